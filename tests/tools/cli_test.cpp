@@ -1,0 +1,67 @@
+// Drives the real `tinsmith` binary: arguments, help, version and exit codes.
+#include <gtest/gtest.h>
+
+#include "core/base/version.hpp"
+#include "tests/support/run_command.hpp"
+
+namespace tinsmith {
+namespace {
+
+using test::runTinsmith;
+
+TEST(Cli, VersionNamesTinsmithAndItsLibraries) {
+  const auto r = runTinsmith("--version");
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.out.rfind(std::string("tinsmith ") + kVersion, 0), 0u) << r.out;
+  EXPECT_NE(r.out.find("GDAL 3."), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("GeographicLib 2."), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Draco 1."), std::string::npos) << r.out;
+}
+
+TEST(Cli, HelpListsEverySubcommandAndTheExitCodes) {
+  const auto r = runTinsmith("--help");
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  for (const char* sub : {"build", "tin", "fit", "tile", "serve", "info", "export", "query", "validate"})
+    EXPECT_NE(r.out.find(sub), std::string::npos) << "missing subcommand " << sub;
+  EXPECT_NE(r.out.find("Exit codes"), std::string::npos);
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  for (const char* sub : {"build", "tin", "fit", "tile", "serve", "info", "export", "query", "validate"}) {
+    const auto r = runTinsmith(std::string(sub) + " --help");
+    EXPECT_EQ(r.exitCode, 0) << sub << ": " << r.err;
+    EXPECT_NE(r.out.find(std::string("tinsmith ") + sub), std::string::npos) << r.out;
+  }
+}
+
+TEST(Cli, NoSubcommandIsAUsageError) {
+  const auto r = runTinsmith("");
+  EXPECT_EQ(r.exitCode, 2);
+}
+
+TEST(Cli, UnknownSubcommandOrOptionIsAUsageError) {
+  EXPECT_EQ(runTinsmith("frobnicate").exitCode, 2);
+  EXPECT_EQ(runTinsmith("--no-such-flag").exitCode, 2);
+}
+
+TEST(Cli, MissingRequiredArgumentIsAUsageErrorThatNamesIt) {
+  const auto r = runTinsmith("tile");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.err.find("tin"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace tinsmith
+
+namespace tinsmith {
+namespace {
+
+TEST(Cli, UnbuiltStageSaysSoAndExitsWithNotImplemented) {
+  const auto r = test::runTinsmith("serve some.3dtiles");
+  EXPECT_EQ(r.exitCode, 6) << r.err;
+  EXPECT_NE(r.err.find("not implemented yet"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.rfind("ERROR: ", 0), 0u) << r.err;
+}
+
+}  // namespace
+}  // namespace tinsmith

@@ -1,0 +1,64 @@
+// tinsmith — terrain TIN builder and 3D Tiles server. Entry point: parses the
+// command line, runs one subcommand, maps errors to exit codes.
+#include <draco/core/draco_version.h>
+#include <GeographicLib/Config.h>
+
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <string>
+
+#include "core/base/error.hpp"
+#include "core/base/version.hpp"
+#include "ingest/base/gdal_runtime.hpp"
+#include "tools/cli/commands.hpp"
+#include "tools/cli/exit_codes.hpp"
+
+namespace {
+
+std::string versionText() {
+  return std::string("tinsmith ") + tinsmith::kVersion + "\n" +
+         "  " + tinsmith::ingest::gdalVersionString() + ", GeographicLib " +
+         GEOGRAPHICLIB_VERSION_STRING + ", Draco " + draco::kDracoVersion;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace tinsmith;
+  using namespace tinsmith::cli;
+
+  CLI::App app{"tinsmith — constrained Delaunay terrain TINs, multilevel least-squares\n"
+               "level-of-detail tiles and a 3D Tiles 1.1 server.",
+               "tinsmith"};
+  app.set_version_flag("--version", versionText(), "Print the version and library versions");
+  app.require_subcommand(1, 1);
+  app.footer(
+      "Exit codes: 0 ok, 1 check failed, 2 usage, 3 input, 4 geometry, 5 i/o,\n"
+      "6 not implemented, 70 internal error. Run `tinsmith COMMAND --help` for a command.");
+
+  addBuildCommand(app);
+  addTinCommand(app);
+  addFitCommand(app);
+  addTileCommand(app);
+  addServeCommand(app);
+  addInfoCommand(app);
+  addExportCommand(app);
+  addQueryCommand(app);
+  addValidateCommand(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);  // prints help, version or the parse error
+    return rc == 0 ? kExitOk : kExitUsage;
+  } catch (const Error& e) {
+    std::cerr << "ERROR: " << e.what() << "\n";
+    return exitCodeFor(e.kind());
+  } catch (const std::exception& e) {
+    std::cerr << "ERROR: internal error: " << e.what()
+              << " — this is a bug in tinsmith; please report it with the input that caused it\n";
+    return kExitInternal;
+  }
+  return kExitOk;
+}

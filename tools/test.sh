@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# README command 2: install, build and run every test. Two builds:
+#   build/release   — Release (-O2), all tests;
+#   build/sanitize  — ASan+UBSan, the core tests.
+# Warnings are errors when CI=true. Ends with CTest's summary.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+bash tools/setup.sh
+jobs=$(nproc)
+werror=OFF
+[ "${CI:-}" = "true" ] && werror=ON
+
+echo "== release build"
+cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DTINSMITH_WERROR=$werror >/dev/null
+cmake --build build/release -j "$jobs"
+
+echo "== sanitizer build (core tests)"
+cmake -S . -B build/sanitize -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTINSMITH_SANITIZE=ON \
+  -DTINSMITH_BENCHMARKS=OFF -DTINSMITH_WERROR=$werror >/dev/null
+cmake --build build/sanitize -j "$jobs" --target core_tests
+
+echo "== core tests under ASan+UBSan"
+ctest --test-dir build/sanitize -L core --output-on-failure -j "$jobs"
+
+echo "== all tests (release)"
+ctest --test-dir build/release --output-on-failure -j "$jobs"
