@@ -135,6 +135,7 @@ class Mesh {
                     std::vector<TinFeature> features, std::string crs);
 
  private:
+  friend class Cdt;  // builds its output mesh in place (no re-linking)
   std::vector<Point3> points_;
   std::vector<std::uint32_t> corners_;       // 3 per triangle
   std::vector<HalfedgeId> twins_;            // per half-edge
