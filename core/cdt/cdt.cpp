@@ -656,6 +656,7 @@ struct Cdt::Impl {
       vhe.push_back(kNone);
       insertedUpTo = xy.size();
       splitEdge(e, v);
+      lopAround(v);
     }
     ev.vertex = VertexId(v);
     ev.at = {xy[v].x, xy[v].y, z[v]};
@@ -741,16 +742,16 @@ struct Cdt::Impl {
         targets.push_back(crossingVertex(cur, tgt, e, f));
         continue;
       }
-      removeCrossings(cur, end, crossed);
-      addEdgeFeature(cur, end, f);
+      removeCrossings(cur, end, crossed, f);
       cur = end;
     }
   }
 
-  /// Swaps away every edge crossing cur→end (Sloan; book 6.5), then restores
-  /// the Delaunay property on the new edges.
+  /// Swaps away every edge crossing a→b (Sloan; book 6.5), marks a–b
+  /// constrained for f, then restores the Delaunay property from the new edges.
   void removeCrossings(std::uint32_t a, std::uint32_t b,
-                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed) {
+                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed,
+                       FeatureId f) {
     std::deque<std::pair<std::uint32_t, std::uint32_t>> queue(crossed.begin(), crossed.end());
     std::vector<std::pair<std::uint32_t, std::uint32_t>> fresh;
     std::size_t guard = 0;
@@ -774,23 +775,49 @@ struct Cdt::Impl {
         fresh.emplace_back(c, d);
       }
     }
-    bool changed = true;
-    while (changed) {
-      changed = false;
-      for (auto& [p, q] : fresh) {
-        if ((p == a && q == b) || (p == b && q == a)) continue;
-        const std::uint32_t h = findHalfedge(p, q);
-        if (h == kNone || cons[h]) continue;
-        const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
-        if (c == kInf || d == kInf) continue;
-        if (incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
-          flip(h);
-          p = c;
-          q = d;
-          changed = true;
+    addEdgeFeature(a, b, f);  // constrained before the LOP so it is never flipped
+    lop(fresh);
+  }
+
+  /// Lawson's LOP (book 4.2) from the given edges (vertex pairs): flips every
+  /// unconstrained edge that is not locally Delaunay, queueing the four edges
+  /// around each flip. Consumes `todo`.
+  void lop(std::vector<std::pair<std::uint32_t, std::uint32_t>>& todo) {
+    std::size_t flips = 0;
+    while (!todo.empty()) {
+      const auto [p, q] = todo.back();
+      todo.pop_back();
+      if (p == kInf || q == kInf) continue;
+      const std::uint32_t h = findHalfedge(p, q);
+      if (h == kNone || cons[h]) continue;
+      const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
+      if (c == kInf || d == kInf) continue;
+      if (incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
+        if (++flips > 64 + 64 * xy.size()) {
+          throw internalError("edge legalization did not terminate");
         }
+        flip(h);
+        todo.emplace_back(p, c);
+        todo.emplace_back(c, q);
+        todo.emplace_back(q, d);
+        todo.emplace_back(d, p);
       }
     }
+  }
+
+  /// Runs the LOP on every edge of the triangles around v — needed after a
+  /// forced split at a rounded intersection point, where v may lie off the
+  /// split edge and edges at v itself can be non-Delaunay.
+  void lopAround(std::uint32_t v) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo;
+    const std::uint32_t start = vhe[v];
+    std::uint32_t h = start;
+    do {
+      todo.emplace_back(v, tv[nxt(h)]);
+      todo.emplace_back(tv[nxt(h)], tv[prv(h)]);
+      h = opp[prv(h)];
+    } while (h != start);
+    lop(todo);
   }
 
   void insertPendingSegments() {
