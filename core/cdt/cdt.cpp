@@ -115,6 +115,7 @@ struct Cdt::Impl {
   bool finalized = false;
 
   std::uint32_t lastTriangle = 0;
+  bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
   std::vector<std::uint32_t> visitStamp;
@@ -154,18 +155,31 @@ struct Cdt::Impl {
 
   std::uint32_t newTriangle() {
     const auto t = triCount();
-    tv.insert(tv.end(), 3, kNone);
-    opp.insert(opp.end(), 3, kNone);
-    cons.insert(cons.end(), 3, 0);
+    const std::size_t n = tv.size() + 3;
+    tv.resize(n, kNone);
+    opp.resize(n, kNone);
+    cons.resize(n, 0);
     return t;
   }
   void setTri(std::uint32_t t, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     tv[3 * t] = a;
     tv[3 * t + 1] = b;
     tv[3 * t + 2] = c;
-    if (a != kInf) vhe[a] = 3 * t;
-    if (b != kInf) vhe[b] = 3 * t + 1;
-    if (c != kInf) vhe[c] = 3 * t + 2;
+    if (trackVhe) {
+      if (a != kInf) vhe[a] = 3 * t;
+      if (b != kInf) vhe[b] = 3 * t + 1;
+      if (c != kInf) vhe[c] = 3 * t + 2;
+    }
+  }
+  /// Recomputes vhe from the triangles and keeps it current from now on
+  /// (bulk point insertion does not need it and skips the upkeep).
+  void startTrackingVhe() {
+    if (trackVhe) return;
+    vhe.assign(xy.size(), kNone);
+    for (std::uint32_t h = 0; h < tv.size(); ++h) {
+      if (tv[h] != kInf) vhe[tv[h]] = h;
+    }
+    trackVhe = true;
   }
   void link(std::uint32_t h, std::uint32_t g) {
     opp[h] = g;
@@ -462,12 +476,15 @@ struct Cdt::Impl {
       return;
     }
     rep[v] = v;
+    // After the flips, the split triangle's slot still touches v's
+    // neighbourhood: a good start for the next walk.
     if (loc.kind == LocKind::OnEdge) {
+      lastTriangle = loc.h / 3;
       splitEdge(loc.h, v);
     } else {
+      lastTriangle = loc.t;
       splitTriangle(loc.t, v);
     }
-    lastTriangle = vhe[v] / 3;
   }
 
   /// Builds the first triangle from pending vertices in `order`; returns the
@@ -543,7 +560,7 @@ struct Cdt::Impl {
     }
     radixSortHigh32(keys);
     for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
-    if (vhe.size() < n) vhe.resize(n, kNone);
+    trackVhe = false;
     insertedUpTo = n;
     if (order.empty()) return;
 
@@ -821,6 +838,7 @@ struct Cdt::Impl {
   }
 
   void insertPendingSegments() {
+    if (segmentsDone < segments.size()) startTrackingVhe();
     for (; segmentsDone < segments.size(); ++segmentsDone) {
       const Segment s = segments[segmentsDone];
       const std::uint32_t a = find(s.a), b = find(s.b);
@@ -925,10 +943,15 @@ VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
 
 VertexId Cdt::insertPoints(std::span<const Point3> points, FeatureId feature) {
   const auto first = VertexId(static_cast<std::uint32_t>(impl_->xy.size()));
-  impl_->xy.reserve(impl_->xy.size() + points.size());
-  impl_->z.reserve(impl_->z.size() + points.size());
-  impl_->vfeat.reserve(impl_->vfeat.size() + points.size());
-  impl_->rep.reserve(impl_->rep.size() + points.size());
+  // Grow geometrically: many small polylines must not reallocate each time.
+  const std::size_t need = impl_->xy.size() + points.size();
+  if (need > impl_->xy.capacity()) {
+    const std::size_t cap = std::max(need, 2 * impl_->xy.capacity());
+    impl_->xy.reserve(cap);
+    impl_->z.reserve(cap);
+    impl_->vfeat.reserve(cap);
+    impl_->rep.reserve(cap);
+  }
   for (const Point3& p : points) insertPoint(p, feature);
   return first;
 }
@@ -1027,14 +1050,16 @@ void Cdt::finalize() {
     }
   }
   std::sort(hf.begin(), hf.end());
-  mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
-  mesh.featureIds_.reserve(hf.size());
-  for (const auto& [h, f] : hf) {
-    ++mesh.featureBegin_[h + 1];
-    mesh.featureIds_.push_back(f);
-  }
-  for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
-    mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
+  if (!hf.empty()) {
+    mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
+    mesh.featureIds_.reserve(hf.size());
+    for (const auto& [h, f] : hf) {
+      ++mesh.featureBegin_[h + 1];
+      mesh.featureIds_.push_back(f);
+    }
+    for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
+      mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
+    }
   }
   mesh.outgoing_.assign(outV, HalfedgeId());
   for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {

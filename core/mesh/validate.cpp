@@ -59,10 +59,16 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     }
   }
 
-  // Orientation.
+  // Orientation; the angle sum at each vertex (an interior vertex's must be 2π).
+  std::vector<double> angleSum(m.vertexCount(), 0.0);
   for (std::uint32_t t = 0; t < nt; ++t) {
     const auto v = m.vertices(TriangleId(t));
-    for (VertexId x : v) ++cornersAt[x.value];
+    for (int i = 0; i < 3; ++i) {
+      ++cornersAt[v[i].value];
+      const Point2 c = m.xy(v[i]), a = m.xy(v[(i + 1) % 3]), b = m.xy(v[(i + 2) % 3]);
+      angleSum[v[i].value] += std::atan2((a.x - c.x) * (b.y - c.y) - (a.y - c.y) * (b.x - c.x),
+                                         (a.x - c.x) * (b.x - c.x) + (a.y - c.y) * (b.y - c.y));
+    }
     if (geometry::orient2d(m.xy(v[0]), m.xy(v[1]), m.xy(v[2])) <= 0) {
       problems.add("triangle " + std::to_string(t) + " (" + std::to_string(v[0].value) + ", " +
                    std::to_string(v[1].value) + ", " + std::to_string(v[2].value) +
@@ -147,15 +153,14 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     if (boundaryOut[v] > 1) pinch += boundaryOut[v] - 1;
     // An interior vertex's fan must wind exactly once around it.
     if (boundaryOut[v] == 0) {
-      double angle = 0;
       std::size_t fan = 0;
-      const Point2 c = m.xy(VertexId(v));
-      m.forEachOutgoing(VertexId(v), [&](HalfedgeId h) {
+      const HalfedgeId start = m.outgoing(VertexId(v));
+      HalfedgeId h = start;
+      do {
         ++fan;
-        const Point2 a = m.xy(m.target(h)), b = m.xy(m.origin(Mesh::prev(h)));
-        angle += std::atan2((a.x - c.x) * (b.y - c.y) - (a.y - c.y) * (b.x - c.x),
-                            (a.x - c.x) * (b.x - c.x) + (a.y - c.y) * (b.y - c.y));
-      });
+        h = m.twin(Mesh::prev(h));
+      } while (h.valid() && h != start && fan <= cornersAt[v]);
+      const double angle = angleSum[v];
       if (fan != cornersAt[v]) {
         problems.add("vertex " + std::to_string(v) + " has " + std::to_string(cornersAt[v]) +
                      " triangles but its star has " + std::to_string(fan) + " (non-manifold)");
