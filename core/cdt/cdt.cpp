@@ -266,6 +266,7 @@ struct Cdt::Impl {
     cons[3 * n1] = c1;
     link(3 * n2, o2);
     cons[3 * n2] = c2;
+    cons[3 * t + 1] = cons[3 * t + 2] = 0;  // the reused slot's inner edges are new
     link(3 * t + 1, 3 * n1 + 2);
     link(3 * t + 2, 3 * n2 + 1);
     link(3 * n1 + 1, 3 * n2 + 2);
@@ -785,6 +786,11 @@ struct Cdt::Impl {
         continue;
       }
       flip(h);
+      // The quad's sides now face new triangles: check them in the LOP too.
+      fresh.emplace_back(p, c);
+      fresh.emplace_back(c, q);
+      fresh.emplace_back(q, d);
+      fresh.emplace_back(d, p);
       const bool endC = c == a || c == b, endD = d == a || d == b;
       if (!endC && !endD && orient(a, b, c) * orient(a, b, d) < 0) {
         queue.emplace_back(c, d);
