@@ -8,6 +8,7 @@
 #include "core/cdt/cdt.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <deque>
 #include <string>
@@ -37,9 +38,9 @@ inline std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
   return (static_cast<std::uint64_t>(a) << 32) | b;
 }
 
-// Hilbert index of (x, y) on a 2^16 grid.
-std::uint32_t hilbertIndex(std::uint32_t x, std::uint32_t y) {
-  constexpr std::uint32_t n = 1u << 16;
+// Hilbert index of (x, y) on a 2^13 grid (26 bits).
+std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
+  constexpr std::uint32_t n = 1u << 13;
   std::uint32_t d = 0;
   for (std::uint32_t s = n / 2; s > 0; s /= 2) {
     const std::uint32_t rx = (x & s) ? 1 : 0;
@@ -113,6 +114,7 @@ struct Cdt::Impl {
   Mesh mesh;
   std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
   bool finalized = false;
+  bool meshBuilt = false;
 
   std::uint32_t lastTriangle = 0;
   bool trackVhe = false;  // vhe is maintained only while constraints go in
@@ -155,10 +157,11 @@ struct Cdt::Impl {
 
   std::uint32_t newTriangle() {
     const auto t = triCount();
-    const std::size_t n = tv.size() + 3;
-    tv.resize(n, kNone);
-    opp.resize(n, kNone);
-    cons.resize(n, 0);
+    for (int i = 0; i < 3; ++i) {
+      tv.push_back(kNone);
+      opp.push_back(kNone);
+      cons.push_back(0);
+    }
     return t;
   }
   void setTri(std::uint32_t t, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
@@ -188,8 +191,11 @@ struct Cdt::Impl {
 
   /// Is p in conflict with triangle t (inside its circumcircle, or for a ghost
   /// strictly outside its hull edge, or on the open hull edge)?
-  bool inConflict(std::uint32_t t, const Point2& p) const {
+  inline bool inConflict(std::uint32_t t, const Point2& p) const {
     const std::uint32_t a = tv[3 * t], b = tv[3 * t + 1], c = tv[3 * t + 2];
+    if (std::max(a, std::max(b, c)) < kInf) [[likely]] {
+      return incircle(xy[a], xy[b], xy[c], p) > 0;
+    }
     std::uint32_t u, v;
     if (a == kInf) {
       u = b, v = c;
@@ -548,16 +554,32 @@ struct Cdt::Impl {
       minY = std::min(minY, xy[i].y);
       maxY = std::max(maxY, xy[i].y);
     }
-    // Hilbert order on a 2^16 grid over the bounding box (ties keep input order).
-    const double sx = maxX > minX ? 65535.0 / (maxX - minX) : 0.0;
-    const double sy = maxY > minY ? 65535.0 / (maxY - minY) : 0.0;
+    // BRIO (biased randomized insertion order): point i goes to round k with
+    // probability 2^-(k+1) (from a fixed hash of i, so deterministic); rounds
+    // go in from the smallest, each in Hilbert order on a 2^13 grid over the
+    // bounding box (ties keep input order). Random rounds keep the number of
+    // flips per insertion near the random-order expectation; the Hilbert order
+    // keeps walks short.
+    constexpr double kGrid = 8191.0;
+    const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
+    const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
+    const std::size_t count = n - insertedUpTo;
+    std::uint32_t rounds = 0;
+    while (rounds < 20 && (std::size_t{1000} << rounds) < count) ++rounds;
     std::vector<std::uint64_t> keys;
-    keys.reserve(n - insertedUpTo);
+    keys.reserve(count);
     for (std::size_t i = insertedUpTo; i < n; ++i) {
       if (rep[i] != kNone) continue;
-      const auto gx = static_cast<std::uint32_t>(std::min(65535.0, (xy[i].x - minX) * sx));
-      const auto gy = static_cast<std::uint32_t>(std::min(65535.0, (xy[i].y - minY) * sy));
-      keys.push_back((static_cast<std::uint64_t>(hilbertIndex(gx, gy)) << 32) | i);
+      const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
+      const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
+      std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
+      h ^= h >> 31;
+      h *= 0xBF58476D1CE4E5B9ull;
+      h ^= h >> 29;
+      const auto round = static_cast<std::uint32_t>(
+          std::min<int>(std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
+      const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
+      keys.push_back((static_cast<std::uint64_t>(key) << 32) | i);
     }
     radixSortHigh32(keys);
     for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
@@ -1010,7 +1032,13 @@ void Cdt::finalize() {
   }
   m.insertPendingPoints();
   m.insertPendingSegments();
+  m.finalized = true;
+  m.meshBuilt = false;
+}
 
+void Cdt::buildMesh() const {
+  Impl& m = *impl_;
+  if (m.meshBuilt) return;
   // Domain and the output mesh.
   const std::vector<std::uint8_t> inside = m.classifyDomain();
   const std::uint32_t nt = m.triCount();
@@ -1028,6 +1056,7 @@ void Cdt::finalize() {
   }
   Mesh& mesh = m.mesh;
   mesh = Mesh();
+  std::vector<std::uint32_t>().swap(m.meshOf);
   mesh.crs_ = m.options.crs;
   mesh.features_ = m.features;
   mesh.points_.resize(outV);
@@ -1089,29 +1118,35 @@ void Cdt::finalize() {
           {CdtReport::Dropped::What::PointOutsideDomain, m.vfeat[v], m.xy[v]});
     }
   }
-  m.finalized = true;
+  m.meshBuilt = true;
 }
 
 const Mesh& Cdt::mesh() const {
   if (!impl_->finalized) throw usageError("Cdt::mesh() called before finalize()");
+  buildMesh();
   return impl_->mesh;
 }
 
 TinData Cdt::toTinData() const { return mesh().toTinData(); }
 
 VertexId Cdt::meshVertex(VertexId input) const {
-  if (!impl_->finalized || input.value >= impl_->meshOf.size()) return {};
+  if (!impl_->finalized) return {};
+  buildMesh();
+  if (input.value >= impl_->meshOf.size()) return {};
   const std::uint32_t v = impl_->meshOf[input.value];
   return v == kNone ? VertexId() : VertexId(v);
 }
 
 std::size_t Cdt::inputVertexCount() const { return impl_->xy.size(); }
 
-const CdtReport& Cdt::report() const { return impl_->report; }
+const CdtReport& Cdt::report() const {
+  if (impl_->finalized) buildMesh();  // completes the dropped-point list
+  return impl_->report;
+}
 
 ValidationReport Cdt::validate(const ValidationOptions& options) const {
-  const Impl& m = *impl_;
   ValidationReport r = tinsmith::validate(mesh(), options);
+  const Impl& m = *impl_;
   auto add = [&](const std::string& s) {
     r.ok = false;
     ++r.problemCount;

@@ -128,13 +128,15 @@ class Cdt {
   /// A hole (void): triangles inside are removed. Rings nest by parity.
   void addHole(std::span<const Point3> ring, FeatureId feature);
 
-  /// Triangulates everything pending, inserts pending constraints, applies the
-  /// domain and rebuilds mesh(). Throws geometryError when the input has fewer
-  /// than 3 non-collinear distinct points; internalError on a broken invariant.
+  /// Triangulates everything pending and inserts pending constraints. Throws
+  /// geometryError when the input has fewer than 3 non-collinear distinct
+  /// points; internalError on a broken invariant.
   void finalize();
 
   /// The finished mesh (after finalize()): only triangles inside the domain;
-  /// vertex ids are compacted (see meshVertex()).
+  /// vertex ids are compacted (see meshVertex()). Built on the first call after
+  /// each finalize() (domain classification + compaction, about a fifth of the
+  /// triangulation time); not thread-safe on that first call.
   [[nodiscard]] const Mesh& mesh() const;
   /// mesh() as TinData (vertices, CCW triangles, constrained edges per feature,
   /// features, crs).
@@ -157,6 +159,7 @@ class Cdt {
   static Cdt fromTinData(const TinData& tin, CdtOptions options = {});
 
  private:
+  void buildMesh() const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
