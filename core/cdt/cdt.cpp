@@ -111,6 +111,7 @@ struct Cdt::Impl {
   bool hasBoundary = false, hasHole = false;
 
   CdtReport report;
+  std::unordered_map<std::uint32_t, std::uint32_t> zSource;  // vertex → input its z came from
   Mesh mesh;
   std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
   bool finalized = false;
@@ -418,11 +419,15 @@ struct Cdt::Impl {
     const int pd = priorityOf(features, vfeat[dup]), pk = priorityOf(features, vfeat[keep]);
     double droppedZ = z[dup];
     FeatureId droppedF = vfeat[dup];
-    if (pd > pk || (pd == pk && dup < keep && z[dup] != z[keep])) {
+    // Which input the kept z came from (ties go to the earlier input).
+    auto src = zSource.find(keep);
+    const std::uint32_t from = src == zSource.end() ? keep : src->second;
+    if (pd > pk || (pd == pk && dup < from)) {
       droppedZ = z[keep];
       droppedF = vfeat[keep];
       z[keep] = z[dup];
       vfeat[keep] = vfeat[dup];
+      zSource[keep] = dup;
     }
     m.keptZ = z[keep];
     m.droppedZ = droppedZ;
