@@ -69,6 +69,62 @@ void radixSortHigh32(std::vector<std::uint64_t>& v) {
   }
 }
 
+/// Features of constrained edges, keyed by edgeKey. Most edges carry one
+/// feature, stored inline; edges shared by several features point to an
+/// immutable list (copy on write, so split halves may share one).
+class EdgeFeatureMap {
+ public:
+  struct View {
+    const FeatureId* data = nullptr;
+    std::size_t size = 0;
+    [[nodiscard]] const FeatureId* begin() const { return data; }
+    [[nodiscard]] const FeatureId* end() const { return data + size; }
+    [[nodiscard]] bool empty() const { return size == 0; }
+  };
+
+  [[nodiscard]] View find(std::uint64_t key) const {
+    auto it = map_.find(key);
+    if (it == map_.end()) return {};
+    if (it->second.list == kNoList) return {&it->second.single, 1};
+    const auto& l = lists_[it->second.list];
+    return {l.data(), l.size()};
+  }
+  void add(std::uint64_t key, FeatureId f) {
+    auto [it, fresh] = map_.try_emplace(key, Entry{f, kNoList});
+    if (fresh) return;
+    Entry& e = it->second;
+    if (e.list == kNoList) {
+      if (e.single == f) return;
+      lists_.push_back({e.single, f});
+    } else {
+      const auto& old = lists_[e.list];
+      if (std::find(old.begin(), old.end(), f) != old.end()) return;
+      std::vector<FeatureId> l = old;
+      l.push_back(f);
+      lists_.push_back(std::move(l));
+    }
+    e.list = static_cast<std::uint32_t>(lists_.size() - 1);
+  }
+  /// The edge `from` was split into `a` and `b`: both inherit its features.
+  void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
+    auto it = map_.find(from);
+    if (it == map_.end()) return;
+    const Entry e = it->second;
+    map_.erase(it);
+    map_[a] = e;
+    map_[b] = e;
+  }
+
+ private:
+  static constexpr std::uint32_t kNoList = 0xffffffffu;
+  struct Entry {
+    FeatureId single;
+    std::uint32_t list;
+  };
+  std::unordered_map<std::uint64_t, Entry> map_;
+  std::vector<std::vector<FeatureId>> lists_;
+};
+
 enum class Role : std::uint8_t { None, Boundary, Hole };
 
 struct Segment {
@@ -104,7 +160,7 @@ struct Cdt::Impl {
   std::vector<std::uint32_t> tv;   // corners
   std::vector<std::uint32_t> opp;  // twin half-edge
   std::vector<std::uint8_t> cons;  // constrained flag per half-edge
-  std::unordered_map<std::uint64_t, std::vector<FeatureId>> edgeFeatures;
+  EdgeFeatureMap edgeFeatures;
 
   std::vector<Segment> segments;
   std::size_t segmentsDone = 0;
@@ -315,13 +371,7 @@ struct Cdt::Impl {
     cons[3 * t0 + 2] = cons[3 * n0 + 1] = cons[3 * t1 + 2] = cons[3 * n1 + 1] = 0;
     cons[3 * t0 + 1] = cons[3 * n1 + 2] = cons[3 * n0 + 2] = cons[3 * t1 + 1] = split;
     if (split) {
-      auto it = edgeFeatures.find(edgeKey(a, b));
-      if (it != edgeFeatures.end()) {
-        std::vector<FeatureId> fs = std::move(it->second);
-        edgeFeatures.erase(it);
-        edgeFeatures[edgeKey(a, p)] = fs;
-        edgeFeatures[edgeKey(p, b)] = std::move(fs);
-      }
+      edgeFeatures.split(edgeKey(a, b), edgeKey(a, p), edgeKey(p, b));
     }
     stack.clear();
     stack.push_back(3 * t0);
@@ -621,8 +671,7 @@ struct Cdt::Impl {
     const std::uint32_t h = findHalfedge(p, q);
     if (h == kNone) throw internalError("constraint edge missing after insertion");
     cons[h] = cons[opp[h]] = 1;
-    auto& fs = edgeFeatures[edgeKey(p, q)];
-    if (std::find(fs.begin(), fs.end(), f) == fs.end()) fs.push_back(f);
+    edgeFeatures.add(edgeKey(p, q), f);
   }
 
   /// Is c on the ray from a through b (c collinear with a, b assumed)?
@@ -644,9 +693,7 @@ struct Cdt::Impl {
   int edgePriority(std::uint32_t u, std::uint32_t w, FeatureId* best) const {
     int pr = -1;
     *best = kNoFeature;
-    auto it = edgeFeatures.find(edgeKey(u, w));
-    if (it == edgeFeatures.end()) return pr;
-    for (FeatureId f : it->second) {
+    for (FeatureId f : edgeFeatures.find(edgeKey(u, w))) {
       const int p = priorityOf(features, f);
       if (p > pr || *best == kNoFeature) {
         pr = std::max(pr, p);
@@ -813,11 +860,6 @@ struct Cdt::Impl {
         continue;
       }
       flip(h);
-      // The quad's sides now face new triangles: check them in the LOP too.
-      fresh.emplace_back(p, c);
-      fresh.emplace_back(c, q);
-      fresh.emplace_back(q, d);
-      fresh.emplace_back(d, p);
       const bool endC = c == a || c == b, endD = d == a || d == b;
       if (!endC && !endD && orient(a, b, c) * orient(a, b, d) < 0) {
         queue.emplace_back(c, d);
@@ -885,9 +927,7 @@ struct Cdt::Impl {
 
   bool isDomainEdge(std::uint32_t h) const {
     if (!cons[h]) return false;
-    auto it = edgeFeatures.find(edgeKey(tv[h], tv[nxt(h)]));
-    if (it == edgeFeatures.end()) return false;
-    for (FeatureId f : it->second) {
+    for (FeatureId f : edgeFeatures.find(edgeKey(tv[h], tv[nxt(h)]))) {
       if (f < featureRole.size() && featureRole[f] != Role::None) return true;
       if (f == kDomainFeature) return true;  // domain edges of a loaded TIN
     }
@@ -1080,11 +1120,8 @@ void Cdt::buildMesh() const {
       const std::uint32_t g = m.opp[h];
       if (triMap[g / 3] != kNone) mesh.twins_[oh] = HalfedgeId(3 * triMap[g / 3] + g % 3);
       if (m.cons[h]) {
-        auto it = m.edgeFeatures.find(edgeKey(m.tv[h], m.tv[nxt(h)]));
-        if (it != m.edgeFeatures.end()) {
-          for (FeatureId f : it->second) {
-            if (f < m.features.size()) hf.emplace_back(oh, f);
-          }
+        for (FeatureId f : m.edgeFeatures.find(edgeKey(m.tv[h], m.tv[nxt(h)]))) {
+          if (f < m.features.size()) hf.emplace_back(oh, f);
         }
       }
     }
