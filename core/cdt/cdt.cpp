@@ -1005,6 +1005,19 @@ VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
   if (feature != kNoFeature && feature >= m.features.size()) {
     throw usageError("feature id " + std::to_string(feature) + " was not registered with addFeature");
   }
+  // The predicates are exact while their products neither overflow nor
+  // underflow (predicates.hpp); this range keeps every case inside that.
+  auto outOfRange = [](double c) {
+    const double a = std::fabs(c);
+    return a > 1e60 || (a != 0.0 && a < 1e-50);
+  };
+  if (outOfRange(p.x) || outOfRange(p.y)) {
+    SourceLocation where;
+    if (feature != kNoFeature) where.file = m.features[feature].source;
+    throw inputError("point " + std::to_string(m.xy.size()) + " has a coordinate outside the "
+                         "supported range (0 or 1e-50 to 1e60 in magnitude)",
+                     where, "check the coordinate units and CRS");
+  }
   const auto id = static_cast<std::uint32_t>(m.xy.size());
   if (id >= kInf - 1) throw inputError("too many points (at most 2^32 - 3)");
   m.xy.push_back(p.xy());

@@ -108,8 +108,10 @@ class Cdt {
 
   /// Adds a point (x, y, z in the project CRS, metres). Returns its input
   /// vertex id (consecutive from 0 over every inserted point, polyline vertices
-  /// included). Throws inputError for a non-finite coordinate, naming the
-  /// feature. The point is triangulated at the next finalize().
+  /// included). Throws inputError for a non-finite coordinate or an x, y
+  /// outside 0 ∪ [1e-50, 1e60] in magnitude (where exact predicates on doubles
+  /// would underflow or overflow), naming the feature. The point is
+  /// triangulated at the next finalize().
   VertexId insertPoint(const Point3& p, FeatureId feature = kNoFeature);
   /// Adds many points; returns the id of the first (the rest follow in order).
   VertexId insertPoints(std::span<const Point3> points, FeatureId feature = kNoFeature);

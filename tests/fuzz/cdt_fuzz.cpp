@@ -25,7 +25,22 @@ tinsmith::Point3 point(FuzzedDataProvider& in, double scale, double offset) {
 
 }  // namespace
 
+int runOne(const std::uint8_t* data, std::size_t size);
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    return runOne(data, size);
+  } catch (const tinsmith::Error& e) {
+    // Rejected input is fine; a broken invariant is a bug.
+    if (e.kind() == tinsmith::ErrorKind::Internal) {
+      std::fprintf(stderr, "internal error: %s\n", e.what());
+      std::abort();
+    }
+    return 0;
+  }
+}
+
+int runOne(const std::uint8_t* data, std::size_t size) {
   FuzzedDataProvider in(data, size);
   const double scale = in.PickValueInArray({1.0, 0.001, 0.1, 1000.0});
   const double offset = in.PickValueInArray({0.0, 7000000.0, 500000.25});
