@@ -196,9 +196,18 @@ std::vector<BinaryTriangle> BinaryTriangulation::triangles() const {
       stack.pop_back();
       const std::uint64_t j = (t.l + t.r) / 2;
       if (t.depth <= maxDepth && isActive(j)) {
-        // SubmeshRefine(l, a, r): recurse on (a, j, l) then (r, j, a).
-        stack.push_back(BinaryTriangle{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1});
-        stack.push_back(BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1});
+        // SubmeshRefine(l, a, r): recurse on (a, j, l) and (r, j, a), in
+        // this order at even depths and reversed at odd ones, so that the
+        // leaves follow a Sierpiński curve (consecutive ones share an edge).
+        const BinaryTriangle first{t.a, j, t.l, t.path << 1, t.depth + 1};
+        const BinaryTriangle second{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1};
+        if (t.depth % 2 == 0) {
+          stack.push_back(second);
+          stack.push_back(first);
+        } else {
+          stack.push_back(first);
+          stack.push_back(second);
+        }
       } else {
         out.push_back(t);
       }
@@ -268,18 +277,25 @@ BinaryLocation BinaryTriangulation::locateFrom(Point2 p, std::uint64_t path) con
 }
 
 std::vector<std::uint64_t> BinaryTriangulation::triangleStrip() const {
+  // The triangles in SubmeshRefine order follow a Sierpiński curve, so
+  // consecutive triangles mostly share an edge. Each is appended with one
+  // vertex when it shares the strip's last edge, with a swap (the strip's
+  // third-last vertex repeated before its last one: a degenerate triangle)
+  // when it shares the previous triangle's other edge at the last vertex, and
+  // otherwise the strip restarts through degenerate triangles.
   const auto tris = triangles();
   std::vector<std::uint64_t> s;
   s.reserve(tris.size() * 2);
-  // Appends vertex v if the strip's next triangle (s[n−2], s[n−1], v), read
-  // with the strip's alternating orientation, is `t` (CCW as l, r, a).
   auto sameCycle = [](std::uint64_t x, std::uint64_t y, std::uint64_t z, const BinaryTriangle& t) {
     return (x == t.l && y == t.r && z == t.a) || (x == t.r && y == t.a && z == t.l) ||
            (x == t.a && y == t.l && z == t.r);
   };
+  // Appends the vertex of t that completes (s[n−2], s[n−1], v), if that
+  // triangle, read with the strip's alternating orientation, is t.
   auto tryAppend = [&](const BinaryTriangle& t) {
     const std::size_t n = s.size();
     const std::uint64_t x = s[n - 2], y = s[n - 1];
+    if (x == y) return false;
     for (std::uint64_t v : {t.l, t.r, t.a}) {
       if (v == x || v == y) continue;
       const bool even = ((n - 2) % 2) == 0;
@@ -296,11 +312,15 @@ std::vector<std::uint64_t> BinaryTriangulation::triangleStrip() const {
       continue;
     }
     if (tryAppend(t)) continue;
-    // Swap: repeat s[n−2] (a degenerate triangle) to flip the shared edge.
-    s.push_back(s[s.size() - 2]);
-    if (tryAppend(t)) continue;
-    s.pop_back();
-    // Restart: join with degenerate triangles.
+    const std::size_t n = s.size();
+    if (n >= 3) {
+      const std::uint64_t last = s[n - 1];
+      s.back() = s[n - 3];
+      s.push_back(last);
+      if (tryAppend(t)) continue;
+      s.pop_back();
+      s.back() = last;
+    }
     const std::uint64_t last = s.back();
     s.push_back(last);
     s.push_back(t.l);

@@ -3,8 +3,12 @@
 // function sampled unevenly, and small triangulations with a brute-force locator.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -102,6 +106,39 @@ inline Sample locateBruteForce(const SmallMesh& m, const Point3& p, double weigh
     if (b[0] >= -1e-12 && b[1] >= -1e-12 && b[2] >= -1e-12) return {static_cast<std::uint32_t>(t), b, p.z, weight};
   }
   return {0xffffffffu, {}, p.z, weight};
+}
+
+/// Checks that a triangulation of the square [x0, x0+size]² is conforming:
+/// every triangle strictly CCW, every edge in one or two triangles with
+/// opposite directions, edges with one triangle on the square's boundary, and
+/// the areas summing to the square's. Returns "" or the first problem found.
+inline std::string conformingSquareMesh(const std::vector<Point2>& v, const std::vector<Triangle>& tris, Point2 origin,
+                                        double size) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  double area = 0.0;
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    const auto& tr = tris[t];
+    const Point2 &a = v[tr[0]], &b = v[tr[1]], &c = v[tr[2]];
+    const double a2 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+    if (!(a2 > 0.0)) return "triangle " + std::to_string(t) + " is not CCW";
+    area += 0.5 * a2;
+    for (int k = 0; k < 3; ++k) {
+      if (++directed[{tr[k], tr[(k + 1) % 3]}] > 1) return "directed edge used twice at triangle " + std::to_string(t);
+    }
+  }
+  const double eps = 1e-12 * size;
+  auto onBoundary = [&](const Point2& p, const Point2& q) {
+    auto same = [&](double x, double y) { return std::abs(x - y) <= eps; };
+    return (same(p.x, origin.x) && same(q.x, origin.x)) || (same(p.x, origin.x + size) && same(q.x, origin.x + size)) ||
+           (same(p.y, origin.y) && same(q.y, origin.y)) || (same(p.y, origin.y + size) && same(q.y, origin.y + size));
+  };
+  for (const auto& [e, count] : directed) {
+    if (directed.count({e.second, e.first}) == 0 && !onBoundary(v[e.first], v[e.second])) {
+      return "interior edge (" + std::to_string(e.first) + ", " + std::to_string(e.second) + ") has one triangle (a crack)";
+    }
+  }
+  if (std::abs(area - size * size) > 1e-9 * size * size) return "area " + std::to_string(area) + " is not the square's";
+  return "";
 }
 
 }  // namespace tinsmith::fit::testing
