@@ -126,8 +126,8 @@ enum class SolverKind { Direct, GaussSeidel, ConjugateGradient };
 /// and the relative residual ‖b − Ac‖₂ / ‖b‖₂ below `relativeResidual`, or after
 /// `maxIterations`.
 struct IterationControl {
-  double relativeImprovement = 1e-4;
-  double relativeResidual = 1e-2;
+  double relativeImprovement = 1e-5;
+  double relativeResidual = 1e-3;
   int maxIterations = 2000;
 };
 
