@@ -27,16 +27,19 @@ class CellGrid {
   /// A cell size giving about one cell per item, never below `minimum`.
   static double cellFor(double width, double height, std::size_t items, double minimum) {
     const double n = static_cast<double>(std::max<std::size_t>(items, 1));
-    return std::max({minimum, std::sqrt(width * height / n), std::max(width, height) / (2.0 * n), 1e-9});
+    return std::max(
+        {minimum, std::sqrt(width * height / n), std::max(width, height) / (2.0 * n), 1e-9});
   }
 
   [[nodiscard]] double cell() const { return cell_; }
   [[nodiscard]] double originY() const { return minY_; }
   [[nodiscard]] std::int64_t cellX(double x) const {
-    return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((x - minX_) * inverseCell_)), 0, nx_ - 1);
+    return std::clamp<std::int64_t>(
+        static_cast<std::int64_t>(std::floor((x - minX_) * inverseCell_)), 0, nx_ - 1);
   }
   [[nodiscard]] std::int64_t cellY(double y) const {
-    return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((y - minY_) * inverseCell_)), 0, ny_ - 1);
+    return std::clamp<std::int64_t>(
+        static_cast<std::int64_t>(std::floor((y - minY_) * inverseCell_)), 0, ny_ - 1);
   }
   [[nodiscard]] std::size_t index(std::int64_t cx, std::int64_t cy) const {
     return static_cast<std::size_t>(cy * nx_ + cx);
@@ -67,7 +70,9 @@ class CellGrid {
     for (auto k = start_[c]; k < start_[c + 1]; ++k) f(items_[k]);
   }
   [[nodiscard]] std::uint32_t cellSize(std::size_t c) const { return start_[c + 1] - start_[c]; }
-  [[nodiscard]] const std::uint32_t* cellItems(std::size_t c) const { return items_.data() + start_[c]; }
+  [[nodiscard]] const std::uint32_t* cellItems(std::size_t c) const {
+    return items_.data() + start_[c];
+  }
 
   /// Calls f(item) for each item in the cells the box [x-r, x+r] x [y-r, y+r] overlaps.
   template <typename F>

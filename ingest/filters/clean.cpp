@@ -37,7 +37,8 @@ double dist2(const Point3& a, const Point3& b) {
 
 // Features (layer, index) of line and area layers, highest constraintPriority
 // first, then config order.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> featureOrder(const std::vector<IngestedLayer>& layers) {
+std::vector<std::pair<std::uint32_t, std::uint32_t>> featureOrder(
+    const std::vector<IngestedLayer>& layers) {
   std::vector<std::uint32_t> layerOrder(layers.size());
   std::iota(layerOrder.begin(), layerOrder.end(), 0u);
   std::stable_sort(layerOrder.begin(), layerOrder.end(), [&](std::uint32_t a, std::uint32_t b) {
@@ -52,8 +53,8 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> featureOrder(const std::vec
 
 // Rule 1. Vertices are visited in priority order; a vertex snaps onto the
 // nearest earlier, unsnapped vertex of another feature within the tolerance.
-void snapVertices(std::vector<IngestedLayer>& layers, double tolerance, const Extent& extent, std::size_t vertexCount,
-                  CleaningReport& report) {
+void snapVertices(std::vector<IngestedLayer>& layers, double tolerance, const Extent& extent,
+                  std::size_t vertexCount, CleaningReport& report) {
   if (tolerance <= 0.0 || vertexCount == 0) return;  // exact duplicates are already identical
   const auto order = featureOrder(layers);
   std::vector<Point3*> vertex;
@@ -67,7 +68,8 @@ void snapVertices(std::vector<IngestedLayer>& layers, double tolerance, const Ex
     }
   }
   CellGrid grid(extent.minX, extent.minY, extent.maxX, extent.maxY,
-                CellGrid::cellFor(extent.maxX - extent.minX, extent.maxY - extent.minY, vertex.size(), tolerance));
+                CellGrid::cellFor(extent.maxX - extent.minX, extent.maxY - extent.minY,
+                                  vertex.size(), tolerance));
   grid.build(vertex.size(), [&](std::size_t i, auto&& emit) {
     emit(grid.index(grid.cellX(vertex[i]->x), grid.cellY(vertex[i]->y)));
   });
@@ -97,7 +99,8 @@ void snapVertices(std::vector<IngestedLayer>& layers, double tolerance, const Ex
 }
 
 // Rules 2 and 3.
-void dropRepeatedVertices(std::vector<IngestedLayer>& layers, double tolerance, CleaningReport& report) {
+void dropRepeatedVertices(std::vector<IngestedLayer>& layers, double tolerance,
+                          CleaningReport& report) {
   const double tol2 = tolerance * tolerance;
   for (auto& layer : layers) {
     auto& features = layer.features;
@@ -134,8 +137,8 @@ void dropRepeatedVertices(std::vector<IngestedLayer>& layers, double tolerance, 
 // Rule 4. Line vertices come first in the grid's order, then the points by
 // layer priority; a point is dropped when an earlier, kept item is within the
 // tolerance.
-void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zConflict, const Extent& extent,
-                 CleaningReport& report) {
+void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zConflict,
+                 const Extent& extent, CleaningReport& report) {
   std::size_t pointCount = 0;
   std::size_t lineVertices = 0;
   for (const auto& l : layers) {
@@ -151,12 +154,15 @@ void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zC
   std::vector<Point3> position;
   position.reserve(lineVertices + pointCount);
   for (const auto& layer : layers) {
-    for (const auto& f : layer.features) position.insert(position.end(), f.vertices.begin(), f.vertices.end());
+    for (const auto& f : layer.features)
+      position.insert(position.end(), f.vertices.begin(), f.vertices.end());
   }
-  for (const auto l : layerOrder) position.insert(position.end(), layers[l].points.begin(), layers[l].points.end());
+  for (const auto l : layerOrder)
+    position.insert(position.end(), layers[l].points.begin(), layers[l].points.end());
 
   CellGrid grid(extent.minX, extent.minY, extent.maxX, extent.maxY,
-                CellGrid::cellFor(extent.maxX - extent.minX, extent.maxY - extent.minY, position.size(), tolerance));
+                CellGrid::cellFor(extent.maxX - extent.minX, extent.maxY - extent.minY,
+                                  position.size(), tolerance));
   grid.build(position.size(), [&](std::size_t i, auto&& emit) {
     emit(grid.index(grid.cellX(position[i].x), grid.cellY(position[i].y)));
   });
@@ -234,7 +240,7 @@ struct ContourRef {
 };
 
 struct Segment {
-  const Point3* a;        // start and end vertex
+  const Point3* a;  // start and end vertex
   const Point3* b;
   std::uint32_t contour;  // index into the ContourRef list
   std::uint32_t index;    // segment i joins vertices i and i+1 (mod n when closed)
@@ -245,8 +251,8 @@ struct Hit {
   Point2 at;
 };
 
-void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& options, const Extent& extent,
-                   const Progress* progress, CleaningReport& report) {
+void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& options,
+                   const Extent& extent, const Progress* progress, CleaningReport& report) {
   std::vector<ContourRef> contours;
   std::vector<Segment> segments;
   double totalLength = 0.0;
@@ -284,8 +290,10 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
       double xHi = std::max(a.x, b.x);
       if (cy0 != cy1) {
         // Clip the segment to this row's y band (a little wider, for rounding).
-        const double y0 = std::max(std::min(a.y, b.y), grid.originY() + static_cast<double>(cy) * cell);
-        const double y1 = std::min(std::max(a.y, b.y), grid.originY() + static_cast<double>(cy + 1) * cell);
+        const double y0 =
+            std::max(std::min(a.y, b.y), grid.originY() + static_cast<double>(cy) * cell);
+        const double y1 =
+            std::min(std::max(a.y, b.y), grid.originY() + static_cast<double>(cy + 1) * cell);
         const double x0 = a.x + (b.x - a.x) * (y0 - a.y) / (b.y - a.y);
         const double x1 = a.x + (b.x - a.x) * (y1 - a.y) / (b.y - a.y);
         xLo = std::max(xLo, std::min(x0, x1) - 1e-6 * cell);
@@ -318,8 +326,9 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
           const auto& ref = contours[s1.contour];
           const auto lo = std::min(s1.index, s2.index);
           const auto hi = std::max(s1.index, s2.index);
-          if (hi == lo + 1) continue;                                      // neighbours share a vertex
-          if (ref.closed && lo == 0 && hi == ref.vertexCount - 1) continue;  // across the ring's seam
+          if (hi == lo + 1) continue;  // neighbours share a vertex
+          if (ref.closed && lo == 0 && hi == ref.vertexCount - 1)
+            continue;  // across the ring's seam
         } else if (std::abs(s1.a->z - s2.a->z) <= 1e-9) {
           continue;  // same height: may meet
         }
@@ -338,8 +347,10 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
   auto hitKey = [](const Hit& h) {
     return std::tuple(h.a.contour, h.a.index, h.b.contour, h.b.index);
   };
-  std::sort(hits.begin(), hits.end(), [&](const Hit& x, const Hit& y) { return hitKey(x) < hitKey(y); });
-  hits.erase(std::unique(hits.begin(), hits.end(), [&](const Hit& x, const Hit& y) { return hitKey(x) == hitKey(y); }),
+  std::sort(hits.begin(), hits.end(),
+            [&](const Hit& x, const Hit& y) { return hitKey(x) < hitKey(y); });
+  hits.erase(std::unique(hits.begin(), hits.end(),
+                         [&](const Hit& x, const Hit& y) { return hitKey(x) == hitKey(y); }),
              hits.end());
 
   std::vector<std::pair<std::uint32_t, std::uint32_t>> bad;  // (contour, segment index)
@@ -367,8 +378,11 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
     SourceLocation where;
     where.layer = first.layerA;
     where.feature = first.fidA;
-    throw inputError(std::to_string(report.crossings.size()) + " contour crossing(s); the first: " + describe(first),
-                     where, "fix the contours (a contour may not cross itself or another height), or leave strict mode off to cut the crossing segments out");
+    throw inputError(std::to_string(report.crossings.size()) +
+                         " contour crossing(s); the first: " + describe(first),
+                     where,
+                     "fix the contours (a contour may not cross itself or another height), or "
+                     "leave strict mode off to cut the crossing segments out");
   }
 
   // Cut the crossing segments out: each affected feature becomes the runs of
@@ -441,14 +455,18 @@ std::string describe(const ContourCrossing& c) {
   std::snprintf(za, sizeof za, "%g", c.zA);
   std::snprintf(zb, sizeof zb, "%g", c.zB);
   if (c.self) {
-    return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za + ") crosses itself at " + at;
+    return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za +
+           ") crosses itself at " + at;
   }
-  return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za + ") crosses '" + c.layerB +
-         "' feature " + std::to_string(c.fidB) + " (z " + zb + ") at " + at;
+  return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za +
+         ") crosses '" + c.layerB + "' feature " + std::to_string(c.fidB) + " (z " + zb + ") at " +
+         at;
 }
 
-CleaningReport cleanLayers(std::vector<IngestedLayer>& layers, const CleanOptions& options, const Progress* progress) {
-  if (!(options.tolerance >= 0.0)) throw usageError("the cleaning tolerance must be 0 or more metres");
+CleaningReport cleanLayers(std::vector<IngestedLayer>& layers, const CleanOptions& options,
+                           const Progress* progress) {
+  if (!(options.tolerance >= 0.0))
+    throw usageError("the cleaning tolerance must be 0 or more metres");
   CleaningReport report;
   Extent extent;
   std::size_t vertexCount = 0;

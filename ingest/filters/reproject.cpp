@@ -15,8 +15,9 @@ namespace {
 OGRSpatialReference makeSrs(const std::string& crs, const SourceLocation& where, const char* role) {
   OGRSpatialReference srs;
   if (srs.SetFromUserInput(crs.c_str()) != OGRERR_NONE) {
-    throw inputError(std::string(role) + " CRS '" + crs.substr(0, 80) + "' is not one GDAL/PROJ knows", where,
-                     "write it as \"EPSG:code\" or as WKT");
+    throw inputError(
+        std::string(role) + " CRS '" + crs.substr(0, 80) + "' is not one GDAL/PROJ knows", where,
+        "write it as \"EPSG:code\" or as WKT");
   }
   srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   return srs;
@@ -24,10 +25,12 @@ OGRSpatialReference makeSrs(const std::string& crs, const SourceLocation& where,
 
 }  // namespace
 
-CrsTransform::CrsTransform(const std::string& source, const std::string& target, const SourceLocation& where) {
+CrsTransform::CrsTransform(const std::string& source, const std::string& target,
+                           const SourceLocation& where) {
   ensureGdalReady();
   if (source.empty()) {
-    throw inputError("has no CRS", where, "set crs = \"EPSG:…\" in the layer to say which CRS its coordinates are in");
+    throw inputError("has no CRS", where,
+                     "set crs = \"EPSG:…\" in the layer to say which CRS its coordinates are in");
   }
   auto src = makeSrs(source, where, "the layer's");
   auto dst = makeSrs(target, where, "the project's");
@@ -36,7 +39,8 @@ CrsTransform::CrsTransform(const std::string& source, const std::string& target,
   auto* ct = OGRCreateCoordinateTransformation(&src, &dst);
   if (!ct) {
     const char* msg = CPLGetLastErrorMsg();
-    throw inputError("cannot transform from '" + source.substr(0, 80) + "' to '" + target.substr(0, 80) + "'" +
+    throw inputError("cannot transform from '" + source.substr(0, 80) + "' to '" +
+                         target.substr(0, 80) + "'" +
                          (msg && *msg ? std::string(" (PROJ: ") + msg + ")" : std::string()),
                      where, "check the layer's CRS");
   }
@@ -44,7 +48,8 @@ CrsTransform::CrsTransform(const std::string& source, const std::string& target,
 }
 
 CrsTransform::~CrsTransform() {
-  if (transform_) OGRCoordinateTransformation::DestroyCT(static_cast<OGRCoordinateTransformation*>(transform_));
+  if (transform_)
+    OGRCoordinateTransformation::DestroyCT(static_cast<OGRCoordinateTransformation*>(transform_));
 }
 
 std::int64_t CrsTransform::transform(Point3* points, std::size_t count) const {
@@ -62,7 +67,8 @@ std::int64_t CrsTransform::transform(Point3* points, std::size_t count) const {
     }
     ct->Transform(n, xs.data(), ys.data(), nullptr, ok.data());
     for (std::size_t i = 0; i < n; ++i) {
-      if (!ok[i] || !std::isfinite(xs[i]) || !std::isfinite(ys[i])) return static_cast<std::int64_t>(start + i);
+      if (!ok[i] || !std::isfinite(xs[i]) || !std::isfinite(ys[i]))
+        return static_cast<std::int64_t>(start + i);
       points[start + i].x = xs[i];
       points[start + i].y = ys[i];
     }
@@ -78,9 +84,10 @@ void reprojectLayer(IngestedLayer& layer, const std::string& targetCrs, const Pr
   ProgressTicker ticker(progress, "filters.reproject", detail, layer.vertexCount());
   std::uint64_t done = 0;
   auto fail = [&](std::int64_t fid, const Point3& p) {
-    throw inputError("cannot be transformed into the project CRS " + targetCrs + " (point " + std::to_string(p.x) +
-                         ", " + std::to_string(p.y) + ")",
-                     layerLocation(layer.config, fid), "check the layer's CRS: the point is outside its domain");
+    throw inputError("cannot be transformed into the project CRS " + targetCrs + " (point " +
+                         std::to_string(p.x) + ", " + std::to_string(p.y) + ")",
+                     layerLocation(layer.config, fid),
+                     "check the layer's CRS: the point is outside its domain");
   };
   constexpr std::size_t kBatch = 65536;
   for (std::size_t start = 0; start < layer.points.size(); start += kBatch) {

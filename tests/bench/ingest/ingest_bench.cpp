@@ -67,23 +67,29 @@ long readStatusKb(const char* key) {
   return -1;
 }
 
-void resetPeak() { std::ofstream("/proc/self/clear_refs") << "5"; }
+void resetPeak() {
+  std::ofstream("/proc/self/clear_refs") << "5";
+}
 
 // Terrain of the synthetic site: smooth, in metres.
-double terrain(double x, double y) { return 1600.0 + 0.02 * y + 15.0 * std::sin(x / 700.0) * std::cos(y / 900.0); }
+double terrain(double x, double y) {
+  return 1600.0 + 0.02 * y + 15.0 * std::sin(x / 700.0) * std::cos(y / 900.0);
+}
 
 void generate(BenchContext& ctx) {
   ensureGdalReady();
   auto* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
   std::filesystem::remove(ctx.gpkg);
-  std::unique_ptr<GDALDataset> ds(driver->Create(ctx.gpkg.string().c_str(), 0, 0, 0, GDT_Unknown, nullptr));
+  std::unique_ptr<GDALDataset> ds(
+      driver->Create(ctx.gpkg.string().c_str(), 0, 0, 0, GDT_Unknown, nullptr));
   if (!ds) throw ioError("cannot create the benchmark GeoPackage", {ctx.gpkg.string()});
   OGRSpatialReference utm, geographic;
   utm.importFromEPSG(32612);
   geographic.importFromEPSG(4326);
   utm.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   geographic.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  std::unique_ptr<OGRCoordinateTransformation> toGeographic(OGRCreateCoordinateTransformation(&utm, &geographic));
+  std::unique_ptr<OGRCoordinateTransformation> toGeographic(
+      OGRCreateCoordinateTransformation(&utm, &geographic));
   const double x0 = 420000.0, y0 = 4500000.0;
 
   // Contours: rows of wavy lines 10 m apart (amplitude 3 m: they never meet),
@@ -100,14 +106,16 @@ void generate(BenchContext& ctx) {
       line.setNumPoints(static_cast<int>(perLine));
       for (long i = 0; i < perLine; ++i) {
         const double x = x0 + static_cast<double>(i) * 20.0;
-        const double y = y0 + static_cast<double>(c) * 10.0 + 3.0 * std::sin(static_cast<double>(i) / 8.0);
+        const double y =
+            y0 + static_cast<double>(c) * 10.0 + 3.0 * std::sin(static_cast<double>(i) / 8.0);
         line.setPoint(static_cast<int>(i), x, y);
       }
       line.transform(toGeographic.get());
       OGRFeature feature(layer->GetLayerDefn());
       feature.SetField("elev", 1600.0 + static_cast<double>(c));
       feature.SetGeometry(&line);
-      if (layer->CreateFeature(&feature) != OGRERR_NONE) throw ioError("cannot write a benchmark feature");
+      if (layer->CreateFeature(&feature) != OGRERR_NONE)
+        throw ioError("cannot write a benchmark feature");
     }
     ds->CommitTransaction();
   }
@@ -132,7 +140,8 @@ void generate(BenchContext& ctx) {
       OGRFeature feature(layer->GetLayerDefn());
       feature.SetField("elev", terrain(x, y));
       feature.SetGeometry(&p);
-      if (layer->CreateFeature(&feature) != OGRERR_NONE) throw ioError("cannot write a benchmark feature");
+      if (layer->CreateFeature(&feature) != OGRERR_NONE)
+        throw ioError("cannot write a benchmark feature");
     }
     ds->CommitTransaction();
   }
@@ -144,25 +153,29 @@ void generate(BenchContext& ctx) {
     for (long r = 0; r < roads; ++r) {
       OGRLineString line;
       for (long i = 0; i < perLine; ++i) {
-        const double x = x0 + (static_cast<double>(r) + 0.5) * width / static_cast<double>(roads) + 40.0 * std::sin(static_cast<double>(i) / 30.0);
+        const double x = x0 + (static_cast<double>(r) + 0.5) * width / static_cast<double>(roads) +
+                         40.0 * std::sin(static_cast<double>(i) / 30.0);
         const double y = y0 + static_cast<double>(i) * height / static_cast<double>(perLine);
         line.addPoint(x, y, terrain(x, y));
       }
       line.transform(toGeographic.get());
       OGRFeature feature(layer->GetLayerDefn());
       feature.SetGeometry(&line);
-      if (layer->CreateFeature(&feature) != OGRERR_NONE) throw ioError("cannot write a benchmark feature");
+      if (layer->CreateFeature(&feature) != OGRERR_NONE)
+        throw ioError("cannot write a benchmark feature");
     }
     ds->CommitTransaction();
   }
   ds.reset();
 
   const auto toml = ctx.dir / "bench.toml";
-  std::ofstream(toml) << "[project]\ncrs = \"EPSG:32612\"\n"
-                      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"contours\"\nkind = \"contours\"\nz = \"elev\"\n"
-                      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"spots\"\nkind = \"points\"\nz = \"elev\"\n"
-                      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"roads\"\nkind = \"road\"\n"
-                      << "[tin]\nsnap_tolerance = 0.001\n";
+  std::ofstream(toml)
+      << "[project]\ncrs = \"EPSG:32612\"\n"
+      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"contours\"\nkind = \"contours\"\nz = "
+         "\"elev\"\n"
+      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"spots\"\nkind = \"points\"\nz = \"elev\"\n"
+      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"roads\"\nkind = \"road\"\n"
+      << "[tin]\nsnap_tolerance = 0.001\n";
   ctx.config = loadProjectConfig(toml);
 }
 
@@ -186,17 +199,26 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (arg == "--contour-vertices") ctx.sizes.contourVertices = std::stol(next());
-    else if (arg == "--spot-heights") ctx.sizes.spotHeights = std::stol(next());
-    else if (arg == "--breakline-vertices") ctx.sizes.breaklineVertices = std::stol(next());
-    else if (arg == "--dir") ctx.dir = next();
-    else if (arg == "--keep") keep = true;
+    if (arg == "--contour-vertices")
+      ctx.sizes.contourVertices = std::stol(next());
+    else if (arg == "--spot-heights")
+      ctx.sizes.spotHeights = std::stol(next());
+    else if (arg == "--breakline-vertices")
+      ctx.sizes.breaklineVertices = std::stol(next());
+    else if (arg == "--dir")
+      ctx.dir = next();
+    else if (arg == "--keep")
+      keep = true;
     else {
-      std::fprintf(stderr, "usage: ingest_bench [--contour-vertices N] [--spot-heights N] [--breakline-vertices N] [--dir DIR] [--keep]\n");
+      std::fprintf(stderr,
+                   "usage: ingest_bench [--contour-vertices N] [--spot-heights N] "
+                   "[--breakline-vertices N] [--dir DIR] [--keep]\n");
       return 2;
     }
   }
-  if (ctx.dir.empty()) ctx.dir = std::filesystem::temp_directory_path() / ("tinsmith-ingest-bench-" + std::to_string(::getpid()));
+  if (ctx.dir.empty())
+    ctx.dir = std::filesystem::temp_directory_path() /
+              ("tinsmith-ingest-bench-" + std::to_string(::getpid()));
   std::filesystem::create_directories(ctx.dir);
   ctx.gpkg = ctx.dir / "bench.gpkg";
 
@@ -224,7 +246,8 @@ int main(int argc, char** argv) {
       resetPeak();
       const auto start = std::chrono::steady_clock::now();
       stage.run(ctx);
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const long hwm = readStatusKb("VmHWM:");
       const long rss = readStatusKb("VmRSS:");
       if (stage.name == "read") inputVertices = countVertices(ctx.layers);
@@ -232,21 +255,30 @@ int main(int argc, char** argv) {
         total += seconds;
         peakKb = std::max(peakKb, hwm);
       }
-      std::printf("| %s | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, hwm / 1024.0, rss / 1024.0);
+      std::printf("| %s | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, hwm / 1024.0,
+                  rss / 1024.0);
     }
     std::printf("| **ingest total** | **%.3f** | **%.1f** | |\n\n", total, peakKb / 1024.0);
-    std::printf("input vertices: %zu (contours %ld, spot heights %ld, break lines %ld)\n", inputVertices,
-                ctx.sizes.contourVertices, ctx.sizes.spotHeights, ctx.sizes.breaklineVertices);
-    std::printf("baseline RSS %.1f MB; peak above baseline %.1f MB = %.0f bytes per input vertex\n", baselineKb / 1024.0,
-                (peakKb - baselineKb) / 1024.0,
-                inputVertices ? (peakKb - baselineKb) * 1024.0 / static_cast<double>(inputVertices) : 0.0);
+    std::printf("input vertices: %zu (contours %ld, spot heights %ld, break lines %ld)\n",
+                inputVertices, ctx.sizes.contourVertices, ctx.sizes.spotHeights,
+                ctx.sizes.breaklineVertices);
+    std::printf(
+        "baseline RSS %.1f MB; peak above baseline %.1f MB = %.0f bytes per input vertex\n",
+        baselineKb / 1024.0, (peakKb - baselineKb) / 1024.0,
+        inputVertices ? (peakKb - baselineKb) * 1024.0 / static_cast<double>(inputVertices) : 0.0);
     const auto& r = ctx.cleaning;
-    std::printf("cleaning: %llu snapped, %llu repeated vertices, %llu degenerate, %llu points merged (%llu z conflicts), "
-                "%llu points on break-line vertices, %llu contour crossings, %llu self-crossings\n",
-                static_cast<unsigned long long>(r.verticesSnapped), static_cast<unsigned long long>(r.repeatedVerticesDropped),
-                static_cast<unsigned long long>(r.degenerateFeaturesDropped), static_cast<unsigned long long>(r.duplicatePointsMerged),
-                static_cast<unsigned long long>(r.duplicatePointZConflicts), static_cast<unsigned long long>(r.pointsOnBreakLineVertices),
-                static_cast<unsigned long long>(r.contourCrossings), static_cast<unsigned long long>(r.contourSelfCrossings));
+    std::printf(
+        "cleaning: %llu snapped, %llu repeated vertices, %llu degenerate, %llu points merged (%llu "
+        "z conflicts), "
+        "%llu points on break-line vertices, %llu contour crossings, %llu self-crossings\n",
+        static_cast<unsigned long long>(r.verticesSnapped),
+        static_cast<unsigned long long>(r.repeatedVerticesDropped),
+        static_cast<unsigned long long>(r.degenerateFeaturesDropped),
+        static_cast<unsigned long long>(r.duplicatePointsMerged),
+        static_cast<unsigned long long>(r.duplicatePointZConflicts),
+        static_cast<unsigned long long>(r.pointsOnBreakLineVertices),
+        static_cast<unsigned long long>(r.contourCrossings),
+        static_cast<unsigned long long>(r.contourSelfCrossings));
     std::printf("vertices after cleaning: %zu\n", countVertices(ctx.layers));
   } catch (const Error& e) {
     std::fprintf(stderr, "ERROR: %s\n", e.what());
