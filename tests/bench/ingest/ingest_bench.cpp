@@ -14,6 +14,7 @@
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 #include <ogrsf_frmts.h>
+#include <sys/resource.h>
 
 #include <chrono>
 #include <cmath>
@@ -65,6 +66,13 @@ long readStatusKb(const char* key) {
     if (line.rfind(key, 0) == 0) return std::stol(line.substr(std::strlen(key)));
   }
   return -1;
+}
+
+double cpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
 }
 
 void resetPeak() {
@@ -236,8 +244,10 @@ int main(int argc, char** argv) {
   };
 
   try {
-    std::printf("| stage | seconds | peak RSS MB | RSS after MB |\n|---|---:|---:|---:|\n");
+    std::printf(
+        "| stage | wall s | CPU s | peak RSS MB | RSS after MB |\n|---|---:|---:|---:|---:|\n");
     double total = 0.0;
+    double totalCpu = 0.0;
     long peakKb = 0;
     std::size_t inputVertices = 0;
     long baselineKb = -1;  // RSS before the first counted stage: libraries, not data
@@ -245,7 +255,9 @@ int main(int argc, char** argv) {
       if (stage.counted && baselineKb < 0) baselineKb = readStatusKb("VmRSS:");
       resetPeak();
       const auto start = std::chrono::steady_clock::now();
+      const double cpuStart = cpuSeconds();
       stage.run(ctx);
+      const double cpu = cpuSeconds() - cpuStart;
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const long hwm = readStatusKb("VmHWM:");
@@ -253,12 +265,14 @@ int main(int argc, char** argv) {
       if (stage.name == "read") inputVertices = countVertices(ctx.layers);
       if (stage.counted) {
         total += seconds;
+        totalCpu += cpu;
         peakKb = std::max(peakKb, hwm);
       }
-      std::printf("| %s | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, hwm / 1024.0,
-                  rss / 1024.0);
+      std::printf("| %s | %.3f | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, cpu,
+                  hwm / 1024.0, rss / 1024.0);
     }
-    std::printf("| **ingest total** | **%.3f** | **%.1f** | |\n\n", total, peakKb / 1024.0);
+    std::printf("| **ingest total** | **%.3f** | **%.3f** | **%.1f** | |\n\n", total, totalCpu,
+                peakKb / 1024.0);
     std::printf("input vertices: %zu (contours %ld, spot heights %ld, break lines %ld)\n",
                 inputVertices, ctx.sizes.contourVertices, ctx.sizes.spotHeights,
                 ctx.sizes.breaklineVertices);
