@@ -5,8 +5,10 @@
 #include <cstdio>
 #include <limits>
 #include <numeric>
+#include <tuple>
 
 #include "core/base/error.hpp"
+#include "core/geometry/predicates.hpp"
 #include "ingest/filters/cell_grid.hpp"
 
 namespace tinsmith::ingest {
@@ -200,36 +202,26 @@ void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zC
 
 // ---- Rule 5: contour crossings -------------------------------------------
 
-double orient(const Point3& a, const Point3& b, const Point3& c) {
-  // Relative to a, which keeps UTM-sized coordinates from cancelling.
-  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-}
-
-bool onSegment(const Point3& a, const Point3& b, const Point3& p) {
-  return std::min(a.x, b.x) <= p.x && p.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= p.y &&
-         p.y <= std::max(a.y, b.y);
-}
-
-// Whether segments ab and cd meet (cross or touch); `at` gets a meeting point.
+// Whether segments ab and cd meet (cross or touch), decided with the exact
+// predicates; `at` gets a meeting point (rounded where they cross properly).
 bool segmentsMeet(const Point3& a, const Point3& b, const Point3& c, const Point3& d, Point2& at) {
-  if (std::max(a.x, b.x) < std::min(c.x, d.x) || std::max(c.x, d.x) < std::min(a.x, b.x) ||
-      std::max(a.y, b.y) < std::min(c.y, d.y) || std::max(c.y, d.y) < std::min(a.y, b.y)) {
-    return false;
-  }
-  const double o1 = orient(a, b, c);
-  const double o2 = orient(a, b, d);
-  const double o3 = orient(c, d, a);
-  const double o4 = orient(c, d, b);
-  if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) {
-    const double t = o3 / (o3 - o4);
-    at = {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)};
+  using geometry::SegmentIntersection;
+  const auto kind = geometry::segmentIntersection(a.xy(), b.xy(), c.xy(), d.xy());
+  if (kind == SegmentIntersection::None) return false;
+  if (kind == SegmentIntersection::Proper) {
+    at = geometry::intersectionPoint(a.xy(), b.xy(), c.xy(), d.xy());
     return true;
   }
-  if (o1 == 0 && onSegment(a, b, c)) return at = c.xy(), true;
-  if (o2 == 0 && onSegment(a, b, d)) return at = d.xy(), true;
-  if (o3 == 0 && onSegment(c, d, a)) return at = a.xy(), true;
-  if (o4 == 0 && onSegment(c, d, b)) return at = b.xy(), true;
-  return false;
+  // Touching or overlapping: some endpoint lies on the other segment.
+  for (const auto& [p, q0, q1] :
+       {std::tuple{c, a, b}, std::tuple{d, a, b}, std::tuple{a, c, d}, std::tuple{b, c, d}}) {
+    if (geometry::onSegment(q0.xy(), q1.xy(), p.xy())) {
+      at = p.xy();
+      return true;
+    }
+  }
+  at = c.xy();
+  return true;
 }
 
 struct ContourRef {
