@@ -225,6 +225,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   const bool useError = crit.errorAbsolute.has_value() || crit.errorPercent.has_value();
 
   std::vector<std::uint64_t> paths(n, 0);
+  std::vector<std::uint64_t> previousPaths;
   std::vector<std::uint32_t> triOf(n, 0);
   Vector coefficients;
   std::vector<LevelStats> stats;
@@ -265,19 +266,35 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     std::vector<Point2> positions(nv);
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
+    // Triangles of Δ_{k−1} that were not split keep their path: their points
+    // stay put. The others' points continue their descent from there.
+    std::vector<std::uint32_t> remap(previousPaths.size());
+    for (std::size_t t = 0; t < previousPaths.size(); ++t) remap[t] = triIndex.find(previousPaths[t]);
+
     // Locate the points and accumulate per-triangle moments, one copy per worker.
     std::vector<std::vector<TriangleMoments>> moments(static_cast<std::size_t>(threads));
     parallelFor(n, threads, [&](std::size_t b, std::size_t e, int worker) {
       auto& mine = moments[static_cast<std::size_t>(worker)];
       mine.assign(tris.size(), TriangleMoments{});
       for (std::size_t i = b; i < e; ++i) {
-        const BinaryLocation loc = level == 1 ? mesh.locate(pts[i].xy()) : mesh.locateFrom(pts[i].xy(), paths[i]);
-        paths[i] = loc.triangle.path;
-        const std::uint32_t t = triIndex.find(paths[i]);
+        const std::uint32_t kept = level == 1 ? KeyIndexMap::kNone : remap[triOf[i]];
+        std::uint32_t t = kept;
+        std::array<double, 3> bc;
+        if (kept != KeyIndexMap::kNone) {
+          const Triangle& tv = triVerts[t];
+          bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
+        } else {
+          const BinaryLocation loc = level == 1 ? mesh.locate(pts[i].xy()) : mesh.locateFrom(pts[i].xy(), paths[i]);
+          paths[i] = loc.triangle.path;
+          t = triIndex.find(paths[i]);
+          bc = loc.barycentric;
+        }
         triOf[i] = t;
-        mine[t].add(loc.barycentric, pts[i].z, weights.empty() ? 1.0 : weights[i]);
+        mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
       }
     });
+    previousPaths.resize(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) previousPaths[t] = tris[t].path;
     for (std::size_t w = 1; w < moments.size(); ++w) {
       if (moments[w].empty()) continue;
       for (std::size_t t = 0; t < tris.size(); ++t) moments[0][t].merge(moments[w][t]);
