@@ -1,0 +1,1138 @@
+// Constrained Delaunay triangulation (see cdt.hpp for the contract).
+//
+// Working structure: triangle-based half-edges in flat arrays. Triangle t owns
+// half-edges 3t..3t+2; half-edge 3t+i runs from corner i to corner (i+1)%3 with
+// the triangle on its left. The convex hull is closed by ghost triangles whose
+// third corner is the vertex at infinity (kInf), so every half-edge has a twin.
+// Flips and splits reuse triangle slots; nothing is ever deleted.
+#include "core/cdt/cdt.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include "core/base/error.hpp"
+#include "core/geometry/predicates.hpp"
+
+namespace tinsmith {
+namespace {
+
+using geometry::incircle;
+using geometry::orient2d;
+
+constexpr std::uint32_t kNone = 0xffffffffu;
+constexpr std::uint32_t kInf = 0xfffffffeu;
+// Feature id of the boundary edges of a TIN loaded by fromTinData: bounds the
+// domain, never exported.
+constexpr FeatureId kDomainFeature = 0xfffffffeu;
+
+inline std::uint32_t nxt(std::uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+inline std::uint32_t prv(std::uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+
+inline std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | b;
+}
+
+// Hilbert index of (x, y) on a 2^16 grid.
+std::uint32_t hilbertIndex(std::uint32_t x, std::uint32_t y) {
+  constexpr std::uint32_t n = 1u << 16;
+  std::uint32_t d = 0;
+  for (std::uint32_t s = n / 2; s > 0; s /= 2) {
+    const std::uint32_t rx = (x & s) ? 1 : 0;
+    const std::uint32_t ry = (y & s) ? 1 : 0;
+    d += s * s * ((3 * rx) ^ ry);
+    if (ry == 0) {
+      if (rx == 1) {
+        x = n - 1 - x;
+        y = n - 1 - y;
+      }
+      std::swap(x, y);
+    }
+  }
+  return d;
+}
+
+// LSD radix sort of 64-bit values on their upper 32 bits (stable).
+void radixSortHigh32(std::vector<std::uint64_t>& v) {
+  std::vector<std::uint64_t> tmp(v.size());
+  for (int shift = 32; shift < 64; shift += 8) {
+    std::size_t count[257] = {};
+    for (std::uint64_t x : v) ++count[((x >> shift) & 0xff) + 1];
+    for (int i = 0; i < 256; ++i) count[i + 1] += count[i];
+    for (std::uint64_t x : v) tmp[count[(x >> shift) & 0xff]++] = x;
+    v.swap(tmp);
+  }
+}
+
+enum class Role : std::uint8_t { None, Boundary, Hole };
+
+struct Segment {
+  std::uint32_t a, b;
+  FeatureId feature;
+  Role role;
+};
+
+enum class LocKind { InTriangle, OnEdge, OnVertex, Outside };
+struct Location {
+  LocKind kind;
+  std::uint32_t t;  // triangle (InTriangle, Outside: the ghost)
+  std::uint32_t h;  // half-edge (OnEdge), in a finite triangle
+  std::uint32_t v;  // vertex (OnVertex)
+};
+
+}  // namespace
+
+struct Cdt::Impl {
+  CdtOptions options;
+  std::vector<TinFeature> features;
+  std::vector<Role> featureRole;  // unused for now beyond segments' roles
+
+  // Input vertices (intersection vertices are appended).
+  std::vector<Point2> xy;
+  std::vector<double> z;
+  std::vector<FeatureId> vfeat;
+  std::vector<std::uint32_t> rep;  // kNone while pending; self if a vertex; else merged into
+  std::vector<std::uint32_t> vhe;  // an outgoing half-edge of each live vertex
+  std::size_t insertedUpTo = 0;
+
+  // Triangles.
+  std::vector<std::uint32_t> tv;   // corners
+  std::vector<std::uint32_t> opp;  // twin half-edge
+  std::vector<std::uint8_t> cons;  // constrained flag per half-edge
+  std::unordered_map<std::uint64_t, std::vector<FeatureId>> edgeFeatures;
+
+  std::vector<Segment> segments;
+  std::size_t segmentsDone = 0;
+  bool hasBoundary = false, hasHole = false;
+
+  CdtReport report;
+  Mesh mesh;
+  std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
+  bool finalized = false;
+
+  std::uint32_t lastTriangle = 0;
+  std::uint32_t rng = 2463534242u;
+  std::vector<std::uint32_t> stack;
+  std::vector<std::uint32_t> visitStamp;
+  std::uint32_t stamp = 0;
+
+  // ---------------------------------------------------------------- basics
+  [[nodiscard]] bool triangulated() const { return !tv.empty(); }
+  [[nodiscard]] std::uint32_t triCount() const { return static_cast<std::uint32_t>(tv.size() / 3); }
+  [[nodiscard]] bool isGhost(std::uint32_t t) const {
+    return tv[3 * t] == kInf || tv[3 * t + 1] == kInf || tv[3 * t + 2] == kInf;
+  }
+  std::uint32_t nextRandom() {
+    rng ^= rng << 13;
+    rng ^= rng >> 17;
+    rng ^= rng << 5;
+    return rng;
+  }
+  int orient(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+    return orient2d(xy[a], xy[b], xy[c]);
+  }
+  int orientP(std::uint32_t a, std::uint32_t b, const Point2& p) const {
+    return orient2d(xy[a], xy[b], p);
+  }
+  static int priorityOf(const std::vector<TinFeature>& fs, FeatureId f) {
+    return f == kNoFeature || f >= fs.size() ? -1 : constraintPriority(fs[f].kind);
+  }
+  std::uint32_t find(std::uint32_t v) {
+    std::uint32_t r = v;
+    while (rep[r] != r) r = rep[r];
+    while (rep[v] != r) {
+      const std::uint32_t n = rep[v];
+      rep[v] = r;
+      v = n;
+    }
+    return r;
+  }
+
+  std::uint32_t newTriangle() {
+    const auto t = triCount();
+    tv.insert(tv.end(), 3, kNone);
+    opp.insert(opp.end(), 3, kNone);
+    cons.insert(cons.end(), 3, 0);
+    return t;
+  }
+  void setTri(std::uint32_t t, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    tv[3 * t] = a;
+    tv[3 * t + 1] = b;
+    tv[3 * t + 2] = c;
+    if (a != kInf) vhe[a] = 3 * t;
+    if (b != kInf) vhe[b] = 3 * t + 1;
+    if (c != kInf) vhe[c] = 3 * t + 2;
+  }
+  void link(std::uint32_t h, std::uint32_t g) {
+    opp[h] = g;
+    opp[g] = h;
+  }
+
+  /// Is p in conflict with triangle t (inside its circumcircle, or for a ghost
+  /// strictly outside its hull edge, or on the open hull edge)?
+  bool inConflict(std::uint32_t t, const Point2& p) const {
+    const std::uint32_t a = tv[3 * t], b = tv[3 * t + 1], c = tv[3 * t + 2];
+    std::uint32_t u, v;
+    if (a == kInf) {
+      u = b, v = c;
+    } else if (b == kInf) {
+      u = c, v = a;
+    } else if (c == kInf) {
+      u = a, v = b;
+    } else {
+      return incircle(xy[a], xy[b], xy[c], p) > 0;
+    }
+    const int o = orientP(u, v, p);
+    if (o != 0) return o > 0;
+    const Point2 &pu = xy[u], &pv = xy[v];
+    return std::min(pu.x, pv.x) <= p.x && p.x <= std::max(pu.x, pv.x) &&
+           std::min(pu.y, pv.y) <= p.y && p.y <= std::max(pu.y, pv.y) && !(p == pu) &&
+           !(p == pv);
+  }
+
+  // --------------------------------------------------------------- flips
+  /// Flips the edge of half-edge h (a→b in (a,b,c); twin in (b,a,d)) to c–d.
+  /// Afterwards triangle h/3 = (c,a,d) and twin's triangle = (d,b,c).
+  void flip(std::uint32_t h) {
+    const std::uint32_t g = opp[h];
+    const std::uint32_t t0 = h / 3, t1 = g / 3;
+    const std::uint32_t a = tv[h], b = tv[nxt(h)], c = tv[prv(h)], d = tv[prv(g)];
+    const std::uint32_t x1 = opp[nxt(h)], x2 = opp[prv(h)], x3 = opp[nxt(g)], x4 = opp[prv(g)];
+    const std::uint8_t c1 = cons[nxt(h)], c2 = cons[prv(h)], c3 = cons[nxt(g)], c4 = cons[prv(g)];
+    setTri(t0, c, a, d);
+    setTri(t1, d, b, c);
+    const std::uint32_t b0 = 3 * t0, b1 = 3 * t1;
+    link(b0, x2);
+    cons[b0] = c2;
+    link(b0 + 1, x3);
+    cons[b0 + 1] = c3;
+    link(b0 + 2, b1 + 2);
+    cons[b0 + 2] = 0;
+    cons[b1 + 2] = 0;
+    link(b1, x4);
+    cons[b1] = c4;
+    link(b1 + 1, x1);
+    cons[b1 + 1] = c1;
+  }
+
+  /// Restores the (constrained) Delaunay property around vertex p after the
+  /// half-edges on `stack` (each opposite p in its triangle) were created.
+  void legalize(std::uint32_t p) {
+    const Point2 pp = xy[p];
+    while (!stack.empty()) {
+      const std::uint32_t h = stack.back();
+      stack.pop_back();
+      if (cons[h]) continue;
+      const std::uint32_t g = opp[h];
+      if (!inConflict(g / 3, pp)) continue;
+      flip(h);
+      // p is corner 0 of triangle h/3 = (p,a,d) and corner 2 of (d,b,p).
+      stack.push_back(3 * (h / 3) + 1);
+      stack.push_back(3 * (g / 3));
+    }
+  }
+
+  // -------------------------------------------------------------- splits
+  /// Splits triangle t = (a,b,c) at new vertex p into (a,b,p), (b,c,p), (c,a,p).
+  void splitTriangle(std::uint32_t t, std::uint32_t p) {
+    const std::uint32_t a = tv[3 * t], b = tv[3 * t + 1], c = tv[3 * t + 2];
+    const std::uint32_t o0 = opp[3 * t], o1 = opp[3 * t + 1], o2 = opp[3 * t + 2];
+    const std::uint8_t c0 = cons[3 * t], c1 = cons[3 * t + 1], c2 = cons[3 * t + 2];
+    const std::uint32_t n1 = newTriangle(), n2 = newTriangle();
+    setTri(t, a, b, p);
+    setTri(n1, b, c, p);
+    setTri(n2, c, a, p);
+    link(3 * t, o0);
+    cons[3 * t] = c0;
+    link(3 * n1, o1);
+    cons[3 * n1] = c1;
+    link(3 * n2, o2);
+    cons[3 * n2] = c2;
+    link(3 * t + 1, 3 * n1 + 2);
+    link(3 * t + 2, 3 * n2 + 1);
+    link(3 * n1 + 1, 3 * n2 + 2);
+    stack.clear();
+    stack.push_back(3 * t);
+    stack.push_back(3 * n1);
+    stack.push_back(3 * n2);
+    legalize(p);
+  }
+
+  /// Splits the edge of half-edge h (a→b in (a,b,c), twin in (b,a,d)) at new
+  /// vertex p; a constrained edge stays constrained in both halves.
+  void splitEdge(std::uint32_t h, std::uint32_t p) {
+    const std::uint32_t g = opp[h];
+    const std::uint32_t t0 = h / 3, t1 = g / 3;
+    const std::uint32_t a = tv[h], b = tv[nxt(h)], c = tv[prv(h)], d = tv[prv(g)];
+    const std::uint32_t xbc = opp[nxt(h)], xca = opp[prv(h)], xad = opp[nxt(g)],
+                        xdb = opp[prv(g)];
+    const std::uint8_t cbc = cons[nxt(h)], cca = cons[prv(h)], cad = cons[nxt(g)],
+                       cdb = cons[prv(g)];
+    const std::uint8_t split = cons[h];
+    const std::uint32_t n0 = newTriangle(), n1 = newTriangle();
+    setTri(t0, c, a, p);
+    setTri(n0, b, c, p);
+    setTri(t1, d, b, p);
+    setTri(n1, a, d, p);
+    link(3 * t0, xca);
+    cons[3 * t0] = cca;
+    link(3 * n0, xbc);
+    cons[3 * n0] = cbc;
+    link(3 * t1, xdb);
+    cons[3 * t1] = cdb;
+    link(3 * n1, xad);
+    cons[3 * n1] = cad;
+    link(3 * t0 + 1, 3 * n1 + 2);  // a→p / p→a
+    link(3 * t0 + 2, 3 * n0 + 1);  // p→c / c→p
+    link(3 * n0 + 2, 3 * t1 + 1);  // p→b / b→p
+    link(3 * t1 + 2, 3 * n1 + 1);  // p→d / d→p
+    cons[3 * t0 + 2] = cons[3 * n0 + 1] = cons[3 * t1 + 2] = cons[3 * n1 + 1] = 0;
+    cons[3 * t0 + 1] = cons[3 * n1 + 2] = cons[3 * n0 + 2] = cons[3 * t1 + 1] = split;
+    if (split) {
+      auto it = edgeFeatures.find(edgeKey(a, b));
+      if (it != edgeFeatures.end()) {
+        std::vector<FeatureId> fs = std::move(it->second);
+        edgeFeatures.erase(it);
+        edgeFeatures[edgeKey(a, p)] = fs;
+        edgeFeatures[edgeKey(p, b)] = std::move(fs);
+      }
+    }
+    stack.clear();
+    stack.push_back(3 * t0);
+    stack.push_back(3 * n0);
+    stack.push_back(3 * t1);
+    stack.push_back(3 * n1);
+    legalize(p);
+  }
+
+  // ------------------------------------------------------------ location
+  Location classify(std::uint32_t t, const Point2& p) const {
+    const std::uint32_t base = 3 * t;
+    int o[3];
+    for (int i = 0; i < 3; ++i) o[i] = orientP(tv[base + i], tv[base + (i + 1) % 3], p);
+    const int zeros = (o[0] == 0) + (o[1] == 0) + (o[2] == 0);
+    if (zeros == 0) return {LocKind::InTriangle, t, kNone, kNone};
+    if (zeros == 1) {
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        if (o[i] == 0) return {LocKind::OnEdge, t, base + i, kNone};
+      }
+    }
+    // Two zeros: p is the corner shared by those edges.
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      if (o[i] == 0 && o[(i + 2) % 3] == 0) return {LocKind::OnVertex, t, kNone, tv[base + i]};
+    }
+    return {LocKind::OnVertex, t, kNone, tv[base]};
+  }
+
+  /// The finite edge u→v of ghost triangle t.
+  std::uint32_t ghostEdge(std::uint32_t t) const {
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      if (tv[3 * t + i] != kInf && tv[3 * t + (i + 1) % 3] != kInf) return 3 * t + i;
+    }
+    return kNone;
+  }
+
+  /// Visibility walk from triangle `start` (stochastic edge order from a fixed
+  /// seed — deterministic and it cannot cycle for ever); falls back to a scan
+  /// of all triangles after too many steps.
+  Location locate(const Point2& p, std::uint32_t start) {
+    std::uint32_t t = start;
+    std::uint32_t from = kNone;  // half-edge we entered through
+    const std::size_t limit = 4 * static_cast<std::size_t>(triCount()) + 64;
+    for (std::size_t steps = 0; steps < limit; ++steps) {
+      if (isGhost(t)) {
+        const std::uint32_t e = ghostEdge(t);
+        if (orientP(tv[e], tv[nxt(e)], p) > 0) return {LocKind::Outside, t, kNone, kNone};
+        from = opp[e];
+        t = from / 3;
+        continue;
+      }
+      const std::uint32_t r = nextRandom() % 3;
+      bool moved = false;
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t h = 3 * t + (r + k) % 3;
+        if (h == from) continue;
+        if (orientP(tv[h], tv[nxt(h)], p) < 0) {
+          from = opp[h];
+          t = from / 3;
+          if (isGhost(t)) return {LocKind::Outside, t, kNone, kNone};
+          moved = true;
+          break;
+        }
+      }
+      if (!moved) return classify(t, p);
+    }
+    return scan(p);
+  }
+
+  Location scan(const Point2& p) const {
+    for (std::uint32_t t = 0; t < triCount(); ++t) {
+      if (isGhost(t)) continue;
+      bool inside = true;
+      for (std::uint32_t i = 0; i < 3 && inside; ++i) {
+        inside = orientP(tv[3 * t + i], tv[3 * t + (i + 1) % 3], p) >= 0;
+      }
+      if (inside) return classify(t, p);
+    }
+    for (std::uint32_t t = 0; t < triCount(); ++t) {
+      if (!isGhost(t)) continue;
+      const std::uint32_t e = ghostEdge(t);
+      if (orientP(tv[e], tv[nxt(e)], p) > 0) return {LocKind::Outside, t, kNone, kNone};
+    }
+    throw internalError("point location failed: the point is in no triangle");
+  }
+
+  // ----------------------------------------------------------- insertion
+  /// Merges input vertex `dup` into live vertex `keep`, z by priority.
+  void merge(std::uint32_t dup, std::uint32_t keep) {
+    rep[dup] = keep;
+    CdtReport::Merge m;
+    m.at = xy[keep];
+    m.kept = VertexId(keep);
+    m.merged = VertexId(dup);
+    const int pd = priorityOf(features, vfeat[dup]), pk = priorityOf(features, vfeat[keep]);
+    double droppedZ = z[dup];
+    FeatureId droppedF = vfeat[dup];
+    if (pd > pk || (pd == pk && dup < keep && z[dup] != z[keep])) {
+      droppedZ = z[keep];
+      droppedF = vfeat[keep];
+      z[keep] = z[dup];
+      vfeat[keep] = vfeat[dup];
+    }
+    m.keptZ = z[keep];
+    m.droppedZ = droppedZ;
+    m.keptFeature = vfeat[keep];
+    m.droppedFeature = droppedF;
+    report.merges.push_back(m);
+  }
+
+  /// A live vertex within snapTolerance of p near location `loc`, or kNone.
+  /// Looks at the vertices of every triangle in conflict with p reachable from
+  /// the located one (p's Delaunay neighbours-to-be, which contain its nearest
+  /// vertex).
+  std::uint32_t nearVertex(const Point2& p, const Location& loc) {
+    const double tol = options.snapTolerance;
+    if (!(tol > 0)) return kNone;
+    if (visitStamp.size() < triCount()) visitStamp.resize(triCount(), 0);
+    ++stamp;
+    std::vector<std::uint32_t> todo{loc.t};
+    if (loc.kind == LocKind::OnEdge) todo.push_back(opp[loc.h] / 3);
+    std::uint32_t best = kNone;
+    double bestD = tol * tol;
+    std::size_t visited = 0;
+    while (!todo.empty() && visited < 4096) {
+      const std::uint32_t t = todo.back();
+      todo.pop_back();
+      if (visitStamp[t] == stamp) continue;
+      visitStamp[t] = stamp;
+      ++visited;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t v = tv[3 * t + i];
+        if (v == kInf) continue;
+        const double dx = xy[v].x - p.x, dy = xy[v].y - p.y;
+        const double d = dx * dx + dy * dy;
+        if (d <= bestD && (best == kNone || d < bestD || v < best)) {
+          best = v;
+          bestD = d;
+        }
+        const std::uint32_t n = opp[3 * t + i] / 3;
+        if (visitStamp[n] != stamp && inConflict(n, p)) todo.push_back(n);
+      }
+    }
+    return best;
+  }
+
+  /// Inserts input vertex v (rep[v] == kNone) into the triangulation.
+  void insertVertex(std::uint32_t v) {
+    const Point2 p = xy[v];
+    const Location loc = locate(p, lastTriangle);
+    if (loc.kind == LocKind::OnVertex) {
+      merge(v, loc.v);
+      lastTriangle = loc.t;
+      return;
+    }
+    const std::uint32_t nearV = nearVertex(p, loc);
+    if (nearV != kNone) {
+      merge(v, nearV);
+      lastTriangle = loc.t;
+      return;
+    }
+    rep[v] = v;
+    if (loc.kind == LocKind::OnEdge) {
+      splitEdge(loc.h, v);
+    } else {
+      splitTriangle(loc.t, v);
+    }
+    lastTriangle = vhe[v] / 3;
+  }
+
+  /// Builds the first triangle from pending vertices in `order`; returns the
+  /// three used, or throws when all pending points are collinear.
+  void initialTriangle(const std::vector<std::uint32_t>& order, std::size_t& usedA,
+                       std::size_t& usedB, std::size_t& usedC) {
+    const std::uint32_t a = order[0];
+    std::size_t ib = kNone, ic = kNone;
+    for (std::size_t i = 1; i < order.size(); ++i) {
+      if (!(xy[order[i]] == xy[a])) {
+        ib = i;
+        break;
+      }
+    }
+    if (ib != kNone) {
+      for (std::size_t i = ib + 1; i < order.size(); ++i) {
+        if (orient(a, order[ib], order[i]) != 0) {
+          ic = i;
+          break;
+        }
+      }
+    }
+    if (ic == kNone) {
+      throw geometryError(
+          "the input has fewer than 3 non-collinear distinct points (" +
+              std::to_string(order.size()) + " points given)",
+          {}, "give at least three points that do not lie on one line");
+    }
+    std::uint32_t b = order[ib], c = order[ic];
+    if (orient(a, b, c) < 0) std::swap(b, c);
+    usedA = 0;
+    usedB = ib;
+    usedC = ic;
+    for (std::uint32_t v : {a, b, c}) rep[v] = v;
+    const std::uint32_t t = newTriangle(), g0 = newTriangle(), g1 = newTriangle(),
+                        g2 = newTriangle();
+    setTri(g0, b, a, kInf);
+    setTri(g1, c, b, kInf);
+    setTri(g2, a, c, kInf);
+    setTri(t, a, b, c);
+    link(3 * t, 3 * g0);
+    link(3 * t + 1, 3 * g1);
+    link(3 * t + 2, 3 * g2);
+    link(3 * g0 + 1, 3 * g2 + 2);
+    link(3 * g0 + 2, 3 * g1 + 1);
+    link(3 * g1 + 2, 3 * g2 + 1);
+    lastTriangle = t;
+  }
+
+  void insertPendingPoints() {
+    const std::size_t n = xy.size();
+    if (insertedUpTo >= n) return;
+    std::vector<std::uint32_t> order;
+    order.reserve(n - insertedUpTo);
+    double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+    for (std::size_t i = insertedUpTo; i < n; ++i) {
+      if (rep[i] != kNone) continue;
+      minX = std::min(minX, xy[i].x);
+      maxX = std::max(maxX, xy[i].x);
+      minY = std::min(minY, xy[i].y);
+      maxY = std::max(maxY, xy[i].y);
+    }
+    // Hilbert order on a 2^16 grid over the bounding box (ties keep input order).
+    const double sx = maxX > minX ? 65535.0 / (maxX - minX) : 0.0;
+    const double sy = maxY > minY ? 65535.0 / (maxY - minY) : 0.0;
+    std::vector<std::uint64_t> keys;
+    keys.reserve(n - insertedUpTo);
+    for (std::size_t i = insertedUpTo; i < n; ++i) {
+      if (rep[i] != kNone) continue;
+      const auto gx = static_cast<std::uint32_t>(std::min(65535.0, (xy[i].x - minX) * sx));
+      const auto gy = static_cast<std::uint32_t>(std::min(65535.0, (xy[i].y - minY) * sy));
+      keys.push_back((static_cast<std::uint64_t>(hilbertIndex(gx, gy)) << 32) | i);
+    }
+    radixSortHigh32(keys);
+    for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
+    if (vhe.size() < n) vhe.resize(n, kNone);
+    insertedUpTo = n;
+    if (order.empty()) return;
+
+    std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
+    if (!triangulated()) {
+      tv.reserve(order.size() * 6 + 12);
+      opp.reserve(order.size() * 6 + 12);
+      cons.reserve(order.size() * 6 + 12);
+      initialTriangle(order, skipA, skipB, skipC);
+    }
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      if (i == skipA || i == skipB || i == skipC) continue;
+      insertVertex(order[i]);
+    }
+  }
+
+  // --------------------------------------------------------- constraints
+  /// Half-edge p→q, or kNone if p and q are not adjacent.
+  std::uint32_t findHalfedge(std::uint32_t p, std::uint32_t q) const {
+    const std::uint32_t start = vhe[p];
+    std::uint32_t h = start;
+    do {
+      if (tv[nxt(h)] == q) return h;
+      h = opp[prv(h)];
+    } while (h != start);
+    return kNone;
+  }
+
+  void addEdgeFeature(std::uint32_t p, std::uint32_t q, FeatureId f) {
+    const std::uint32_t h = findHalfedge(p, q);
+    if (h == kNone) throw internalError("constraint edge missing after insertion");
+    cons[h] = cons[opp[h]] = 1;
+    auto& fs = edgeFeatures[edgeKey(p, q)];
+    if (std::find(fs.begin(), fs.end(), f) == fs.end()) fs.push_back(f);
+  }
+
+  /// Is c on the ray from a through b (c collinear with a, b assumed)?
+  bool onRay(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+    const Point2 &pa = xy[a], &pb = xy[b], &pc = xy[c];
+    if (pb.x > pa.x) return pc.x > pa.x;
+    if (pb.x < pa.x) return pc.x < pa.x;
+    return pb.y > pa.y ? pc.y > pa.y : pc.y < pa.y;
+  }
+
+  double zAlong(std::uint32_t u, std::uint32_t w, const Point2& p) const {
+    const double dx = xy[w].x - xy[u].x, dy = xy[w].y - xy[u].y;
+    const double l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((p.x - xy[u].x) * dx + (p.y - xy[u].y) * dy) / l2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    return z[u] + t * (z[w] - z[u]);
+  }
+
+  int edgePriority(std::uint32_t u, std::uint32_t w, FeatureId* best) const {
+    int pr = -1;
+    *best = kNoFeature;
+    auto it = edgeFeatures.find(edgeKey(u, w));
+    if (it == edgeFeatures.end()) return pr;
+    for (FeatureId f : it->second) {
+      const int p = priorityOf(features, f);
+      if (p > pr || *best == kNoFeature) {
+        pr = std::max(pr, p);
+        *best = f;
+      }
+    }
+    return pr;
+  }
+
+  /// The constraint cur→tgt crosses constrained edge e (R→L, in the
+  /// triangle on cur's side). Makes a vertex at the crossing — a new one
+  /// splitting e, or R or L when the crossing is (nearly) at one of them —
+  /// and returns it.
+  std::uint32_t crossingVertex(std::uint32_t cur, std::uint32_t tgt, std::uint32_t e,
+                               FeatureId f) {
+    const std::uint32_t R = tv[e], L = tv[nxt(e)];
+    const Point2 X = geometry::intersectionPoint(xy[cur], xy[tgt], xy[R], xy[L]);
+    FeatureId existing;
+    const int pe = edgePriority(R, L, &existing);
+    const int pi = priorityOf(features, f);
+    const double zE = zAlong(R, L, X), zI = zAlong(cur, tgt, X);
+
+    auto dist2 = [&](std::uint32_t v) {
+      const double dx = xy[v].x - X.x, dy = xy[v].y - X.y;
+      return dx * dx + dy * dy;
+    };
+    const std::uint32_t nearest = dist2(R) <= dist2(L) ? R : L;
+    const double tol = options.snapTolerance;
+    bool useExisting = tol > 0 && dist2(nearest) <= tol * tol;
+    if (!useExisting) {
+      // The split must leave four strictly counter-clockwise triangles.
+      const std::uint32_t c = tv[prv(e)], d = tv[prv(opp[e])];
+      const bool ok = c != kInf && d != kInf && orient2d(xy[c], xy[R], X) > 0 &&
+                      orient2d(xy[L], xy[c], X) > 0 && orient2d(xy[d], xy[L], X) > 0 &&
+                      orient2d(xy[R], xy[d], X) > 0;
+      useExisting = !ok;
+    }
+    CdtReport::Intersection ev;
+    ev.existing = existing;
+    ev.inserted = f;
+    ev.zExisting = zE;
+    ev.zInserted = zI;
+    std::uint32_t v;
+    if (useExisting) {
+      v = nearest;
+    } else {
+      v = static_cast<std::uint32_t>(xy.size());
+      xy.push_back(X);
+      z.push_back(pi > pe ? zI : zE);
+      vfeat.push_back(pi > pe ? f : existing);
+      rep.push_back(v);
+      vhe.push_back(kNone);
+      insertedUpTo = xy.size();
+      splitEdge(e, v);
+    }
+    ev.vertex = VertexId(v);
+    ev.at = {xy[v].x, xy[v].y, z[v]};
+    report.intersections.push_back(ev);
+    return v;
+  }
+
+  /// Inserts the constraint segment a→b (live vertices) for feature f.
+  void insertSegment(std::uint32_t a, std::uint32_t b, FeatureId f) {
+    std::vector<std::uint32_t> targets{b};
+    std::uint32_t cur = a;
+    const std::size_t guardLimit = 64 + 8 * xy.size();
+    std::size_t guard = 0;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> crossed;
+    while (!targets.empty()) {
+      if (++guard > guardLimit) {
+        throw internalError("constraint insertion did not terminate");
+      }
+      const std::uint32_t tgt = targets.back();
+      if (cur == tgt) {
+        targets.pop_back();
+        continue;
+      }
+      // Find the wedge at cur that holds the direction to tgt.
+      std::uint32_t firstCross = kNone, onLine = kNone;
+      {
+        const std::uint32_t start = vhe[cur];
+        std::uint32_t h = start;
+        std::size_t turns = 0;
+        do {
+          const std::uint32_t u = tv[nxt(h)], w = tv[prv(h)];
+          if (u != kInf) {
+            if (u == tgt) {
+              onLine = u;
+              break;
+            }
+            const int ou = orient(cur, tgt, u);
+            if (ou == 0 && onRay(cur, tgt, u)) {
+              onLine = u;
+              break;
+            }
+            if (w != kInf && ou < 0 && orient(cur, tgt, w) > 0) {
+              firstCross = nxt(h);  // u→w, u right of cur→tgt, w left
+              break;
+            }
+          }
+          h = opp[prv(h)];
+        } while (h != start && ++turns < 1u << 30);
+      }
+      if (onLine != kNone) {
+        addEdgeFeature(cur, onLine, f);
+        cur = onLine;
+        continue;
+      }
+      if (firstCross == kNone) throw internalError("constraint direction found in no triangle");
+
+      // Walk the crossed edges.
+      crossed.clear();
+      std::uint32_t e = firstCross;
+      std::uint32_t end = kNone;
+      bool hitConstraint = false;
+      for (;;) {
+        if (cons[e]) {
+          hitConstraint = true;
+          break;
+        }
+        crossed.emplace_back(tv[e], tv[nxt(e)]);
+        const std::uint32_t g = opp[e];
+        const std::uint32_t x = tv[prv(g)];
+        if (x == kInf) throw internalError("constraint leaves the convex hull");
+        if (x == tgt) {
+          end = tgt;
+          break;
+        }
+        const int ox = orient(cur, tgt, x);
+        if (ox == 0) {
+          end = x;
+          break;
+        }
+        e = ox > 0 ? nxt(g) : prv(g);
+      }
+      if (hitConstraint) {
+        targets.push_back(crossingVertex(cur, tgt, e, f));
+        continue;
+      }
+      removeCrossings(cur, end, crossed);
+      addEdgeFeature(cur, end, f);
+      cur = end;
+    }
+  }
+
+  /// Swaps away every edge crossing cur→end (Sloan; book 6.5), then restores
+  /// the Delaunay property on the new edges.
+  void removeCrossings(std::uint32_t a, std::uint32_t b,
+                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed) {
+    std::deque<std::pair<std::uint32_t, std::uint32_t>> queue(crossed.begin(), crossed.end());
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> fresh;
+    std::size_t guard = 0;
+    const std::size_t limit = 64 + 16 * crossed.size() * crossed.size();
+    while (!queue.empty()) {
+      if (++guard > limit) throw internalError("constraint edge recovery did not terminate");
+      const auto [p, q] = queue.front();
+      queue.pop_front();
+      const std::uint32_t h = findHalfedge(p, q);
+      if (h == kNone) throw internalError("crossing edge vanished");
+      const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
+      if (orient(c, d, p) * orient(c, d, q) >= 0) {  // not strictly convex
+        queue.emplace_back(p, q);
+        continue;
+      }
+      flip(h);
+      const bool endC = c == a || c == b, endD = d == a || d == b;
+      if (!endC && !endD && orient(a, b, c) * orient(a, b, d) < 0) {
+        queue.emplace_back(c, d);
+      } else {
+        fresh.emplace_back(c, d);
+      }
+    }
+    bool changed = true;
+    while (changed) {
+      changed = false;
+      for (auto& [p, q] : fresh) {
+        if ((p == a && q == b) || (p == b && q == a)) continue;
+        const std::uint32_t h = findHalfedge(p, q);
+        if (h == kNone || cons[h]) continue;
+        const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
+        if (c == kInf || d == kInf) continue;
+        if (incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
+          flip(h);
+          p = c;
+          q = d;
+          changed = true;
+        }
+      }
+    }
+  }
+
+  void insertPendingSegments() {
+    for (; segmentsDone < segments.size(); ++segmentsDone) {
+      const Segment s = segments[segmentsDone];
+      const std::uint32_t a = find(s.a), b = find(s.b);
+      if (a == b) {
+        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, s.feature, xy[a]});
+        continue;
+      }
+      insertSegment(a, b, s.feature);
+    }
+  }
+
+  bool isDomainEdge(std::uint32_t h) const {
+    if (!cons[h]) return false;
+    auto it = edgeFeatures.find(edgeKey(tv[h], tv[nxt(h)]));
+    if (it == edgeFeatures.end()) return false;
+    for (FeatureId f : it->second) {
+      if (f < featureRole.size() && featureRole[f] != Role::None) return true;
+      if (f == kDomainFeature) return true;  // domain edges of a loaded TIN
+    }
+    return false;
+  }
+
+  /// Marks triangles inside the domain: crossing-count parity from the outside.
+  std::vector<std::uint8_t> classifyDomain() const {
+    const std::uint32_t nt = triCount();
+    std::vector<std::uint8_t> inside(nt, 0);
+    if (!hasBoundary && !hasHole) {
+      for (std::uint32_t t = 0; t < nt; ++t) inside[t] = !isGhost(t);
+      return inside;
+    }
+    std::vector<std::uint32_t> depth(nt, kNone);
+    std::deque<std::uint32_t> dq;
+    for (std::uint32_t t = 0; t < nt; ++t) {
+      if (isGhost(t)) {
+        depth[t] = 0;
+        dq.push_back(t);
+      }
+    }
+    while (!dq.empty()) {
+      const std::uint32_t t = dq.front();
+      dq.pop_front();
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t h = 3 * t + i;
+        const std::uint32_t n = opp[h] / 3;
+        const std::uint32_t w = isDomainEdge(h) ? 1 : 0;
+        if (depth[t] + w < depth[n]) {
+          depth[n] = depth[t] + w;
+          if (w == 0) {
+            dq.push_front(n);
+          } else {
+            dq.push_back(n);
+          }
+        }
+      }
+    }
+    for (std::uint32_t t = 0; t < nt; ++t) {
+      if (isGhost(t)) continue;
+      inside[t] = hasBoundary ? (depth[t] % 2 == 1) : (depth[t] % 2 == 0);
+    }
+    return inside;
+  }
+};
+
+Cdt::Cdt(CdtOptions options) : impl_(std::make_unique<Impl>()) {
+  impl_->options = std::move(options);
+}
+Cdt::~Cdt() = default;
+Cdt::Cdt(Cdt&&) noexcept = default;
+Cdt& Cdt::operator=(Cdt&&) noexcept = default;
+
+FeatureId Cdt::addFeature(FeatureKind kind, std::string source) {
+  impl_->features.push_back({kind, std::move(source)});
+  impl_->featureRole.push_back(Role::None);
+  return static_cast<FeatureId>(impl_->features.size() - 1);
+}
+
+const std::vector<TinFeature>& Cdt::features() const { return impl_->features; }
+
+VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
+  Impl& m = *impl_;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    SourceLocation where;
+    if (feature != kNoFeature && feature < m.features.size()) {
+      where.file = m.features[feature].source;
+    }
+    throw inputError("point " + std::to_string(m.xy.size()) + " has a non-finite coordinate (" +
+                         std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
+                         std::to_string(p.z) + ")",
+                     where, "remove NaN/infinite values from the input");
+  }
+  if (feature != kNoFeature && feature >= m.features.size()) {
+    throw usageError("feature id " + std::to_string(feature) + " was not registered with addFeature");
+  }
+  const auto id = static_cast<std::uint32_t>(m.xy.size());
+  if (id >= kInf - 1) throw inputError("too many points (at most 2^32 - 3)");
+  m.xy.push_back(p.xy());
+  m.z.push_back(p.z);
+  m.vfeat.push_back(feature);
+  m.rep.push_back(kNone);
+  return VertexId(id);
+}
+
+VertexId Cdt::insertPoints(std::span<const Point3> points, FeatureId feature) {
+  const auto first = VertexId(static_cast<std::uint32_t>(impl_->xy.size()));
+  impl_->xy.reserve(impl_->xy.size() + points.size());
+  impl_->z.reserve(impl_->z.size() + points.size());
+  impl_->vfeat.reserve(impl_->vfeat.size() + points.size());
+  impl_->rep.reserve(impl_->rep.size() + points.size());
+  for (const Point3& p : points) insertPoint(p, feature);
+  return first;
+}
+
+void Cdt::insertConstraint(std::span<const Point3> polyline, FeatureId feature, bool closed) {
+  if (polyline.empty()) return;
+  const VertexId first = insertPoints(polyline, feature);
+  for (std::uint32_t i = 0; i + 1 < polyline.size(); ++i) {
+    insertConstraintSegment(VertexId(first.value + i), VertexId(first.value + i + 1), feature);
+  }
+  if (closed && polyline.size() > 2) {
+    insertConstraintSegment(VertexId(first.value + static_cast<std::uint32_t>(polyline.size()) - 1),
+                            first, feature);
+  }
+}
+
+void Cdt::insertConstraintSegment(VertexId a, VertexId b, FeatureId feature) {
+  Impl& m = *impl_;
+  if (a.value >= m.xy.size() || b.value >= m.xy.size()) {
+    throw usageError("constraint segment names a vertex that was not inserted");
+  }
+  const Role role = feature != kNoFeature && feature < m.featureRole.size()
+                        ? m.featureRole[feature]
+                        : Role::None;
+  m.segments.push_back({a.value, b.value, feature, role});
+}
+
+void Cdt::addBoundary(std::span<const Point3> ring, FeatureId feature) {
+  if (feature == kNoFeature || feature >= impl_->features.size()) {
+    throw usageError("addBoundary needs a registered feature");
+  }
+  impl_->featureRole[feature] = Role::Boundary;
+  impl_->hasBoundary = true;
+  insertConstraint(ring, feature, true);
+}
+
+void Cdt::addHole(std::span<const Point3> ring, FeatureId feature) {
+  if (feature == kNoFeature || feature >= impl_->features.size()) {
+    throw usageError("addHole needs a registered feature");
+  }
+  impl_->featureRole[feature] = Role::Hole;
+  impl_->hasHole = true;
+  insertConstraint(ring, feature, true);
+}
+
+void Cdt::finalize() {
+  Impl& m = *impl_;
+  if (!m.triangulated() && m.xy.empty()) {
+    throw geometryError("no points to triangulate", {}, "give at least three points");
+  }
+  m.insertPendingPoints();
+  m.insertPendingSegments();
+
+  // Domain and the output mesh.
+  const std::vector<std::uint8_t> inside = m.classifyDomain();
+  const std::uint32_t nt = m.triCount();
+  std::vector<std::uint32_t> triMap(nt, kNone);
+  std::vector<std::uint32_t> used(m.xy.size(), kNone);
+  std::uint32_t outT = 0;
+  for (std::uint32_t t = 0; t < nt; ++t) {
+    if (!inside[t]) continue;
+    triMap[t] = outT++;
+    for (std::uint32_t i = 0; i < 3; ++i) used[m.tv[3 * t + i]] = 0;
+  }
+  std::uint32_t outV = 0;
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    if (used[v] != kNone) used[v] = outV++;
+  }
+  Mesh& mesh = m.mesh;
+  mesh = Mesh();
+  mesh.crs_ = m.options.crs;
+  mesh.features_ = m.features;
+  mesh.points_.resize(outV);
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
+  }
+  mesh.corners_.resize(3 * static_cast<std::size_t>(outT));
+  mesh.twins_.assign(3 * static_cast<std::size_t>(outT), HalfedgeId());
+  std::vector<std::pair<std::uint32_t, FeatureId>> hf;
+  for (std::uint32_t t = 0; t < nt; ++t) {
+    if (triMap[t] == kNone) continue;
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t h = 3 * t + i;
+      const std::uint32_t oh = 3 * triMap[t] + i;
+      mesh.corners_[oh] = used[m.tv[h]];
+      const std::uint32_t g = m.opp[h];
+      if (triMap[g / 3] != kNone) mesh.twins_[oh] = HalfedgeId(3 * triMap[g / 3] + g % 3);
+      if (m.cons[h]) {
+        auto it = m.edgeFeatures.find(edgeKey(m.tv[h], m.tv[nxt(h)]));
+        if (it != m.edgeFeatures.end()) {
+          for (FeatureId f : it->second) {
+            if (f < m.features.size()) hf.emplace_back(oh, f);
+          }
+        }
+      }
+    }
+  }
+  std::sort(hf.begin(), hf.end());
+  mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
+  mesh.featureIds_.reserve(hf.size());
+  for (const auto& [h, f] : hf) {
+    ++mesh.featureBegin_[h + 1];
+    mesh.featureIds_.push_back(f);
+  }
+  for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
+    mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
+  }
+  mesh.outgoing_.assign(outV, HalfedgeId());
+  for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {
+    HalfedgeId& o = mesh.outgoing_[mesh.corners_[h]];
+    if (!o.valid() || (!mesh.twins_[h].valid() && mesh.twins_[o.value].valid())) o = HalfedgeId(h);
+  }
+
+  // Input vertex → mesh vertex; live vertices outside the domain are dropped.
+  m.meshOf.assign(m.xy.size(), kNone);
+  m.report.dropped.erase(
+      std::remove_if(m.report.dropped.begin(), m.report.dropped.end(),
+                     [](const CdtReport::Dropped& d) {
+                       return d.what == CdtReport::Dropped::What::PointOutsideDomain;
+                     }),
+      m.report.dropped.end());
+  for (std::uint32_t v = 0; v < m.xy.size(); ++v) {
+    const std::uint32_t r = m.find(v);
+    m.meshOf[v] = used[r];
+    if (r == v && used[v] == kNone) {
+      m.report.dropped.push_back(
+          {CdtReport::Dropped::What::PointOutsideDomain, m.vfeat[v], m.xy[v]});
+    }
+  }
+  m.finalized = true;
+}
+
+const Mesh& Cdt::mesh() const {
+  if (!impl_->finalized) throw usageError("Cdt::mesh() called before finalize()");
+  return impl_->mesh;
+}
+
+TinData Cdt::toTinData() const { return mesh().toTinData(); }
+
+VertexId Cdt::meshVertex(VertexId input) const {
+  if (!impl_->finalized || input.value >= impl_->meshOf.size()) return {};
+  const std::uint32_t v = impl_->meshOf[input.value];
+  return v == kNone ? VertexId() : VertexId(v);
+}
+
+std::size_t Cdt::inputVertexCount() const { return impl_->xy.size(); }
+
+const CdtReport& Cdt::report() const { return impl_->report; }
+
+ValidationReport Cdt::validate(const ValidationOptions& options) const {
+  const Impl& m = *impl_;
+  ValidationReport r = tinsmith::validate(mesh(), options);
+  auto add = [&](const std::string& s) {
+    r.ok = false;
+    ++r.problemCount;
+    if (r.problems.size() < options.maxProblems) r.problems.push_back(s);
+  };
+  // Every input vertex is a mesh vertex, or merged/dropped and reported.
+  std::vector<std::uint8_t> merged(m.xy.size(), 0), dropped(m.xy.size(), 0);
+  for (const auto& mg : m.report.merges) merged[mg.merged.value] = 1;
+  for (std::uint32_t v = 0; v < m.xy.size(); ++v) {
+    if (m.rep[v] != v && !merged[v]) {
+      add("input vertex " + std::to_string(v) + " is neither a vertex nor reported as merged");
+    }
+    if (m.meshOf[v] != kNone) {
+      const Point3& p = mesh().point(VertexId(m.meshOf[v]));
+      const std::uint32_t r0 = m.rep[v];
+      if (r0 == v && !(p.xy() == m.xy[v])) {
+        add("input vertex " + std::to_string(v) + " moved");
+      }
+    }
+  }
+  // Every constraint segment is a chain of edges carrying its feature (checked
+  // when no domain clips the constraints).
+  if (!m.hasBoundary && !m.hasHole) {
+    std::unordered_map<std::uint64_t, std::uint32_t> index;  // (vertex, feature) → DSU slot
+    std::vector<std::uint32_t> parent;
+    auto slot = [&](std::uint32_t v, FeatureId f) {
+      const std::uint64_t key = (static_cast<std::uint64_t>(f) << 32) | v;
+      auto [it, fresh] = index.emplace(key, static_cast<std::uint32_t>(parent.size()));
+      if (fresh) parent.push_back(it->second);
+      return it->second;
+    };
+    auto root = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    const Mesh& me = mesh();
+    for (std::uint32_t h = 0; h < me.halfedgeCount(); ++h) {
+      for (FeatureId f : me.edgeFeatures(HalfedgeId(h))) {
+        const std::uint32_t x = root(slot(me.origin(HalfedgeId(h)).value, f));
+        const std::uint32_t y = root(slot(me.target(HalfedgeId(h)).value, f));
+        parent[x] = y;
+      }
+    }
+    for (const Segment& s : m.segments) {
+      const std::uint32_t a = m.meshOf[s.a], b = m.meshOf[s.b];
+      if (a == b || s.feature >= m.features.size()) continue;
+      if (a == kNone || b == kNone || root(slot(a, s.feature)) != root(slot(b, s.feature))) {
+        add("constraint segment " + std::to_string(s.a) + "-" + std::to_string(s.b) +
+            " (feature " + std::to_string(s.feature) + ") is not a chain of constrained edges");
+      }
+    }
+  }
+  return r;
+}
+
+Cdt Cdt::fromTinData(const TinData& tin, CdtOptions options) {
+  if (options.crs.empty()) options.crs = tin.crs;
+  Cdt cdt(std::move(options));
+  for (const auto& f : tin.features) cdt.addFeature(f.kind, f.source);
+  cdt.insertPoints(tin.vertices);
+  const auto nv = tin.vertices.size();
+  for (const auto& e : tin.constrainedEdges) {
+    if (e.a >= nv || e.b >= nv || e.feature >= tin.features.size()) {
+      throw inputError("constrained edge " + std::to_string(e.a) + "-" + std::to_string(e.b) +
+                       " is out of range");
+    }
+    cdt.insertConstraintSegment(VertexId(e.a), VertexId(e.b), e.feature);
+  }
+  // The loaded mesh's boundary edges bound the domain again.
+  const Mesh mesh = Mesh::fromTinData(tin);
+  bool any = false;
+  for (HalfedgeId h : mesh.boundaryHalfedges()) {
+    cdt.impl_->segments.push_back(
+        {mesh.origin(h).value, mesh.target(h).value, kDomainFeature, Role::Boundary});
+    any = true;
+  }
+  // A convex TIN needs no domain; keep it simple and let parity decide.
+  cdt.impl_->hasBoundary = any;
+  return cdt;
+}
+
+}  // namespace tinsmith

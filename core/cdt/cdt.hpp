@@ -1,0 +1,164 @@
+// Constrained Delaunay triangulation of terrain input (book ch. 3, 4, 6):
+// points with z, constraint polylines (break lines, contours, roads, rivers),
+// an optional outer boundary and holes. Produces a Mesh / TinData.
+//
+// Algorithm: points are spatially sorted (Hilbert curve order) and inserted
+// incrementally; each is located by a visibility walk from the previous vertex
+// (stochastic edge order from a fixed seed, with an exhaustive fallback, so it
+// cannot cycle) and the Delaunay property restored by Lawson flips (4.2). The
+// convex hull is closed by "ghost" triangles at a vertex at infinity, so the
+// hull needs no special cases. Constraint segments are inserted by swapping the
+// crossed diagonals away (Sloan; book 6.5) and re-running the LOP on the new
+// edges, never flipping a constrained edge. Predicates are exact
+// (core/geometry/predicates.hpp); constructed points (constraint
+// intersections) are rounded to doubles.
+//
+// Degeneracies, decided deterministically (same input and options → same mesh):
+//   * cocircular quadruples: an edge is flipped only if the opposite vertex is
+//     strictly inside the circumcircle — the neutral case keeps the current edge;
+//   * points closer than snapTolerance (exactly equal when 0) merge into the
+//     vertex already there; z is taken from the higher constraintPriority()
+//     feature (ties: the earlier input), the merge is recorded in the report;
+//   * a constraint through existing vertices is split at them; collinear
+//     overlapping constraints share edges (the edge records every feature);
+//   * crossing constraints are split at their intersection; the new vertex's z
+//     is interpolated along the higher-priority feature (ties: the earlier
+//     inserted one); the event is recorded;
+//   * zero-length segments (after merging) are dropped and recorded.
+//
+// Usage:
+//   Cdt cdt({.snapTolerance = 0.001});
+//   auto road = cdt.addFeature(FeatureKind::Road, "roads.gpkg, feature 3");
+//   cdt.insertPoints(points, spotFeature);
+//   cdt.insertConstraint(roadLine, road);
+//   cdt.finalize();                  // throws tinsmith::Error on bad input
+//   TinData tin = cdt.toTinData();   // or cdt.mesh()
+// More input may be added after finalize(); the next finalize() inserts it into
+// the existing triangulation.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/base/point.hpp"
+#include "core/mesh/mesh.hpp"
+#include "core/mesh/validate.hpp"
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith {
+
+/// Index into the feature list (TinData::features); kNoFeature for input that
+/// belongs to no feature (priority 0).
+using FeatureId = std::uint32_t;
+inline constexpr FeatureId kNoFeature = std::numeric_limits<std::uint32_t>::max();
+
+struct CdtOptions {
+  /// Points closer than this (metres, in x, y) merge into one vertex. 0 merges
+  /// only exact duplicates. Also used to snap a constraint intersection onto a
+  /// vertex that is nearer than this.
+  double snapTolerance = 0.0;
+  /// Copied into TinData::crs.
+  std::string crs;
+};
+
+/// What the CDT changed in its input, so callers can report it.
+struct CdtReport {
+  struct Merge {
+    Point2 at;                     ///< position of the vertex kept
+    VertexId kept;                 ///< input vertex id that stays
+    VertexId merged;               ///< input vertex id merged into it
+    double keptZ = 0, droppedZ = 0;
+    FeatureId keptFeature = kNoFeature, droppedFeature = kNoFeature;
+  };
+  struct Intersection {
+    Point3 at;                     ///< the new (or snapped-to) vertex, z as chosen
+    VertexId vertex;               ///< its input-side vertex id
+    FeatureId existing = kNoFeature;  ///< feature of the constraint already there
+    FeatureId inserted = kNoFeature;  ///< feature of the constraint being inserted
+    double zExisting = 0, zInserted = 0;  ///< z of each constraint at that point
+  };
+  struct Dropped {
+    enum class What { ZeroLengthSegment, PointOutsideDomain };
+    What what = What::ZeroLengthSegment;
+    FeatureId feature = kNoFeature;
+    Point2 at;
+  };
+  std::vector<Merge> merges;
+  std::vector<Intersection> intersections;
+  std::vector<Dropped> dropped;
+};
+
+class Cdt {
+ public:
+  explicit Cdt(CdtOptions options = {});
+  ~Cdt();
+  Cdt(Cdt&&) noexcept;
+  Cdt& operator=(Cdt&&) noexcept;
+  Cdt(const Cdt&) = delete;
+  Cdt& operator=(const Cdt&) = delete;
+
+  /// Registers an input feature; the id indexes TinData::features.
+  FeatureId addFeature(FeatureKind kind, std::string source);
+  [[nodiscard]] const std::vector<TinFeature>& features() const;
+
+  /// Adds a point (x, y, z in the project CRS, metres). Returns its input
+  /// vertex id (consecutive from 0 over every inserted point, polyline vertices
+  /// included). Throws inputError for a non-finite coordinate, naming the
+  /// feature. The point is triangulated at the next finalize().
+  VertexId insertPoint(const Point3& p, FeatureId feature = kNoFeature);
+  /// Adds many points; returns the id of the first (the rest follow in order).
+  VertexId insertPoints(std::span<const Point3> points, FeatureId feature = kNoFeature);
+
+  /// Adds a constraint polyline (its vertices become input vertices); `closed`
+  /// adds the segment from the last vertex back to the first. A polyline with
+  /// fewer than 2 vertices adds its points only.
+  void insertConstraint(std::span<const Point3> polyline, FeatureId feature, bool closed = false);
+  /// Adds a constraint segment between two input vertices.
+  void insertConstraintSegment(VertexId a, VertexId b, FeatureId feature);
+
+  /// The outer boundary of the domain: a closed ring (first vertex need not be
+  /// repeated). Triangles outside every boundary ring are removed at finalize().
+  /// Several rings may be given (several islands). Its edges are constraints.
+  void addBoundary(std::span<const Point3> ring, FeatureId feature);
+  /// A hole (void): triangles inside are removed. Rings nest by parity.
+  void addHole(std::span<const Point3> ring, FeatureId feature);
+
+  /// Triangulates everything pending, inserts pending constraints, applies the
+  /// domain and rebuilds mesh(). Throws geometryError when the input has fewer
+  /// than 3 non-collinear distinct points; internalError on a broken invariant.
+  void finalize();
+
+  /// The finished mesh (after finalize()): only triangles inside the domain;
+  /// vertex ids are compacted (see meshVertex()).
+  [[nodiscard]] const Mesh& mesh() const;
+  /// mesh() as TinData (vertices, CCW triangles, constrained edges per feature,
+  /// features, crs).
+  [[nodiscard]] TinData toTinData() const;
+  /// Mesh vertex of an input vertex (after merges); invalid if it was dropped
+  /// (outside the domain) or finalize() has not run.
+  [[nodiscard]] VertexId meshVertex(VertexId input) const;
+  [[nodiscard]] std::size_t inputVertexCount() const;
+
+  [[nodiscard]] const CdtReport& report() const;
+
+  /// validate(mesh()) plus: every input point is a mesh vertex or reported as
+  /// merged/dropped, and every inserted constraint segment is present as a chain
+  /// of mesh edges carrying its feature (unless outside the domain).
+  [[nodiscard]] ValidationReport validate(const ValidationOptions& options = {}) const;
+
+  /// Re-triangulates a TinData: its vertices and constrained edges become input
+  /// (same feature ids) and triangles outside its boundary edges stay outside.
+  /// Use to add more input to a loaded TIN.
+  static Cdt fromTinData(const TinData& tin, CdtOptions options = {});
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tinsmith

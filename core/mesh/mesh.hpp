@@ -1,0 +1,150 @@
+// The triangle mesh of a TIN as a half-edge (dart) structure (book ch. 2.5, 9):
+// topology apart from geometry, strongly typed ids.
+//
+// Storage is triangle-based: triangle t owns half-edges 3t, 3t+1, 3t+2; half-edge
+// 3t+i runs from corner i to corner (i+1)%3 of t, with the triangle on its left
+// (triangles are counter-clockwise in x, y). twin(h) is the oppositely directed
+// half-edge of the neighbouring triangle, or invalid on the boundary of the mesh.
+// In the book's dart terms: α0 = twin∘next∘… — here `next`, `prev`, `twin`.
+//
+// Vertices carry x, y (project CRS, metres) and z (metres) as payload. An edge
+// may be constrained: it then records the ids of the input features it came from
+// (indices into features()); both half-edges of an edge carry the same list.
+#pragma once
+
+#include <array>
+#include <compare>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/base/point.hpp"
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith {
+
+/// A strongly typed 32-bit index. `Tag` keeps vertex, half-edge and triangle ids
+/// apart; the default value is the explicit invalid id.
+template <class Tag>
+struct StrongId {
+  static constexpr std::uint32_t kInvalid = std::numeric_limits<std::uint32_t>::max();
+  std::uint32_t value = kInvalid;
+
+  constexpr StrongId() = default;
+  constexpr explicit StrongId(std::uint32_t v) : value(v) {}
+  static constexpr StrongId invalid() { return StrongId(); }
+  [[nodiscard]] constexpr bool valid() const { return value != kInvalid; }
+  constexpr explicit operator bool() const { return valid(); }
+  friend constexpr auto operator<=>(StrongId, StrongId) = default;
+};
+
+struct VertexTag;
+struct HalfedgeTag;
+struct TriangleTag;
+using VertexId = StrongId<VertexTag>;
+using HalfedgeId = StrongId<HalfedgeTag>;
+using TriangleId = StrongId<TriangleTag>;
+
+/// A finished TIN mesh (possibly non-convex, with holes). Built by the CDT
+/// (Cdt::mesh()) or from TinData (Mesh::fromTinData). Immutable once built.
+class Mesh {
+ public:
+  Mesh() = default;
+
+  /// Rebuilds a mesh from TinData (e.g. a loaded .tin file): links twins,
+  /// attaches constrained-edge features. Never throws on bad topology: what
+  /// cannot be represented (index out of range, an edge used by more than two
+  /// triangles or twice in one direction, a constrained edge that is not a mesh
+  /// edge) is listed in buildProblems() and left out, so validate() can report it.
+  static Mesh fromTinData(const TinData& tin);
+
+  /// The indexed form: vertices, triangles (CCW), constrained edges (one entry
+  /// per edge and feature, a < b, sorted), features, crs.
+  [[nodiscard]] TinData toTinData() const;
+
+  // --- sizes -------------------------------------------------------------
+  [[nodiscard]] std::size_t vertexCount() const { return points_.size(); }
+  [[nodiscard]] std::size_t triangleCount() const { return corners_.size() / 3; }
+  [[nodiscard]] std::size_t halfedgeCount() const { return corners_.size(); }
+
+  // --- geometry ----------------------------------------------------------
+  [[nodiscard]] const Point3& point(VertexId v) const { return points_[v.value]; }
+  [[nodiscard]] Point2 xy(VertexId v) const { return points_[v.value].xy(); }
+  [[nodiscard]] double z(VertexId v) const { return points_[v.value].z; }
+  [[nodiscard]] const std::vector<Point3>& points() const { return points_; }
+
+  // --- topology ----------------------------------------------------------
+  [[nodiscard]] static HalfedgeId halfedge(TriangleId t, int corner) {
+    return HalfedgeId(t.value * 3 + static_cast<std::uint32_t>(corner));
+  }
+  [[nodiscard]] static TriangleId triangle(HalfedgeId h) { return TriangleId(h.value / 3); }
+  [[nodiscard]] static HalfedgeId next(HalfedgeId h) {
+    return HalfedgeId(h.value % 3 == 2 ? h.value - 2 : h.value + 1);
+  }
+  [[nodiscard]] static HalfedgeId prev(HalfedgeId h) {
+    return HalfedgeId(h.value % 3 == 0 ? h.value + 2 : h.value - 1);
+  }
+  /// The opposite half-edge, invalid on the mesh boundary.
+  [[nodiscard]] HalfedgeId twin(HalfedgeId h) const { return twins_[h.value]; }
+  [[nodiscard]] VertexId origin(HalfedgeId h) const { return VertexId(corners_[h.value]); }
+  [[nodiscard]] VertexId target(HalfedgeId h) const { return origin(next(h)); }
+  [[nodiscard]] std::array<VertexId, 3> vertices(TriangleId t) const {
+    return {VertexId(corners_[3 * t.value]), VertexId(corners_[3 * t.value + 1]),
+            VertexId(corners_[3 * t.value + 2])};
+  }
+  [[nodiscard]] bool isBoundary(HalfedgeId h) const { return !twins_[h.value].valid(); }
+
+  /// One half-edge leaving v; for a boundary vertex the one whose clockwise
+  /// neighbour is missing, so that star iteration (CCW) covers the whole fan.
+  /// Invalid for a vertex no triangle uses.
+  [[nodiscard]] HalfedgeId outgoing(VertexId v) const { return outgoing_[v.value]; }
+
+  /// Calls f(h) for every half-edge leaving v, counter-clockwise, starting at
+  /// outgoing(v). Covers one fan (a vertex where several fans touch is listed
+  /// by validate()).
+  void forEachOutgoing(VertexId v, const std::function<void(HalfedgeId)>& f) const;
+
+  /// Boundary half-edges (twin invalid), in increasing id order.
+  [[nodiscard]] std::vector<HalfedgeId> boundaryHalfedges() const;
+
+  // --- constraints -------------------------------------------------------
+  [[nodiscard]] bool isConstrained(HalfedgeId h) const {
+    return featureBegin_[h.value] != featureBegin_[h.value + 1];
+  }
+  /// Feature ids (into features()) of the edge of h, ascending; empty if unconstrained.
+  [[nodiscard]] std::span<const std::uint32_t> edgeFeatures(HalfedgeId h) const {
+    return {featureIds_.data() + featureBegin_[h.value],
+            featureIds_.data() + featureBegin_[h.value + 1]};
+  }
+  [[nodiscard]] const std::vector<TinFeature>& features() const { return features_; }
+  [[nodiscard]] const std::string& crs() const { return crs_; }
+
+  /// Problems found while building from TinData (empty for CDT output).
+  [[nodiscard]] const std::vector<std::string>& buildProblems() const { return buildProblems_; }
+
+  // --- construction (used by the CDT and fromTinData) ---------------------
+  /// Builds from raw arrays: `corners` has 3 vertex indices per triangle (CCW),
+  /// `edgeFeatures` lists (a, b, feature) with a, b vertex indices. Twins are
+  /// linked here. Same tolerance for bad input as fromTinData.
+  static Mesh build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
+                    const std::vector<TinData::ConstrainedEdge>& edgeFeatures,
+                    std::vector<TinFeature> features, std::string crs);
+
+ private:
+  friend class Cdt;  // builds its output mesh in place (no re-linking)
+  std::vector<Point3> points_;
+  std::vector<std::uint32_t> corners_;       // 3 per triangle
+  std::vector<HalfedgeId> twins_;            // per half-edge
+  std::vector<HalfedgeId> outgoing_;         // per vertex
+  std::vector<std::uint32_t> featureBegin_;  // per half-edge + 1 (CSR)
+  std::vector<std::uint32_t> featureIds_;
+  std::vector<TinFeature> features_;
+  std::string crs_;
+  std::vector<std::string> buildProblems_;
+};
+
+}  // namespace tinsmith
