@@ -299,18 +299,20 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       if (moments[w].empty()) continue;
       for (std::size_t t = 0; t < tris.size(); ++t) moments[0][t].merge(moments[w][t]);
     }
+    for (std::size_t w = 1; w < moments.size(); ++w) moments[w] = {};
     NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
-    moments.clear();
-    moments.shrink_to_fit();
+    moments = {};
 
-    SparseMatrix a = eq.btb;
-    SparseMatrix energy;
+    SparseMatrix a;
     if (options.smoothing != Smoothing::None) {
-      energy = smoothingMatrix(options.smoothing, positions, triVerts);
+      SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
       st.lambda = options.lambdaAbsolute ? *options.lambdaAbsolute
                                          : options.lambdaFactor * defaultLambda(eq.btb, energy);
       a = eq.btb + st.lambda * energy;
       a.makeCompressed();
+      eq.btb = SparseMatrix();
+    } else {
+      a = std::move(eq.btb);
     }
     applyFixedVertices(a, eq.btz, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
