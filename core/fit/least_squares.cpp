@@ -147,6 +147,40 @@ NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const
   return scatterMoments(vertexCount, triangles, moments);
 }
 
+PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
+                                  const SparseMatrix& energy, double lambdaFactor,
+                                  std::optional<double> lambdaAbsolute) {
+  PenalizedSystem sys;
+  SparseMatrix btb = energy;
+  std::fill(btb.valuePtr(), btb.valuePtr() + btb.nonZeros(), 0.0);
+  sys.b = Vector::Zero(energy.rows());
+  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& m = moments[t];
+    const auto& tri = triangles[t];
+    bool empty = true;
+    for (double v : m.bb) empty = empty && v == 0.0;
+    if (empty) continue;
+    for (int i = 0; i < 3; ++i) {
+      sys.b[tri[i]] += m.bz[i];
+      for (int j = 0; j < 3; ++j) btb.coeffRef(tri[i], tri[j]) += m.bb[kIndex[i][j]];
+    }
+  }
+  btb.makeCompressed();
+  sys.lambdaDefault = defaultLambda(btb, energy);
+  sys.lambda = lambdaAbsolute ? *lambdaAbsolute : lambdaFactor * sys.lambdaDefault;
+  if (btb.nonZeros() == energy.nonZeros()) {  // no entry was inserted: same pattern
+    sys.a = std::move(btb);
+    double* v = sys.a.valuePtr();
+    const double* e = energy.valuePtr();
+    for (Eigen::Index k = 0; k < sys.a.nonZeros(); ++k) v[k] += sys.lambda * e[k];
+  } else {
+    sys.a = btb + sys.lambda * energy;
+    sys.a.makeCompressed();
+  }
+  return sys;
+}
+
 SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
   checkTriangles(vertices.size(), triangles);
   // E = GᵀG with two rows per triangle, √A_t ∇g_t = (Σ η_i c_i, Σ μ_i c_i) / (2√A_t):

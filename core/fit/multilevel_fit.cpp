@@ -300,23 +300,23 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       for (std::size_t t = 0; t < tris.size(); ++t) moments[0][t].merge(moments[w][t]);
     }
     for (std::size_t w = 1; w < moments.size(); ++w) moments[w] = {};
-    NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
-    moments = {};
-
     SparseMatrix a;
+    Vector rhs;
     if (options.smoothing != Smoothing::None) {
-      SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
-      st.lambda = options.lambdaAbsolute ? *options.lambdaAbsolute
-                                         : options.lambdaFactor * defaultLambda(eq.btb, energy);
-      a = eq.btb + st.lambda * energy;
-      a.makeCompressed();
-      eq.btb = SparseMatrix();
+      const SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
+      PenalizedSystem sys = assemblePenalized(triVerts, moments[0], energy, options.lambdaFactor, options.lambdaAbsolute);
+      st.lambda = sys.lambda;
+      a = std::move(sys.a);
+      rhs = std::move(sys.b);
     } else {
+      NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
       a = std::move(eq.btb);
+      rhs = std::move(eq.btz);
     }
-    applyFixedVertices(a, eq.btz, fixed);
+    moments = {};
+    applyFixedVertices(a, rhs, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
-    const SolveReport report = solveSystem(a, eq.btz, coefficients, st.solver, options.control);
+    const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);
     st.iterations = report.iterations;
     st.relativeResidual = report.relativeResidual;
 
