@@ -31,7 +31,10 @@ std::string BuildReport::toJson() const {
                            {"source", l.source},
                            {"features", l.features},
                            {"points", l.points},
-                           {"vertices", l.vertices}});
+                           {"vertices", l.vertices},
+                           {"features_read", l.readFeatures},
+                           {"vertices_read", l.readVertices},
+                           {"source_crs", l.sourceCrs}});
   J cleanJ = J::object();
   for (const auto& [name, count] : cleaning) cleanJ[name] = count;
   j["cleaning"] = cleanJ;
@@ -91,6 +94,7 @@ std::string BuildReport::summary() const {
       s << "    " << l.name << " [" << l.kind << "]: " << l.features << " features";
       if (l.points) s << ", " << l.points << " points";
       if (l.vertices) s << ", " << l.vertices << " line vertices";
+      if (l.readVertices) s << " (read " << l.readFeatures << " features, " << l.readVertices << " vertices)";
       s << "\n";
     }
   }
@@ -99,7 +103,11 @@ std::string BuildReport::summary() const {
     for (const auto& [name, count] : cleaning) s << " " << name << " " << count << ";";
     s << "\n";
   }
-  for (const auto& e : dataErrors) s << "  data error: " << e << "\n";
+  if (!dataErrors.empty()) {
+    s << "  data errors: " << dataErrors.size() << " (all in the JSON report)\n";
+    for (std::size_t i = 0; i < dataErrors.size() && i < 5; ++i) s << "    " << dataErrors[i] << "\n";
+    if (dataErrors.size() > 5) s << "    … " << dataErrors.size() - 5 << " more\n";
+  }
   s << "  input: " << inputPoints << " points, " << inputLineVertices << " break-line vertices\n";
   s << "  merged points: " << mergedPoints << ", crossings split: " << crossings
     << ", zero-length segments dropped: " << droppedSegments;

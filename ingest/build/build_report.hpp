@@ -19,6 +19,9 @@ struct BuildReport {
     std::size_t features = 0;
     std::size_t points = 0;    ///< point geometries (spot heights, raster cells)
     std::size_t vertices = 0;  ///< polyline and ring vertices
+    std::size_t readFeatures = 0;  ///< as read, before cleaning (0: not known)
+    std::size_t readVertices = 0;  ///< points and vertices as read, before cleaning
+    std::string sourceCrs;         ///< the CRS the layer was read in
   };
   struct Event {         ///< a merge, crossing or bridge candidate
     Point2 at;

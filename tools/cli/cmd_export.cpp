@@ -7,6 +7,7 @@
 
 #include "core/base/error.hpp"
 #include "ingest/export/mesh_export.hpp"
+#include "ingest/export/rasterise.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 
@@ -44,7 +45,7 @@ void addExportCommand(CLI::App& app) {
     } else if (f == "ply") {
       ingest::writePly(opt->output, tin);
     } else {
-      throw notImplemented("tinsmith export --format " + f + " (heightmap rasters)");
+      ingest::writeHeightmap(tin, *opt->cell, f, opt->output);
     }
     std::cerr << "wrote " << opt->output << ": " << tin.vertices.size() << " vertices, "
               << tin.triangles.size() << " triangles\n";
