@@ -2,14 +2,13 @@
 # README command 2: install, build and run every test. Two builds:
 #   build/release   — Release (-O2), all tests;
 #   build/sanitize  — ASan+UBSan, the core tests.
-# Warnings are errors when CI=true. Ends with CTest's summary.
+# Warnings are errors. Ends with CTest's summary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 bash tools/setup.sh
 jobs=$(nproc)
-werror=OFF
-[ "${CI:-}" = "true" ] && werror=ON
+werror=ON   # the test command is what CI runs: warnings are errors here
 
 echo "== release build"
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DTINSMITH_WERROR=$werror >/dev/null

@@ -28,10 +28,10 @@ std::string_view toString(ErrorKind kind);
 
 /// Where in the input a problem was found. Every field is optional.
 struct SourceLocation {
-  std::string file;
-  std::string layer;
-  std::optional<std::int64_t> feature;  ///< feature id (OGR FID) or record index
-  std::optional<std::int64_t> line;     ///< 1-based line in a text file
+  std::string file{};
+  std::string layer{};
+  std::optional<std::int64_t> feature{};  ///< feature id (OGR FID) or record index
+  std::optional<std::int64_t> line{};     ///< 1-based line in a text file
 
   [[nodiscard]] bool empty() const;
   /// "file, layer 'L', feature F, line N" — only the fields that are set.

@@ -1,16 +1,239 @@
-// `tinsmith tin`: build a constrained Delaunay TIN from points and break lines.
+// `tinsmith tin`: build a constrained Delaunay TIN.
+//   tinsmith tin CONFIG.toml -o site.tin [--report r.json] [--strict]
+//   tinsmith tin --points FILE... --breaklines FILE... -o OUT.tin [--snap T] [--crs C]
+// The first reads every [[layer]] of the config (ingest: read, reproject,
+// clean) and applies the terrain rules (builders.tin); the second triangulates
+// plain inputs as they are: XYZ/CSV points, and break lines as GeoJSON (or any
+// OGR format) 3D (Multi)LineStrings or text polylines (x y z per line, a
+// blank line between polylines). A human summary goes to stderr; progress bars
+// too when stderr is a terminal. Outputs are written atomically: a failed run
+// leaves no file behind.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "core/base/error.hpp"
+#include "ingest/base/progress.hpp"
+#include "ingest/build/from_ingest.hpp"
+#include "ingest/build/text_polylines.hpp"
+#include "ingest/build/tin_builder.hpp"
+#include "ingest/config/project_config.hpp"
+#include "ingest/filters/load_layers.hpp"
+#include "ingest/readers/layer_reader.hpp"
+#include "ingest/readers/text_points.hpp"
+#include "ingest/tinfile/atomic_file.hpp"
+#include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 
 namespace tinsmith::cli {
 
+namespace {
+
+struct TinOptions {
+  std::string config;
+  std::vector<std::string> points;
+  std::vector<std::string> breaklines;
+  std::string output;
+  std::string report;
+  std::optional<double> snap;
+  std::string crs;
+  bool strict = false;
+  bool noFlatRepair = false;
+  bool quiet = false;
+};
+
+// A one-line progress bar on stderr, redrawn in place; only for terminals.
+class ProgressBar {
+ public:
+  ingest::Progress progress() {
+    ingest::Progress p;
+    p.callback = [this](std::string_view stage, std::string_view detail, std::uint64_t done,
+                        std::uint64_t total) { draw(stage, detail, done, total); };
+    return p;
+  }
+  ~ProgressBar() {
+    if (drawn_) std::fputs("\r\033[K", stderr);
+  }
+
+ private:
+  void draw(std::string_view stage, std::string_view detail, std::uint64_t done, std::uint64_t total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (drawn_ && done != total && now - last_ < std::chrono::milliseconds(100)) return;
+    last_ = now;
+    drawn_ = true;
+    std::string line = "\r\033[K" + std::string(stage);
+    if (!detail.empty()) line += " " + std::string(detail);
+    if (total > 0) {
+      const int width = 30;
+      const int filled = static_cast<int>(width * static_cast<double>(done) / static_cast<double>(total));
+      line += " [" + std::string(static_cast<std::size_t>(filled), '#') +
+              std::string(static_cast<std::size_t>(width - filled), ' ') + "] " +
+              std::to_string(100 * done / total) + "%";
+    }
+    std::fputs(line.c_str(), stderr);
+    std::fflush(stderr);
+  }
+  std::chrono::steady_clock::time_point last_{};
+  bool drawn_ = false;
+};
+
+void checkOutputDirectory(const std::string& path, const char* option) {
+  const std::filesystem::path p(path);
+  const auto dir = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    throw ioError(std::string("the directory of ") + option + " '" + dir.string() + "' does not exist",
+                  {path, {}, {}, {}}, "create it first or choose another path");
+}
+
+bool isTextPolylineFile(const std::filesystem::path& p) {
+  const auto ext = p.extension().string();
+  return ext == ".txt" || ext == ".xyz" || ext == ".pl" || ext == ".poly" || ext == ".lines";
+}
+
+// Plain mode: every input as it is, all features of kind Other.
+std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
+  std::vector<ingest::BuildLayer> layers;
+  for (const auto& file : o.points) {
+    ingest::BuildLayer layer;
+    layer.name = std::filesystem::path(file).filename().string();
+    layer.kindName = "points";
+    layer.kind = FeatureKind::Other;
+    layer.source = file;
+    if (ingest::isTextPointFile(file)) {
+      layer.points = ingest::readTextPoints(file);
+    } else {
+      ingest::LayerConfig config;
+      config.name = layer.name;
+      config.path = file;
+      config.kind = ingest::LayerKind::Points;
+      const auto read = ingest::readOgrLayer(config);
+      if (!read.hasZ)
+        throw inputError("the points have no z", {file, {}, {}, {}},
+                         "give 3D points, or use a config with a 'z' attribute");
+      layer.points = read.points;
+    }
+    layers.push_back(std::move(layer));
+  }
+  for (const auto& file : o.breaklines) {
+    ingest::BuildLayer layer;
+    layer.name = std::filesystem::path(file).filename().string();
+    layer.kindName = "breaklines";
+    layer.kind = FeatureKind::Other;
+    layer.source = file;
+    if (isTextPolylineFile(file)) {
+      for (auto& pl : ingest::readTextPolylines(file))
+        layer.lines.push_back({std::move(pl.vertices), pl.closed, true,
+                               file + ", line " + std::to_string(pl.firstLine)});
+    } else {
+      ingest::LayerConfig config;
+      config.name = layer.name;
+      config.path = file;
+      config.kind = ingest::LayerKind::Road;  // any line kind: read the lines as they are
+      const auto read = ingest::readOgrLayer(config);
+      for (const auto& f : read.features) {
+        const std::string where = file + ", feature " + std::to_string(f.fid) +
+                                  (f.part > 0 ? ", part " + std::to_string(f.part) : "");
+        if (!f.hasZ)
+          throw inputError("break line has no z", {file, {}, f.fid, {}},
+                           "give break lines 3D coordinates [x, y, z], or use a config to drape them");
+        layer.lines.push_back({f.vertices, f.closed, true, where});
+      }
+    }
+    layers.push_back(std::move(layer));
+  }
+  return layers;
+}
+
+void writeReport(const std::string& path, const ingest::BuildReport& report) {
+  ingest::AtomicFile file(path);
+  file.write(report.toJson());
+  file.commit();
+}
+
+void run(const TinOptions& o) {
+  const bool plain = !o.points.empty() || !o.breaklines.empty();
+  if (plain && !o.config.empty())
+    throw usageError("give either a config file or --points/--breaklines, not both");
+  if (!plain && o.config.empty())
+    throw usageError("nothing to triangulate",
+                     "give a config file (tinsmith tin CONFIG.toml -o OUT.tin) or --points FILE");
+  if (plain && o.strict) throw usageError("--strict applies to config runs");
+  if (!plain && o.snap) throw usageError("--snap applies to --points/--breaklines runs; set [tin] snap_tolerance in the config");
+  if (o.snap && !(*o.snap >= 0)) throw usageError("--snap must be a distance in metres, 0 or more");
+  checkOutputDirectory(o.output, "-o");
+  if (!o.report.empty()) checkOutputDirectory(o.report, "--report");
+
+  std::unique_ptr<ProgressBar> bar;
+  ingest::Progress progress;
+  if (!o.quiet && ::isatty(STDERR_FILENO)) {
+    bar = std::make_unique<ProgressBar>();
+    progress = bar->progress();
+  }
+  const ingest::Progress* p = bar ? &progress : nullptr;
+
+  ingest::BuildResult result;
+  if (plain) {
+    ingest::BuildOptions options;
+    options.crs = o.crs;
+    options.snapTolerance = o.snap.value_or(0.0);
+    options.flatTriangleRepair = false;
+    options.riverDescent = false;
+    const auto start = std::chrono::steady_clock::now();
+    auto layers = plainLayers(o);
+    const double readSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result = ingest::buildTin(layers, options, p);
+    result.report.times.insert(result.report.times.begin(), {"read", readSeconds});
+    result.report.totalSeconds += readSeconds;
+  } else {
+    ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
+    if (o.strict) config.tin.strict = true;
+    if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
+    const ingest::IngestResult ingested = ingest::loadLayers(config, p);
+    auto layers = ingest::toBuildLayers(ingested.layers);
+    result = ingest::buildTin(layers, ingest::buildOptionsFrom(config), p);
+    ingest::addIngestReport(result.report, ingested);
+  }
+  bar.reset();
+  ingest::writeTinFile(o.output, result.tin);
+  if (!o.report.empty()) {
+    try {
+      writeReport(o.report, result.report);
+    } catch (...) {
+      std::error_code ec;
+      std::filesystem::remove(o.output, ec);  // both outputs or neither
+      throw;
+    }
+  }
+  if (!o.quiet) std::cerr << result.report.summary() << "wrote " << o.output << "\n";
+}
+
+}  // namespace
+
 void addTinCommand(CLI::App& app) {
+  auto opt = std::make_shared<TinOptions>();
   auto* cmd = app.add_subcommand("tin", "Build a constrained Delaunay TIN from points and break lines");
-  cmd->add_option("config", "Project config (TOML); or give --points/--breaklines");
-  cmd->add_option("--points", "XYZ/CSV point file(s)");
-  cmd->add_option("--breaklines", "Break lines: GeoJSON (Multi)LineString with 3D coordinates, or text polylines");
-  cmd->add_option("-o,--output", "The .tin file to write")->required();
-  cmd->callback([] { throw notImplemented("tinsmith tin (the constrained Delaunay TIN)"); });
+  cmd->add_option("config", opt->config, "Project config (TOML); or give --points/--breaklines");
+  cmd->add_option("--points", opt->points, "XYZ/CSV point file(s) (plain mode)");
+  cmd->add_option("--breaklines", opt->breaklines,
+                  "Break lines (plain mode): GeoJSON (Multi)LineString with 3D coordinates, or text "
+                  "polylines (.txt/.xyz: x y z per line, a blank line between polylines)");
+  cmd->add_option("-o,--output", opt->output, "The .tin file to write")->required();
+  cmd->add_option("--report", opt->report, "Also write the build report as JSON to this file");
+  cmd->add_option("--snap", opt->snap, "Plain mode: merge points closer than this (metres; default 0)");
+  cmd->add_option("--crs", opt->crs, "Plain mode: the CRS to record in the TIN (e.g. EPSG:26912)");
+  cmd->add_flag("--strict", opt->strict, "Config mode: crossing contours are fatal, not just reported");
+  cmd->add_flag("--no-flat-repair", opt->noFlatRepair, "Config mode: keep flat triangles");
+  cmd->add_flag("-q,--quiet", opt->quiet, "No summary and no progress on stderr");
+  cmd->callback([opt] { run(*opt); });
 }
 
 }  // namespace tinsmith::cli

@@ -1,0 +1,168 @@
+// Binary triangulations (Hjelle & Dæhlen 2.10, 8.10): longest-edge bisection
+// of the four isosceles triangles around the centre of a square. The vertices
+// of level k lie on the regular grid Ψk with 2^k + 1 vertices a side; a vertex
+// is active only if its parents (the apexes of the two triangles sharing the
+// edge it splits; one at the boundary) are active, so activation closes upward
+// over all ancestors.
+//
+// Vertices are named by their row-major index ("key") in the finest grid
+// Ψ_K, K = gridLevels(): key = j·(2^K + 1) + i. Because the index is linear in
+// (i, j), a split vertex's key is the mean of the keys of its split edge's ends
+// (i = (l + r)/2). Only active vertices are stored (an open-addressing hash
+// map key → dense id), so memory grows with the active vertices, not with the
+// 4^K grid.
+//
+// Depth: the corners have depth 0, the centre depth 1; a vertex of depth d
+// splits the hypotenuse of a triangle of depth d − 1. Ψk holds the vertices of
+// depth ≤ 2k; the centres of the cells of Ψk have depth 2k + 1.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "core/base/point.hpp"
+
+namespace tinsmith::fit {
+
+/// A map from 64-bit keys to dense 32-bit ids with linear probing; the key
+/// ~0 is reserved. Deterministic (no hashing randomness).
+class KeyIndexMap {
+ public:
+  static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+  void reserve(std::size_t count);
+  /// The id of `key`, or kNone.
+  [[nodiscard]] std::uint32_t find(std::uint64_t key) const {
+    if (slots_.empty()) return kNone;
+    std::size_t h = hash(key) & mask_;
+    while (true) {
+      const Slot& s = slots_[h];
+      if (s.key == key) return s.id;
+      if (s.key == kEmpty) return kNone;
+      h = (h + 1) & mask_;
+    }
+  }
+  /// Inserts key → id unless present; returns true when inserted.
+  bool insert(std::uint64_t key, std::uint32_t id);
+  [[nodiscard]] std::size_t size() const { return size_; }
+  void clear();
+
+ private:
+  struct Slot {
+    std::uint64_t key;
+    std::uint32_t id;
+  };
+  static std::size_t hash(std::uint64_t key) {
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33;
+    return static_cast<std::size_t>(key);
+  }
+  void grow();
+  std::vector<Slot> slots_;
+  std::size_t mask_ = 0;
+  std::size_t size_ = 0;
+};
+
+/// A triangle of a binary triangulation by the keys of its hypotenuse ends l,
+/// r and its apex a; (l, r, a) is counter-clockwise. `path` names the triangle
+/// in the bisection tree (root and child choices) and is unique.
+struct BinaryTriangle {
+  std::uint64_t l = 0;
+  std::uint64_t a = 0;
+  std::uint64_t r = 0;
+  std::uint64_t path = 0;
+  int depth = 0;  ///< 0 for the four triangles around the centre
+};
+
+/// A located point: its triangle and barycentric coordinates with respect to
+/// (l, r, a).
+struct BinaryLocation {
+  BinaryTriangle triangle;
+  std::array<double, 3> barycentric{};
+};
+
+class BinaryTriangulation {
+ public:
+  static constexpr int kMaxGridLevels = 30;
+
+  /// A square domain [origin.x, origin.x + size] × [origin.y, origin.y + size]
+  /// with finest grid Ψ_K, K = gridLevels (1 ≤ K ≤ 30). The four corners and
+  /// the centre start active. Throws inputError for a bad size or level.
+  BinaryTriangulation(Point2 origin, double size, int gridLevels);
+
+  [[nodiscard]] int gridLevels() const { return gridLevels_; }
+  [[nodiscard]] std::uint64_t side() const { return side_; }  ///< 2^K cells a side
+  [[nodiscard]] Point2 origin() const { return origin_; }
+  [[nodiscard]] double size() const { return size_; }
+
+  [[nodiscard]] std::uint64_t key(std::uint64_t i, std::uint64_t j) const { return j * (side_ + 1) + i; }
+  [[nodiscard]] std::uint64_t column(std::uint64_t key) const { return key % (side_ + 1); }
+  [[nodiscard]] std::uint64_t row(std::uint64_t key) const { return key / (side_ + 1); }
+  /// Position in the domain's coordinates.
+  [[nodiscard]] Point2 position(std::uint64_t key) const;
+  /// Bisection depth (see the file comment).
+  [[nodiscard]] int depth(std::uint64_t key) const;
+  /// The parents of a vertex (0, 1 or 2 keys; the corners and centre have none).
+  [[nodiscard]] std::vector<std::uint64_t> parents(std::uint64_t key) const;
+  /// The ends of the edge a vertex splits (its value under nested refinement is
+  /// the mean of theirs). Throws internalError for a corner or the centre.
+  [[nodiscard]] std::array<std::uint64_t, 2> splitEdge(std::uint64_t key) const;
+  /// Key of the centre of cell (ci, cj) of Ψ_level (a vertex of Ψ_level+1);
+  /// level < K.
+  [[nodiscard]] std::uint64_t cellCentre(int level, std::uint64_t ci, std::uint64_t cj) const;
+
+  [[nodiscard]] bool isActive(std::uint64_t key) const { return ids_.find(key) != KeyIndexMap::kNone; }
+  /// Dense id of an active vertex (order of activation), or KeyIndexMap::kNone.
+  [[nodiscard]] std::uint32_t vertexId(std::uint64_t key) const { return ids_.find(key); }
+  /// Keys of the active vertices by dense id.
+  [[nodiscard]] std::span<const std::uint64_t> activeKeys() const { return keys_; }
+  [[nodiscard]] std::size_t activeCount() const { return keys_.size(); }
+
+  /// Activates `key` and every inactive ancestor (2.10). Returns the number of
+  /// vertices newly activated. Throws inputError for a key outside the grid.
+  std::size_t activate(std::uint64_t key);
+
+  /// The triangles by SubmeshRefine (2.10), in recursion order (each is CCW
+  /// as (l, r, a)).
+  [[nodiscard]] std::vector<BinaryTriangle> triangles() const;
+
+  /// One triangle strip over all triangles (degenerate triangles join the
+  /// pieces): triangle i of the strip is (s[i], s[i+1], s[i+2]), CCW for even
+  /// i and CW for odd i; triangles with a repeated vertex are to be skipped.
+  [[nodiscard]] std::vector<std::uint64_t> triangleStrip() const;
+
+  /// The triangle containing p (domain coordinates). Throws inputError when
+  /// p is outside the square.
+  [[nodiscard]] BinaryLocation locate(Point2 p) const;
+  /// The same, continuing downward from a triangle that is known to contain p
+  /// (a coarser one, from an earlier location: nested refinement).
+  [[nodiscard]] BinaryLocation locateFrom(Point2 p, std::uint64_t path) const;
+
+  /// Rebuilds the triangle (l, a, r, depth) from its path.
+  [[nodiscard]] BinaryTriangle triangleFromPath(std::uint64_t path) const;
+
+  /// Grid coordinates (units of the finest cell) of a domain point.
+  [[nodiscard]] Point2 toGrid(Point2 p) const {
+    const double scale = static_cast<double>(side_) / size_;
+    return {(p.x - origin_.x) * scale, (p.y - origin_.y) * scale};
+  }
+
+ private:
+  [[nodiscard]] std::array<BinaryTriangle, 4> roots() const;
+  [[nodiscard]] BinaryLocation descend(Point2 grid, BinaryTriangle t) const;
+  void activateOne(std::uint64_t key);
+
+  Point2 origin_;
+  double size_;
+  int gridLevels_;
+  std::uint64_t side_;
+  KeyIndexMap ids_;
+  std::vector<std::uint64_t> keys_;
+};
+
+}  // namespace tinsmith::fit

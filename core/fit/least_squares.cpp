@@ -1,0 +1,418 @@
+// Penalized least squares over a triangulation (Hjelle & Dæhlen 8.2–8.9).
+#include "core/fit/least_squares.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::fit {
+
+namespace {
+
+using Triplet = Eigen::Triplet<double, SparseMatrix::StorageIndex>;
+
+/// Twice the signed area of (a, b, c): positive when CCW.
+double doubleArea(const Point2& a, const Point2& b, const Point2& c) {
+  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+}
+
+SparseMatrix fromTriplets(std::size_t n, const std::vector<Triplet>& triplets) {
+  SparseMatrix m(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  m.setFromTriplets(triplets.begin(), triplets.end());
+  m.makeCompressed();
+  return m;
+}
+
+void checkTriangles(std::size_t vertexCount, std::span<const Triangle> triangles) {
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (auto v : triangles[t]) {
+      if (v >= vertexCount) {
+        throw inputError("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
+                             " but there are only " + std::to_string(vertexCount) + " vertices",
+                         {}, "give triangles as indices into the vertex list");
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void TriangleMoments::add(const std::array<double, 3>& b, double z, double w) {
+  const double w0 = w * b[0], w1 = w * b[1], w2 = w * b[2];
+  bb[0] += w0 * b[0];
+  bb[1] += w0 * b[1];
+  bb[2] += w0 * b[2];
+  bb[3] += w1 * b[1];
+  bb[4] += w1 * b[2];
+  bb[5] += w2 * b[2];
+  bz[0] += w0 * z;
+  bz[1] += w1 * z;
+  bz[2] += w2 * z;
+}
+
+void TriangleMoments::merge(const TriangleMoments& other) {
+  for (int i = 0; i < 6; ++i) bb[i] += other.bb[i];
+  for (int i = 0; i < 3; ++i) bz[i] += other.bz[i];
+}
+
+std::array<double, 3> barycentric(const Point2& p, const Point2& a, const Point2& b, const Point2& c) {
+  const double area = doubleArea(a, b, c);
+  const double ba = doubleArea(p, b, c) / area;
+  const double bb = doubleArea(a, p, c) / area;
+  return {ba, bb, 1.0 - ba - bb};
+}
+
+std::vector<MeshEdge> meshEdges(std::size_t vertexCount, std::span<const Triangle> triangles) {
+  checkTriangles(vertexCount, triangles);
+  // Half-edges (from, to, opposite) sorted by their undirected key pair up twins.
+  struct HalfEdge {
+    std::uint32_t lo, hi, from, opposite;
+  };
+  std::vector<HalfEdge> half;
+  half.reserve(triangles.size() * 3);
+  for (const auto& t : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      half.push_back({std::min(a, b), std::max(a, b), a, c});
+    }
+  }
+  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.lo != y.lo ? x.lo < y.lo : (x.hi != y.hi ? x.hi < y.hi : x.from < y.from);
+  });
+  std::vector<MeshEdge> edges;
+  edges.reserve(half.size() / 2 + 1);
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i + 1;
+    while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
+    const std::string where = "edge (" + std::to_string(half[i].lo) + ", " + std::to_string(half[i].hi) + ")";
+    if (j - i > 2) throw geometryError(where + " belongs to more than two triangles", {}, "give a manifold triangulation");
+    MeshEdge e;
+    const HalfEdge& h = half[i];
+    e.s = h.from;
+    e.t = h.from == h.lo ? h.hi : h.lo;
+    e.left = h.opposite;
+    if (j - i == 2) {
+      const HalfEdge& g = half[i + 1];
+      if (g.from == h.from) throw geometryError(where + ": its two triangles have the same orientation", {}, "orient every triangle counter-clockwise");
+      e.right = g.opposite;
+    }
+    edges.push_back(e);
+    i = j;
+  }
+  return edges;
+}
+
+NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
+                               std::span<const TriangleMoments> moments) {
+  std::vector<Triplet> triplets;
+  triplets.reserve(triangles.size() * 9);
+  NormalEquations eq;
+  eq.btz = Vector::Zero(static_cast<Eigen::Index>(vertexCount));
+  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& m = moments[t];
+    const auto& tri = triangles[t];
+    bool empty = true;
+    for (double v : m.bb) empty = empty && v == 0.0;
+    if (empty) continue;
+    for (int a = 0; a < 3; ++a) {
+      eq.btz[tri[a]] += m.bz[a];
+      for (int b = 0; b < 3; ++b) {
+        triplets.emplace_back(static_cast<int>(tri[a]), static_cast<int>(tri[b]), m.bb[kIndex[a][b]]);
+      }
+    }
+  }
+  eq.btb = fromTriplets(vertexCount, triplets);
+  return eq;
+}
+
+NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const Triangle> triangles,
+                                        std::span<const Sample> samples) {
+  checkTriangles(vertexCount, triangles);
+  std::vector<TriangleMoments> moments(triangles.size());
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const auto& s = samples[k];
+    if (s.triangle >= triangles.size()) {
+      throw inputError("data point " + std::to_string(k) + " lies in triangle " + std::to_string(s.triangle) +
+                           " of " + std::to_string(triangles.size()),
+                       {}, "locate every data point in the triangulation before fitting");
+    }
+    moments[s.triangle].add(s.barycentric, s.z, s.weight);
+  }
+  return scatterMoments(vertexCount, triangles, moments);
+}
+
+PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
+                                  const SparseMatrix& energy, double lambdaFactor,
+                                  std::optional<double> lambdaAbsolute) {
+  PenalizedSystem sys;
+  SparseMatrix btb = energy;
+  std::fill(btb.valuePtr(), btb.valuePtr() + btb.nonZeros(), 0.0);
+  sys.b = Vector::Zero(energy.rows());
+  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& m = moments[t];
+    const auto& tri = triangles[t];
+    bool empty = true;
+    for (double v : m.bb) empty = empty && v == 0.0;
+    if (empty) continue;
+    for (int i = 0; i < 3; ++i) {
+      sys.b[tri[i]] += m.bz[i];
+      for (int j = 0; j < 3; ++j) btb.coeffRef(tri[i], tri[j]) += m.bb[kIndex[i][j]];
+    }
+  }
+  btb.makeCompressed();
+  sys.lambdaDefault = defaultLambda(btb, energy);
+  sys.lambda = lambdaAbsolute ? *lambdaAbsolute : lambdaFactor * sys.lambdaDefault;
+  if (btb.nonZeros() == energy.nonZeros()) {  // no entry was inserted: same pattern
+    sys.a = std::move(btb);
+    double* v = sys.a.valuePtr();
+    const double* e = energy.valuePtr();
+    for (Eigen::Index k = 0; k < sys.a.nonZeros(); ++k) v[k] += sys.lambda * e[k];
+  } else {
+    sys.a = btb + sys.lambda * energy;
+    sys.a.makeCompressed();
+  }
+  return sys;
+}
+
+SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
+  checkTriangles(vertices.size(), triangles);
+  // E = GᵀG with two rows per triangle, √A_t ∇g_t = (Σ η_i c_i, Σ μ_i c_i) / (2√A_t):
+  // Σ_t A_t |∇g_t|² = Σ_t (η_i η_j + μ_i μ_j) / 4A_t. A product of sparse
+  // matrices needs far less memory than 9 triplets per triangle.
+  std::vector<Triplet> triplets;
+  triplets.reserve(triangles.size() * 6);
+  for (std::size_t k = 0; k < triangles.size(); ++k) {
+    const auto& t = triangles[k];
+    const Point2 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+    const double area2 = std::abs(doubleArea(a, b, c));  // 2A
+    if (area2 == 0.0) throw geometryError("degenerate triangle " + std::to_string(k) + " in the membrane energy");
+    const double eta[3] = {b.y - c.y, c.y - a.y, a.y - b.y};
+    const double mu[3] = {c.x - b.x, a.x - c.x, b.x - a.x};
+    const double scale = 1.0 / std::sqrt(2.0 * area2);  // 1 / (2√A)
+    for (int i = 0; i < 3; ++i) {
+      triplets.emplace_back(static_cast<int>(2 * k), static_cast<int>(t[i]), eta[i] * scale);
+      triplets.emplace_back(static_cast<int>(2 * k + 1), static_cast<int>(t[i]), mu[i] * scale);
+    }
+  }
+  SparseMatrix g(static_cast<Eigen::Index>(2 * triangles.size()), static_cast<Eigen::Index>(vertices.size()));
+  g.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  SparseMatrix e = SparseMatrix(g.transpose()) * g;
+  e.makeCompressed();
+  return e;
+}
+
+SparseMatrix umbrellaEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles, bool weighted) {
+  const auto edges = meshEdges(vertices.size(), triangles);
+  const std::size_t n = vertices.size();
+  std::vector<double> total(n, 0.0);
+  auto weightOf = [&](const MeshEdge& e) {
+    if (!weighted) return 1.0;
+    const double len = std::hypot(vertices[e.s].x - vertices[e.t].x, vertices[e.s].y - vertices[e.t].y);
+    if (len == 0.0) throw geometryError("zero-length edge in the weighted umbrella operator");
+    return 1.0 / len;
+  };
+  for (const auto& e : edges) {
+    const double w = weightOf(e);
+    total[e.s] += w;
+    total[e.t] += w;
+  }
+  // Rows of M: (M f)_k = Σ_l (ω_kl / W_k) c_l − c_k; vertices without edges have no row.
+  std::vector<Triplet> triplets;
+  triplets.reserve(edges.size() * 2 + n);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (total[k] > 0.0) triplets.emplace_back(static_cast<int>(k), static_cast<int>(k), -1.0);
+  }
+  for (const auto& e : edges) {
+    const double w = weightOf(e);
+    triplets.emplace_back(static_cast<int>(e.s), static_cast<int>(e.t), w / total[e.s]);
+    triplets.emplace_back(static_cast<int>(e.t), static_cast<int>(e.s), w / total[e.t]);
+  }
+  const SparseMatrix m = fromTriplets(n, triplets);
+  SparseMatrix e = SparseMatrix(m.transpose()) * m;
+  e.makeCompressed();
+  return e;
+}
+
+std::array<double, 4> thinPlateBetas(const Point2& s, const Point2& t, const Point2& l, const Point2& r) {
+  const double length = std::hypot(t.x - s.x, t.y - s.y);
+  const double aLst = 0.5 * doubleArea(l, s, t);
+  const double aRts = 0.5 * doubleArea(r, t, s);
+  const double aTlr = 0.5 * doubleArea(t, l, r);
+  const double aSrl = 0.5 * doubleArea(s, r, l);
+  if (aLst <= 0.0 || aRts <= 0.0) throw geometryError("degenerate or clockwise triangle in the thin-plate energy");
+  const double denom = 2.0 * aLst * aRts;
+  return {length * aTlr / denom, length * aSrl / denom, -length / (2.0 * aLst), -length / (2.0 * aRts)};
+}
+
+SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
+  // E = DᵀD with one row √L_e β_e per interior edge (4 entries), so that
+  // cᵀEc = Σ_e L_e (T_e f)²; built as a sparse product to keep memory low.
+  const auto edges = meshEdges(vertices.size(), triangles);
+  std::vector<Triplet> triplets;
+  triplets.reserve(edges.size() * 4);
+  int row = 0;
+  for (const auto& e : edges) {
+    if (e.right == MeshEdge::kNone) continue;
+    const auto beta = thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
+    const double w = std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
+    const std::uint32_t idx[4] = {e.s, e.t, e.left, e.right};
+    for (int i = 0; i < 4; ++i) triplets.emplace_back(row, static_cast<int>(idx[i]), w * beta[i]);
+    ++row;
+  }
+  SparseMatrix d(row, static_cast<Eigen::Index>(vertices.size()));
+  d.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  SparseMatrix e = SparseMatrix(d.transpose()) * d;
+  e.makeCompressed();
+  return e;
+}
+
+SparseMatrix smoothingMatrix(Smoothing kind, std::span<const Point2> vertices, std::span<const Triangle> triangles) {
+  switch (kind) {
+    case Smoothing::Membrane: return membraneEnergy(vertices, triangles);
+    case Smoothing::Umbrella: return umbrellaEnergy(vertices, triangles, false);
+    case Smoothing::UmbrellaWeighted: return umbrellaEnergy(vertices, triangles, true);
+    case Smoothing::ThinPlate: return thinPlateEnergy(vertices, triangles);
+    case Smoothing::None: break;
+  }
+  SparseMatrix m(static_cast<Eigen::Index>(vertices.size()), static_cast<Eigen::Index>(vertices.size()));
+  return m;
+}
+
+double defaultLambda(const SparseMatrix& btb, const SparseMatrix& energy) {
+  const double e = energy.norm();
+  return e > 0.0 ? btb.norm() / e : 0.0;
+}
+
+void applyFixedVertices(SparseMatrix& a, Vector& b, std::span<const FixedVertex> fixed) {
+  if (fixed.empty()) return;
+  const auto n = static_cast<std::size_t>(a.rows());
+  std::vector<char> isFixed(n, 0);
+  Vector known = Vector::Zero(a.rows());
+  for (const auto& f : fixed) {
+    if (f.vertex >= n) {
+      throw inputError("fixed vertex " + std::to_string(f.vertex) + " is not a vertex of the triangulation (" +
+                       std::to_string(n) + " vertices)");
+    }
+    isFixed[f.vertex] = 1;
+    known[f.vertex] = f.z;
+  }
+  for (Eigen::Index i = 0; i < a.outerSize(); ++i) {
+    for (SparseMatrix::InnerIterator it(a, i); it; ++it) {
+      const auto r = static_cast<std::size_t>(it.row()), c = static_cast<std::size_t>(it.col());
+      if (isFixed[c] && !isFixed[r]) b[it.row()] -= it.value() * known[it.col()];
+      if (isFixed[r] || isFixed[c]) it.valueRef() = r == c ? 1.0 : 0.0;
+    }
+  }
+  for (const auto& f : fixed) {
+    if (a.coeff(f.vertex, f.vertex) != 1.0) a.coeffRef(f.vertex, f.vertex) = 1.0;
+    b[f.vertex] = f.z;
+  }
+}
+
+namespace {
+
+SolveReport gaussSeidel(const SparseMatrix& a, const Vector& b, Vector& c, const IterationControl& control) {
+  const Eigen::Index n = a.rows();
+  std::vector<double> diagonal(static_cast<std::size_t>(n), 0.0);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (SparseMatrix::InnerIterator it(a, i); it; ++it) {
+      if (it.col() == i) diagonal[static_cast<std::size_t>(i)] = it.value();
+    }
+    if (diagonal[static_cast<std::size_t>(i)] <= 0.0) {
+      throw geometryError("the least-squares system has no positive diagonal at unknown " + std::to_string(i), {},
+                          "use a smoothing term (thin-plate, membrane or umbrella) when cells have no data");
+    }
+  }
+  const double bNorm = std::max(b.norm(), 1e-300);
+  SolveReport report;
+  report.converged = false;
+  for (int iter = 1; iter <= control.maxIterations; ++iter) {
+    double change2 = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double sum = b[i];
+      for (SparseMatrix::InnerIterator it(a, i); it; ++it) {
+        if (it.col() != i) sum -= it.value() * c[it.col()];
+      }
+      const double next = sum / diagonal[static_cast<std::size_t>(i)];
+      change2 += (next - c[i]) * (next - c[i]);
+      c[i] = next;
+    }
+    report.iterations = iter;
+    const double improvement = std::sqrt(change2) / std::max(c.norm(), 1e-300);
+    if (improvement < control.relativeImprovement) {
+      report.relativeResidual = (b - a * c).norm() / bNorm;
+      if (report.relativeResidual < control.relativeResidual) {
+        report.converged = true;
+        return report;
+      }
+    }
+  }
+  report.relativeResidual = (b - a * c).norm() / bNorm;
+  return report;
+}
+
+}  // namespace
+
+SolveReport solveSystem(const SparseMatrix& a, const Vector& b, Vector& c, SolverKind solver,
+                        const IterationControl& control) {
+  if (c.size() != b.size()) c = Vector::Zero(b.size());
+  if (b.size() == 0) return {};
+  switch (solver) {
+    case SolverKind::Direct: {
+      const Eigen::SparseMatrix<double, Eigen::ColMajor, int> colMajor = a;
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>> ldlt(colMajor);
+      if (ldlt.info() != Eigen::Success || (ldlt.vectorD().array() <= 0.0).any()) {
+        throw geometryError("the least-squares system is singular", {},
+                            "use a smoothing term (thin-plate, membrane or umbrella) when some vertices have no data");
+      }
+      c = ldlt.solve(b);
+      SolveReport report;
+      report.relativeResidual = (b - a * c).norm() / std::max(b.norm(), 1e-300);
+      return report;
+    }
+    case SolverKind::GaussSeidel: return gaussSeidel(a, b, c, control);
+    case SolverKind::ConjugateGradient: {
+      Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper> cg;
+      cg.setTolerance(control.relativeResidual * 1e-2);
+      cg.setMaxIterations(control.maxIterations);
+      cg.compute(a);
+      c = cg.solveWithGuess(b, c);
+      SolveReport report;
+      report.iterations = static_cast<int>(cg.iterations());
+      report.relativeResidual = (b - a * c).norm() / std::max(b.norm(), 1e-300);
+      report.converged = cg.info() == Eigen::Success;
+      return report;
+    }
+  }
+  return {};
+}
+
+LeastSquaresResult fitLeastSquares(std::span<const Point2> vertices, std::span<const Triangle> triangles,
+                                   std::span<const Sample> samples, const LeastSquaresOptions& options,
+                                   const Vector& initial) {
+  NormalEquations eq = assembleNormalEquations(vertices.size(), triangles, samples);
+  LeastSquaresResult result;
+  SparseMatrix a = eq.btb;
+  if (options.smoothing != Smoothing::None) {
+    const SparseMatrix energy = smoothingMatrix(options.smoothing, vertices, triangles);
+    result.lambdaDefault = defaultLambda(eq.btb, energy);
+    result.lambda = options.lambdaAbsolute ? *options.lambdaAbsolute : options.lambdaFactor * result.lambdaDefault;
+    a = eq.btb + result.lambda * energy;
+    a.makeCompressed();
+  }
+  applyFixedVertices(a, eq.btz, options.fixed);
+  result.coefficients = initial.size() == eq.btz.size() ? initial : Vector::Zero(eq.btz.size());
+  result.report = solveSystem(a, eq.btz, result.coefficients, options.solver, options.control);
+  return result;
+}
+
+}  // namespace tinsmith::fit

@@ -1,0 +1,418 @@
+// Algorithm 8.1 over binary triangulations (Hjelle & Dæhlen 8.10).
+//
+// The data are sorted once along the Morton (Z-order) curve of the finest grid,
+// so that the points of any grid cell of any level form one contiguous run:
+// the per-cell criteria are a linear scan, and nearby points are near in memory.
+// Every point keeps the bisection-tree path of its triangle; as the
+// triangulations are nested, locating it at the next level continues downward
+// from there.
+#include "core/fit/multilevel_fit.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <thread>
+#include <utility>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::fit {
+
+namespace {
+
+std::uint64_t spreadBits(std::uint64_t v) {
+  v &= 0xffffffffULL;
+  v = (v | (v << 16)) & 0x0000ffff0000ffffULL;
+  v = (v | (v << 8)) & 0x00ff00ff00ff00ffULL;
+  v = (v | (v << 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  v = (v | (v << 2)) & 0x3333333333333333ULL;
+  v = (v | (v << 1)) & 0x5555555555555555ULL;
+  return v;
+}
+
+std::uint64_t compactBits(std::uint64_t v) {
+  v &= 0x5555555555555555ULL;
+  v = (v | (v >> 1)) & 0x3333333333333333ULL;
+  v = (v | (v >> 2)) & 0x0f0f0f0f0f0f0f0fULL;
+  v = (v | (v >> 4)) & 0x00ff00ff00ff00ffULL;
+  v = (v | (v >> 8)) & 0x0000ffff0000ffffULL;
+  v = (v | (v >> 16)) & 0x00000000ffffffffULL;
+  return v;
+}
+
+/// Runs f(begin, end, worker) over [0, n) split into `threads` chunks.
+template <class F>
+void parallelFor(std::size_t n, int threads, F&& f) {
+  if (threads <= 1 || n < 16384) {
+    f(std::size_t{0}, n, 0);
+    return;
+  }
+  std::vector<std::thread> pool;
+  const std::size_t chunk = (n + static_cast<std::size_t>(threads) - 1) / static_cast<std::size_t>(threads);
+  for (int t = 1; t < threads; ++t) {
+    const std::size_t b = std::min(n, chunk * static_cast<std::size_t>(t));
+    const std::size_t e = std::min(n, b + chunk);
+    pool.emplace_back([&f, b, e, t] { f(b, e, t); });
+  }
+  f(std::size_t{0}, std::min(n, chunk), 0);
+  for (auto& th : pool) th.join();
+}
+
+struct CellRecord {
+  std::uint64_t cell = 0;  ///< Morton code of the cell at the current level
+  std::size_t count = 0;
+  double maxError = 0.0;
+};
+
+const char* solverName(SolverKind s) {
+  switch (s) {
+    case SolverKind::Direct: return "direct";
+    case SolverKind::GaussSeidel: return "gauss-seidel";
+    case SolverKind::ConjugateGradient: return "cg";
+  }
+  return "?";
+}
+
+}  // namespace
+
+double frankeFunction(double x, double y) {
+  return 0.75 * std::exp(-((9 * x - 2) * (9 * x - 2) + (9 * y - 2) * (9 * y - 2)) / 4) +
+         0.75 * std::exp(-((9 * x + 1) * (9 * x + 1)) / 49 - (9 * y + 1) / 10) +
+         0.5 * std::exp(-((9 * x - 7) * (9 * x - 7) + (9 * y - 3) * (9 * y - 3)) / 4) -
+         0.2 * std::exp(-(9 * x - 4) * (9 * x - 4) - (9 * y - 7) * (9 * y - 7));
+}
+
+MultilevelFit::MultilevelFit(BinaryTriangulation mesh, std::vector<double> z, std::vector<LevelStats> levels)
+    : mesh_(std::move(mesh)), z_(std::move(z)), levels_(std::move(levels)) {}
+
+double MultilevelFit::evaluate(Point2 p) const {
+  const BinaryLocation loc = mesh_.locate(p);
+  const auto& t = loc.triangle;
+  return loc.barycentric[0] * z_[mesh_.vertexId(t.l)] + loc.barycentric[1] * z_[mesh_.vertexId(t.r)] +
+         loc.barycentric[2] * z_[mesh_.vertexId(t.a)];
+}
+
+std::vector<double> MultilevelFit::evaluateGrid(Point2 origin, double dx, double dy, std::size_t nx,
+                                                std::size_t ny) const {
+  std::vector<double> out(nx * ny, std::numeric_limits<double>::quiet_NaN());
+  const Point2 lo = mesh_.origin();
+  const double hi = mesh_.size();
+  for (std::size_t j = 0; j < ny; ++j) {
+    for (std::size_t i = 0; i < nx; ++i) {
+      const Point2 p{origin.x + static_cast<double>(i) * dx, origin.y + static_cast<double>(j) * dy};
+      if (p.x < lo.x || p.y < lo.y || p.x > lo.x + hi || p.y > lo.y + hi) continue;
+      out[j * nx + i] = evaluate(p);
+    }
+  }
+  return out;
+}
+
+TinData MultilevelFit::toTinData(const std::string& crs) const {
+  TinData tin;
+  tin.crs = crs;
+  const auto keys = mesh_.activeKeys();
+  tin.vertices.reserve(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const Point2 p = mesh_.position(keys[i]);
+    tin.vertices.push_back({p.x, p.y, z_[i]});
+  }
+  const auto tris = mesh_.triangles();
+  tin.triangles.reserve(tris.size());
+  for (const auto& t : tris) {
+    tin.triangles.push_back({mesh_.vertexId(t.l), mesh_.vertexId(t.r), mesh_.vertexId(t.a)});
+  }
+  return tin;
+}
+
+MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto& crit = options.criteria;
+  if (!crit.errorAbsolute && !crit.errorPercent && !crit.countAbove && !crit.curvatureAbove) {
+    throw usageError("no refinement criterion given", "give an error tolerance, a count, a curvature threshold or a combination");
+  }
+  if (input.size() < 3) throw inputError("the fit needs at least 3 data points (got " + std::to_string(input.size()) + ")");
+  if (options.maxLevel < 1 || options.maxLevel > BinaryTriangulation::kMaxGridLevels - 1) {
+    throw usageError("the maximum level must be within 1.." + std::to_string(BinaryTriangulation::kMaxGridLevels - 1) +
+                     " (got " + std::to_string(options.maxLevel) + ")");
+  }
+  if (!options.weights.empty() && options.weights.size() != input.size()) {
+    throw inputError("there are " + std::to_string(options.weights.size()) + " weights for " +
+                     std::to_string(input.size()) + " points", {}, "give one weight per point or none");
+  }
+  double xmin = std::numeric_limits<double>::infinity(), ymin = xmin, zmin = xmin;
+  double xmax = -xmin, ymax = -xmin, zmax = -xmin;
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    const auto& p = input[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      throw inputError("data point " + std::to_string(i) + " has a non-finite coordinate", {},
+                       "remove NaN or infinite values from the input");
+    }
+    if (!options.weights.empty() && !(options.weights[i] > 0.0 && std::isfinite(options.weights[i]))) {
+      throw inputError("data point " + std::to_string(i) + " has a weight that is not positive and finite");
+    }
+    xmin = std::min(xmin, p.x), xmax = std::max(xmax, p.x);
+    ymin = std::min(ymin, p.y), ymax = std::max(ymax, p.y);
+    zmin = std::min(zmin, p.z), zmax = std::max(zmax, p.z);
+  }
+  Point2 origin{xmin, ymin};
+  double size = std::max(xmax - xmin, ymax - ymin);
+  if (options.domainOrigin) origin = *options.domainOrigin;
+  if (options.domainSize) size = *options.domainSize;
+  if (!(size > 0.0)) {
+    throw inputError("the data points have no extent in x and y", {}, "give points that span an area");
+  }
+  const int gridLevels = options.maxLevel + 1;
+  BinaryTriangulation mesh(origin, size, gridLevels);
+  const std::uint64_t side = mesh.side();
+  const int threads = options.threads > 0 ? options.threads
+                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+
+  // Sort the data along the Morton curve of the finest grid.
+  auto fineCell = [&](const Point2& g) {
+    const double lim = static_cast<double>(side - 1);
+    const auto ci = static_cast<std::uint64_t>(std::clamp(std::floor(g.x), 0.0, lim));
+    const auto cj = static_cast<std::uint64_t>(std::clamp(std::floor(g.y), 0.0, lim));
+    return spreadBits(ci) | (spreadBits(cj) << 1);
+  };
+  const std::size_t n = input.size();
+  std::vector<Point3> pts(n);
+  std::vector<double> weights;
+  {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
+    const double sideD = static_cast<double>(side);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point2 g = mesh.toGrid(input[i].xy());
+      if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
+        throw inputError("data point " + std::to_string(i) + " is outside the square domain", {},
+                         "choose a domain that covers every data point");
+      }
+      order[i] = {fineCell(g), static_cast<std::uint32_t>(i)};
+    }
+    std::sort(order.begin(), order.end());
+    for (std::size_t i = 0; i < n; ++i) pts[i] = input[order[i].second];
+    if (!options.weights.empty()) {
+      weights.resize(n);
+      for (std::size_t i = 0; i < n; ++i) weights[i] = options.weights[order[i].second];
+    }
+  }
+
+  // Constraints (8.9): snapped to the finest grid, active from the start.
+  std::vector<std::pair<std::uint64_t, double>> fixedKeys;
+  for (const auto& f : options.fixed) {
+    const Point2 g = mesh.toGrid(f.xy());
+    const double sideD = static_cast<double>(side);
+    if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
+      throw inputError("fixed vertex (" + std::to_string(f.x) + ", " + std::to_string(f.y) + ") is outside the domain");
+    }
+    const std::uint64_t k = mesh.key(static_cast<std::uint64_t>(std::llround(g.x)), static_cast<std::uint64_t>(std::llround(g.y)));
+    mesh.activate(k);
+    fixedKeys.emplace_back(k, f.z);
+  }
+  std::vector<FixedVertex> fixed;
+  for (const auto& [k, z] : fixedKeys) {
+    const std::uint32_t id = mesh.vertexId(k);
+    auto it = std::find_if(fixed.begin(), fixed.end(), [&](const FixedVertex& f) { return f.vertex == id; });
+    if (it != fixed.end()) it->z = z;
+    else fixed.push_back({id, z});
+  }
+
+  const double epsilon = crit.errorAbsolute ? *crit.errorAbsolute
+                         : crit.errorPercent ? *crit.errorPercent / 100.0 * (zmax - zmin)
+                                             : 0.0;
+  const bool useError = crit.errorAbsolute.has_value() || crit.errorPercent.has_value();
+
+  std::vector<std::uint64_t> paths(n, 0);
+  std::vector<std::uint64_t> previousPaths;
+  std::vector<std::uint32_t> triOf(n, 0);
+  Vector coefficients;
+  std::vector<LevelStats> stats;
+
+  for (int level = 1;; ++level) {
+    const auto start = Clock::now();
+    LevelStats st;
+    st.level = level;
+    const std::size_t nv = mesh.activeCount();
+    st.vertices = nv;
+
+    // Nested iteration: old coefficients carry over (dense ids are stable);
+    // a new vertex gets f_{k−1} at its position = the mean of its split edge's
+    // ends (the edge lies inside one triangle of Δ_{k−1}).
+    const auto oldCount = static_cast<std::size_t>(coefficients.size());
+    coefficients.conservativeResize(static_cast<Eigen::Index>(nv));
+    const auto keys = mesh.activeKeys();
+    for (std::size_t id = oldCount; id < nv; ++id) {
+      if (oldCount == 0) {
+        coefficients[static_cast<Eigen::Index>(id)] = 0.0;
+        continue;
+      }
+      const auto ends = mesh.splitEdge(keys[id]);
+      coefficients[static_cast<Eigen::Index>(id)] =
+          0.5 * (coefficients[mesh.vertexId(ends[0])] + coefficients[mesh.vertexId(ends[1])]);
+    }
+    for (const auto& f : fixed) coefficients[f.vertex] = f.z;
+
+    const auto tris = mesh.triangles();
+    st.triangles = tris.size();
+    KeyIndexMap triIndex;
+    triIndex.reserve(tris.size());
+    std::vector<Triangle> triVerts(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      triIndex.insert(tris[t].path, static_cast<std::uint32_t>(t));
+      triVerts[t] = {mesh.vertexId(tris[t].l), mesh.vertexId(tris[t].r), mesh.vertexId(tris[t].a)};
+    }
+    std::vector<Point2> positions(nv);
+    for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
+
+    // Triangles of Δ_{k−1} that were not split keep their path: their points
+    // stay put. The others' points continue their descent from there.
+    std::vector<std::uint32_t> remap(previousPaths.size());
+    for (std::size_t t = 0; t < previousPaths.size(); ++t) remap[t] = triIndex.find(previousPaths[t]);
+
+    // Locate the points and accumulate per-triangle moments, one copy per worker.
+    std::vector<std::vector<TriangleMoments>> moments(static_cast<std::size_t>(threads));
+    parallelFor(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+      auto& mine = moments[static_cast<std::size_t>(worker)];
+      mine.assign(tris.size(), TriangleMoments{});
+      for (std::size_t i = b; i < e; ++i) {
+        const std::uint32_t kept = level == 1 ? KeyIndexMap::kNone : remap[triOf[i]];
+        std::uint32_t t = kept;
+        std::array<double, 3> bc;
+        if (kept != KeyIndexMap::kNone) {
+          const Triangle& tv = triVerts[t];
+          bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
+        } else {
+          const BinaryLocation loc = level == 1 ? mesh.locate(pts[i].xy()) : mesh.locateFrom(pts[i].xy(), paths[i]);
+          paths[i] = loc.triangle.path;
+          t = triIndex.find(paths[i]);
+          bc = loc.barycentric;
+        }
+        triOf[i] = t;
+        mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
+      }
+    });
+    previousPaths.resize(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) previousPaths[t] = tris[t].path;
+    for (std::size_t w = 1; w < moments.size(); ++w) {
+      if (moments[w].empty()) continue;
+      for (std::size_t t = 0; t < tris.size(); ++t) moments[0][t].merge(moments[w][t]);
+    }
+    for (std::size_t w = 1; w < moments.size(); ++w) moments[w] = {};
+    SparseMatrix a;
+    Vector rhs;
+    if (options.smoothing != Smoothing::None) {
+      const SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
+      PenalizedSystem sys = assemblePenalized(triVerts, moments[0], energy, options.lambdaFactor, options.lambdaAbsolute);
+      st.lambda = sys.lambda;
+      a = std::move(sys.a);
+      rhs = std::move(sys.b);
+    } else {
+      NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
+      a = std::move(eq.btb);
+      rhs = std::move(eq.btz);
+    }
+    moments = {};
+    applyFixedVertices(a, rhs, fixed);
+    st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
+    const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);
+    st.iterations = report.iterations;
+    st.relativeResidual = report.relativeResidual;
+
+    // Errors at the data and per-cell records of Ψ_level (contiguous runs).
+    const int shift = 2 * (gridLevels - level);
+    std::vector<std::vector<CellRecord>> records(static_cast<std::size_t>(threads));
+    std::vector<double> maxErr(static_cast<std::size_t>(threads), 0.0), sumSq(static_cast<std::size_t>(threads), 0.0);
+    parallelFor(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+      auto& rec = records[static_cast<std::size_t>(worker)];
+      double mx = 0.0, ss = 0.0;
+      for (std::size_t i = b; i < e; ++i) {
+        const Triangle& tv = triVerts[triOf[i]];
+        const auto bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
+        const double f = bc[0] * coefficients[tv[0]] + bc[1] * coefficients[tv[1]] + bc[2] * coefficients[tv[2]];
+        const double err = std::abs(f - pts[i].z);
+        mx = std::max(mx, err);
+        ss += err * err;
+        const std::uint64_t cell = fineCell(mesh.toGrid(pts[i].xy())) >> shift;
+        if (rec.empty() || rec.back().cell != cell) rec.push_back({cell, 0, 0.0});
+        rec.back().count += 1;
+        rec.back().maxError = std::max(rec.back().maxError, err);
+      }
+      maxErr[static_cast<std::size_t>(worker)] = mx;
+      sumSq[static_cast<std::size_t>(worker)] = ss;
+    });
+    std::vector<CellRecord> cells;
+    for (auto& rec : records) {
+      for (const auto& r : rec) {
+        if (!cells.empty() && cells.back().cell == r.cell) {
+          cells.back().count += r.count;
+          cells.back().maxError = std::max(cells.back().maxError, r.maxError);
+        } else {
+          cells.push_back(r);
+        }
+      }
+    }
+    records.clear();
+    st.maxError = *std::max_element(maxErr.begin(), maxErr.end());
+    st.rmsError = std::sqrt(std::accumulate(sumSq.begin(), sumSq.end(), 0.0) / static_cast<double>(n));
+
+    // Curvature: cells holding the midpoint of an edge with |T_e f| > τ.
+    std::vector<std::uint64_t> curved;
+    if (crit.curvatureAbove) {
+      for (const auto& e : meshEdges(nv, triVerts)) {
+        if (e.right == MeshEdge::kNone) continue;
+        const auto beta = thinPlateBetas(positions[e.s], positions[e.t], positions[e.left], positions[e.right]);
+        const double te = beta[0] * coefficients[e.s] + beta[1] * coefficients[e.t] + beta[2] * coefficients[e.left] +
+                          beta[3] * coefficients[e.right];
+        if (std::abs(te) > *crit.curvatureAbove) {
+          const Point2 mid{0.5 * (positions[e.s].x + positions[e.t].x), 0.5 * (positions[e.s].y + positions[e.t].y)};
+          curved.push_back(fineCell(mesh.toGrid(mid)) >> shift);
+        }
+      }
+      std::sort(curved.begin(), curved.end());
+      curved.erase(std::unique(curved.begin(), curved.end()), curved.end());
+    }
+
+    // Cells to refine: every criterion that is set must hold.
+    std::vector<std::uint64_t> refine;
+    {
+      auto isCurved = [&](std::uint64_t c) { return std::binary_search(curved.begin(), curved.end(), c); };
+      for (const auto& c : cells) {
+        bool ok = true;
+        if (crit.countAbove) ok = ok && c.count > *crit.countAbove;
+        if (useError) ok = ok && c.maxError > epsilon;
+        if (crit.curvatureAbove) ok = ok && isCurved(c.cell);
+        if (ok) refine.push_back(c.cell);
+      }
+      if (crit.curvatureAbove && !crit.countAbove && !useError) {
+        refine = curved;  // cells without data may be curved too
+      }
+    }
+    st.cellsRefined = refine.size();
+    const bool last = refine.empty() || level >= options.maxLevel;
+    if (!last) {
+      for (std::uint64_t c : refine) {
+        mesh.activate(mesh.cellCentre(level, compactBits(c), compactBits(c >> 1)));
+      }
+    } else {
+      st.cellsRefined = 0;
+    }
+    st.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    stats.push_back(st);
+    if (options.progress) {
+      char line[256];
+      std::snprintf(line, sizeof line,
+                    "level %d: %zu vertices, %zu triangles, %s %d it, max error %.6g, rms %.6g, %zu cells refined, %.3f s",
+                    st.level, st.vertices, st.triangles, solverName(st.solver), st.iterations, st.maxError, st.rmsError,
+                    st.cellsRefined, st.seconds);
+      options.progress(line);
+    }
+    if (last) break;
+  }
+
+  std::vector<double> z(coefficients.data(), coefficients.data() + coefficients.size());
+  return MultilevelFit(std::move(mesh), std::move(z), std::move(stats));
+}
+
+}  // namespace tinsmith::fit

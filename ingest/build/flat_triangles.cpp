@@ -1,0 +1,233 @@
+#include "ingest/build/flat_triangles.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+namespace tinsmith::ingest {
+
+namespace {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | b;
+}
+
+double segmentDistance(const Point3& p, const Point3& a, const Point3& b) {
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  const double len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? ((p.x - a.x) * dx + (p.y - a.y) * dy) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  return std::hypot(p.x - (a.x + t * dx), p.y - (a.y + t * dy));
+}
+
+// Triangle adjacency: neighbour[3t+k] is the triangle across the edge from
+// corner k to corner k+1 of t, or kNone on the boundary.
+std::vector<std::uint32_t> neighbours(const TinData& tin) {
+  struct Half {
+    std::uint64_t key;
+    std::uint32_t half;
+  };
+  std::vector<Half> halves;
+  halves.reserve(tin.triangles.size() * 3);
+  for (std::uint32_t t = 0; t < tin.triangles.size(); ++t)
+    for (std::uint32_t k = 0; k < 3; ++k)
+      halves.push_back({edgeKey(tin.triangles[t][k], tin.triangles[t][(k + 1) % 3]), 3 * t + k});
+  std::sort(halves.begin(), halves.end(), [](const Half& a, const Half& b) {
+    return a.key != b.key ? a.key < b.key : a.half < b.half;
+  });
+  std::vector<std::uint32_t> across(tin.triangles.size() * 3, kNone);
+  for (std::size_t i = 0; i + 1 < halves.size(); ++i) {
+    if (halves[i].key == halves[i + 1].key) {
+      across[halves[i].half] = halves[i + 1].half / 3;
+      across[halves[i + 1].half] = halves[i].half / 3;
+      ++i;
+    }
+  }
+  return across;
+}
+
+std::vector<std::uint64_t> contourEdgeKeys(const TinData& tin) {
+  std::vector<std::uint64_t> keys;
+  for (const auto& e : tin.constrainedEdges)
+    if (e.feature < tin.features.size() && tin.features[e.feature].kind == FeatureKind::Contour)
+      keys.push_back(edgeKey(e.a, e.b));
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  return keys;
+}
+
+bool isFlat(const TinData& tin, const std::vector<char>& onContour, std::uint32_t t) {
+  const auto& tri = tin.triangles[t];
+  if (!onContour[tri[0]] || !onContour[tri[1]] || !onContour[tri[2]]) return false;
+  const double z = tin.vertices[tri[0]].z;
+  return tin.vertices[tri[1]].z == z && tin.vertices[tri[2]].z == z;
+}
+
+}  // namespace
+
+std::vector<char> contourVertices(const TinData& tin) {
+  std::vector<char> on(tin.vertices.size(), 0);
+  for (const auto& e : tin.constrainedEdges)
+    if (e.feature < tin.features.size() && tin.features[e.feature].kind == FeatureKind::Contour)
+      on[e.a] = on[e.b] = 1;
+  return on;
+}
+
+std::size_t countFlatTriangles(const TinData& tin) {
+  const auto on = contourVertices(tin);
+  std::size_t n = 0;
+  for (std::uint32_t t = 0; t < tin.triangles.size(); ++t) n += isFlat(tin, on, t) ? 1 : 0;
+  return n;
+}
+
+FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing) {
+  FlatTriangleAnalysis out;
+  const auto on = contourVertices(tin);
+  const std::size_t nt = tin.triangles.size();
+  std::vector<char> flat(nt, 0);
+  for (std::uint32_t t = 0; t < nt; ++t)
+    if (isFlat(tin, on, t)) {
+      flat[t] = 1;
+      out.flatTriangles.push_back(t);
+    }
+  if (out.flatTriangles.empty()) return out;
+
+  const auto across = neighbours(tin);
+  const auto contourKeys = contourEdgeKeys(tin);
+  auto isContourEdge = [&](std::uint32_t a, std::uint32_t b) {
+    return std::binary_search(contourKeys.begin(), contourKeys.end(), edgeKey(a, b));
+  };
+  const auto& V = tin.vertices;
+
+  std::vector<std::uint32_t> region(nt, kNone);
+  std::unordered_set<std::uint64_t> usedMidpoints;
+  std::vector<std::uint32_t> members, stack;
+  for (const std::uint32_t seed : out.flatTriangles) {
+    if (region[seed] != kNone) continue;
+    const auto id = static_cast<std::uint32_t>(out.regions++);
+    const double z0 = V[tin.triangles[seed][0]].z;
+    // Flood the region: flat neighbours at the same level across non-contour edges.
+    members.clear();
+    stack.assign(1, seed);
+    region[seed] = id;
+    std::vector<std::pair<Point3, Point3>> ownContour;  // the region's z0 contour edges
+    std::vector<Point3> exits;                          // vertices at another level next to it
+    std::vector<double> outside;                        // levels across its contour edges
+    while (!stack.empty()) {
+      const std::uint32_t t = stack.back();
+      stack.pop_back();
+      members.push_back(t);
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t a = tin.triangles[t][k], b = tin.triangles[t][(k + 1) % 3];
+        const std::uint32_t n = across[3 * t + k];
+        const bool contourEdge = isContourEdge(a, b);
+        if (contourEdge) ownContour.push_back({V[a], V[b]});
+        if (n == kNone) continue;
+        if (!contourEdge && flat[n] && V[tin.triangles[n][0]].z == z0) {
+          if (region[n] == kNone) {
+            region[n] = id;
+            stack.push_back(n);
+          }
+          continue;
+        }
+        // The neighbour's vertex opposite the shared edge.
+        std::uint32_t opposite = kNone;
+        for (auto v : tin.triangles[n])
+          if (v != a && v != b) opposite = v;
+        if (opposite == kNone || V[opposite].z == z0) continue;
+        if (contourEdge)
+          outside.push_back(V[opposite].z);
+        else
+          exits.push_back(V[opposite]);
+      }
+    }
+    std::sort(members.begin(), members.end());  // deterministic proposal order
+
+    // Candidate positions, one per flat triangle.
+    std::vector<Point3> candidates;
+    for (const std::uint32_t t : members) {
+      const auto& tri = tin.triangles[t];
+      int longest = 0;
+      double best = -1;
+      for (int k = 0; k < 3; ++k) {
+        const Point3& a = V[tri[k]];
+        const Point3& b = V[tri[(k + 1) % 3]];
+        const double len = std::hypot(b.x - a.x, b.y - a.y);
+        if (len > best) {
+          best = len;
+          longest = k;
+        }
+      }
+      const std::uint32_t a = tri[longest], b = tri[(longest + 1) % 3];
+      Point3 p;
+      if (!isContourEdge(a, b)) {
+        if (!usedMidpoints.insert(edgeKey(a, b)).second) continue;
+        p = {0.5 * (V[a].x + V[b].x), 0.5 * (V[a].y + V[b].y), z0};
+      } else {
+        p = {(V[tri[0]].x + V[tri[1]].x + V[tri[2]].x) / 3.0,
+             (V[tri[0]].y + V[tri[1]].y + V[tri[2]].y) / 3.0, z0};
+      }
+      double nearest = std::numeric_limits<double>::infinity();
+      for (auto v : tri) nearest = std::min(nearest, std::hypot(p.x - V[v].x, p.y - V[v].y));
+      if (nearest <= minSpacing) continue;
+      candidates.push_back(p);
+    }
+    if (candidates.empty()) continue;
+
+    auto distanceToContour = [&](const Point3& p) {
+      double d = std::numeric_limits<double>::infinity();
+      for (const auto& [a, b] : ownContour) d = std::min(d, segmentDistance(p, a, b));
+      if (!std::isfinite(d))  // no contour edge on the region: its vertices are on the level
+        for (const std::uint32_t t : members)
+          for (auto v : tin.triangles[t]) d = std::min(d, std::hypot(p.x - V[v].x, p.y - V[v].y));
+      return d;
+    };
+
+    if (!exits.empty()) {
+      for (Point3 p : candidates) {
+        const double d0 = distanceToContour(p);
+        double d1 = std::numeric_limits<double>::infinity();
+        double z1 = z0;
+        for (const Point3& q : exits) {
+          const double d = std::hypot(p.x - q.x, p.y - q.y);
+          if (d < d1) {
+            d1 = d;
+            z1 = q.z;
+          }
+        }
+        p.z = z0 + (z1 - z0) * d0 / (d0 + d1);
+        out.proposals.push_back(p);
+      }
+    } else if (!outside.empty()) {
+      ++out.closedRegions;
+      std::size_t below = 0;
+      std::vector<double> steps;
+      for (double z : outside) {
+        below += z < z0 ? 1 : 0;
+        steps.push_back(std::abs(z - z0));
+      }
+      std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
+                       steps.end());
+      const double h = 0.5 * steps[steps.size() / 2];
+      const double sign = 2 * below >= outside.size() ? 1.0 : -1.0;  // summit : pit
+      std::vector<double> d0(candidates.size());
+      double d0max = 0;
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        d0[i] = distanceToContour(candidates[i]);
+        d0max = std::max(d0max, d0[i]);
+      }
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        Point3 p = candidates[i];
+        p.z = z0 + sign * h * (d0max > 0 ? d0[i] / d0max : 1.0);
+        out.proposals.push_back(p);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace tinsmith::ingest

@@ -1,0 +1,26 @@
+// The seam between the ingest front half (filters/load_layers.hpp) and the
+// TIN builder: IngestedLayers → BuildLayers, and the ingest stages' counts
+// and timings into the BuildReport.
+#pragma once
+
+#include <vector>
+
+#include "ingest/build/build_report.hpp"
+#include "ingest/build/tin_builder.hpp"
+#include "ingest/filters/load_layers.hpp"
+
+namespace tinsmith::ingest {
+
+/// One BuildLayer per ingested layer, config order. Interior rings of a
+/// boundary polygon become holes; every line's source names the file, the
+/// layer and the feature id (and part, for multi-geometries).
+std::vector<BuildLayer> toBuildLayers(const std::vector<IngestedLayer>& layers);
+
+/// Adds the ingest result's layer counts, cleaning counts, contour-crossing
+/// data errors and stage timings to `report` (before the builder's own).
+void addIngestReport(BuildReport& report, const IngestResult& ingest);
+
+/// BuildOptions from the config's [tin] table and project CRS.
+BuildOptions buildOptionsFrom(const ProjectConfig& config);
+
+}  // namespace tinsmith::ingest

@@ -1,0 +1,390 @@
+#include "ingest/config/project_config.hpp"
+
+#include <ogr_spatialref.h>
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "core/base/error.hpp"
+#include "ingest/base/gdal_runtime.hpp"
+
+namespace tinsmith::ingest {
+
+std::string_view toString(LayerKind kind) {
+  switch (kind) {
+    case LayerKind::Contours:
+      return "contours";
+    case LayerKind::Points:
+      return "points";
+    case LayerKind::Road:
+      return "road";
+    case LayerKind::River:
+      return "river";
+    case LayerKind::Boundary:
+      return "boundary";
+    case LayerKind::Hole:
+      return "hole";
+    case LayerKind::Lake:
+      return "lake";
+    case LayerKind::Dem:
+      return "dem";
+  }
+  return "?";
+}
+
+std::optional<LayerKind> parseLayerKind(std::string_view name) {
+  for (auto k : {LayerKind::Contours, LayerKind::Points, LayerKind::Road, LayerKind::River,
+                 LayerKind::Boundary, LayerKind::Hole, LayerKind::Lake, LayerKind::Dem}) {
+    if (toString(k) == name) return k;
+  }
+  return std::nullopt;
+}
+
+FeatureKind featureKind(LayerKind kind) {
+  switch (kind) {
+    case LayerKind::Contours:
+      return FeatureKind::Contour;
+    case LayerKind::Points:
+      return FeatureKind::SpotHeight;
+    case LayerKind::Road:
+      return FeatureKind::Road;
+    case LayerKind::River:
+      return FeatureKind::River;
+    case LayerKind::Boundary:
+      return FeatureKind::Boundary;
+    case LayerKind::Hole:
+      return FeatureKind::Hole;
+    case LayerKind::Lake:
+      return FeatureKind::Lake;
+    case LayerKind::Dem:
+      return FeatureKind::Raster;
+  }
+  return FeatureKind::Other;
+}
+
+GeometryClass geometryClass(LayerKind kind) {
+  switch (kind) {
+    case LayerKind::Points:
+      return GeometryClass::Points;
+    case LayerKind::Contours:
+    case LayerKind::Road:
+    case LayerKind::River:
+      return GeometryClass::Lines;
+    case LayerKind::Boundary:
+    case LayerKind::Hole:
+    case LayerKind::Lake:
+      return GeometryClass::Areas;
+    case LayerKind::Dem:
+      return GeometryClass::Raster;
+  }
+  return GeometryClass::Points;
+}
+
+void checkProjectCrs(const std::string& crs, const std::string& where) {
+  ensureGdalReady();
+  OGRSpatialReference srs;
+  if (crs.empty() || srs.SetFromUserInput(crs.c_str()) != OGRERR_NONE) {
+    throw inputError(where + ": '" + crs + "' is not a CRS GDAL/PROJ knows", {},
+                     "write it as \"EPSG:code\" (e.g. \"EPSG:32612\" for UTM 12N) or as WKT");
+  }
+  if (srs.IsGeographic() || !srs.IsProjected()) {
+    throw inputError(
+        where + ": '" + crs + "' (" + (srs.GetName() ? srs.GetName() : "?") +
+            ") is not a projected CRS; tinsmith builds TINs in projected metres",
+        {},
+        "choose a projected CRS in metres, such as the UTM zone of the data (e.g. \"EPSG:32619\")");
+  }
+  const char* unitName = nullptr;
+  const double unit = srs.GetLinearUnits(&unitName);
+  if (std::abs(unit - 1.0) > 1e-9) {
+    throw inputError(where + ": '" + crs + "' has linear unit '" + (unitName ? unitName : "?") +
+                         "'; tinsmith needs metres",
+                     {}, "choose a projected CRS in metres");
+  }
+}
+
+namespace {
+
+struct Context {
+  std::string file;  // config file name for messages
+
+  [[noreturn]] void fail(const std::string& problem, std::int64_t line,
+                         const std::string& hint = {}) const {
+    SourceLocation where;
+    where.file = file;
+    if (line > 0) where.line = line;
+    throw inputError(problem, where, hint);
+  }
+};
+
+std::int64_t lineOf(const toml::node& node) {
+  return static_cast<std::int64_t>(node.source().begin.line);
+}
+
+const char* typeName(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    default:
+      return "a date/time";
+  }
+}
+
+void checkKeys(const Context& ctx, const toml::table& table, const std::string& tableName,
+               const std::set<std::string>& allowed) {
+  for (const auto& [key, node] : table) {
+    if (!allowed.count(std::string(key.str()))) {
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+      ctx.fail("unknown key '" + std::string(key.str()) + "' in " + tableName, lineOf(node),
+               "allowed keys: " + list + " (see config/README.md)");
+    }
+  }
+}
+
+std::optional<std::string> getString(const Context& ctx, const toml::table& t,
+                                     const std::string& key, const std::string& tableName) {
+  const auto* node = t.get(key);
+  if (!node) return std::nullopt;
+  if (const auto* s = node->as_string()) return s->get();
+  ctx.fail(tableName + "." + key + " must be a string, not " + typeName(*node), lineOf(*node));
+}
+
+std::optional<double> getNumber(const Context& ctx, const toml::table& t, const std::string& key,
+                                const std::string& tableName) {
+  const auto* node = t.get(key);
+  if (!node) return std::nullopt;
+  if (const auto* f = node->as_floating_point()) {
+    if (!std::isfinite(f->get()))
+      ctx.fail(tableName + "." + key + " must be finite", lineOf(*node));
+    return f->get();
+  }
+  if (const auto* i = node->as_integer()) return static_cast<double>(i->get());
+  ctx.fail(tableName + "." + key + " must be a number, not " + typeName(*node), lineOf(*node));
+}
+
+std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t,
+                                       const std::string& key, const std::string& tableName) {
+  const auto* node = t.get(key);
+  if (!node) return std::nullopt;
+  if (const auto* i = node->as_integer()) return i->get();
+  ctx.fail(tableName + "." + key + " must be an integer, not " + typeName(*node), lineOf(*node));
+}
+
+std::optional<bool> getBool(const Context& ctx, const toml::table& t, const std::string& key,
+                            const std::string& tableName) {
+  const auto* node = t.get(key);
+  if (!node) return std::nullopt;
+  if (const auto* b = node->as_boolean()) return b->get();
+  ctx.fail(tableName + "." + key + " must be true or false, not " + typeName(*node), lineOf(*node));
+}
+
+std::int64_t keyLine(const toml::table& t, const std::string& key) {
+  const auto* node = t.get(key);
+  return node ? lineOf(*node) : lineOf(t);
+}
+
+LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t index,
+                       const std::filesystem::path& baseDir) {
+  const std::string tn = "[[layer]] #" + std::to_string(index + 1);
+  checkKeys(ctx, t, tn,
+            {"path", "layer", "kind", "z", "z_value", "crs", "weight", "name", "x", "y",
+             "delimiter", "header", "band", "nodata"});
+  LayerConfig layer;
+  layer.configLine = lineOf(t);
+
+  const auto path = getString(ctx, t, "path", tn);
+  if (!path || path->empty())
+    ctx.fail(tn + " has no 'path'", layer.configLine, "give the data file's path");
+  layer.path = std::filesystem::path(*path);
+  if (layer.path.is_relative()) layer.path = baseDir / layer.path;
+  layer.path = layer.path.lexically_normal();
+
+  const auto kind = getString(ctx, t, "kind", tn);
+  if (!kind)
+    ctx.fail(tn + " has no 'kind'", layer.configLine,
+             "kind = contours | points | road | river | boundary | hole | lake | dem");
+  const auto parsed = parseLayerKind(*kind);
+  if (!parsed) {
+    ctx.fail(tn + ".kind: unknown kind '" + *kind + "'", keyLine(t, "kind"),
+             "kind = contours | points | road | river | boundary | hole | lake | dem");
+  }
+  layer.kind = *parsed;
+
+  layer.layer = getString(ctx, t, "layer", tn).value_or("");
+  layer.zAttribute = getString(ctx, t, "z", tn).value_or("");
+  layer.zValue = getNumber(ctx, t, "z_value", tn);
+  if (layer.zValue && !layer.zAttribute.empty()) {
+    ctx.fail(tn + ": give either 'z' (an attribute) or 'z_value' (a fixed z), not both",
+             keyLine(t, "z_value"));
+  }
+  layer.crs = getString(ctx, t, "crs", tn).value_or("");
+  if (!layer.crs.empty()) {
+    OGRSpatialReference srs;
+    ensureGdalReady();
+    if (srs.SetFromUserInput(layer.crs.c_str()) != OGRERR_NONE) {
+      ctx.fail(tn + ".crs: '" + layer.crs + "' is not a CRS GDAL/PROJ knows", keyLine(t, "crs"),
+               "write it as \"EPSG:code\" or as WKT");
+    }
+  }
+  layer.weight = getNumber(ctx, t, "weight", tn).value_or(1.0);
+  if (!(layer.weight > 0.0)) ctx.fail(tn + ".weight must be greater than 0", keyLine(t, "weight"));
+
+  layer.xColumn = getString(ctx, t, "x", tn).value_or("");
+  layer.yColumn = getString(ctx, t, "y", tn).value_or("");
+  if (const auto d = getString(ctx, t, "delimiter", tn)) {
+    if (*d == "auto")
+      layer.delimiter = TextDelimiter::Auto;
+    else if (*d == "comma" || *d == ",")
+      layer.delimiter = TextDelimiter::Comma;
+    else if (*d == "semicolon" || *d == ";")
+      layer.delimiter = TextDelimiter::Semicolon;
+    else if (*d == "tab" || *d == "\t")
+      layer.delimiter = TextDelimiter::Tab;
+    else if (*d == "whitespace" || *d == " ")
+      layer.delimiter = TextDelimiter::Whitespace;
+    else
+      ctx.fail(tn + ".delimiter: unknown delimiter '" + *d + "'", keyLine(t, "delimiter"),
+               "delimiter = auto | comma | semicolon | tab | whitespace");
+  }
+  if (const auto h = getBool(ctx, t, "header", tn))
+    layer.header = *h ? TextHeader::Present : TextHeader::Absent;
+  if (const auto b = getInteger(ctx, t, "band", tn)) {
+    if (*b < 1 || *b > 65535) ctx.fail(tn + ".band must be 1 or more", keyLine(t, "band"));
+    layer.band = static_cast<int>(*b);
+  }
+  layer.nodata = getNumber(ctx, t, "nodata", tn);
+
+  const bool rasterKey = t.contains("band") || t.contains("nodata");
+  if (rasterKey && layer.kind != LayerKind::Dem) {
+    ctx.fail(tn + ": 'band' and 'nodata' apply to kind = \"dem\" only",
+             keyLine(t, t.contains("band") ? "band" : "nodata"));
+  }
+
+  std::error_code ec;
+  if (!std::filesystem::exists(layer.path, ec)) {
+    ctx.fail(tn + ".path: file not found: " + layer.path.string(), keyLine(t, "path"),
+             "paths are relative to the config file's folder");
+  }
+
+  if (const auto name = getString(ctx, t, "name", tn)) {
+    layer.name = *name;
+  } else {
+    layer.name = layer.path.filename().string();
+    if (!layer.layer.empty()) layer.name += ":" + layer.layer;
+  }
+  return layer;
+}
+
+}  // namespace
+
+ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::path& file) {
+  Context ctx{file.filename().string()};
+  toml::table root;
+  try {
+    root = toml::parse(text, file.string());
+  } catch (const toml::parse_error& e) {
+    ctx.fail("not valid TOML: " + std::string(e.description()),
+             static_cast<std::int64_t>(e.source().begin.line));
+  }
+
+  ProjectConfig config;
+  config.file = std::filesystem::absolute(file).lexically_normal();
+  checkKeys(ctx, root, "the config", {"project", "layer", "tin", "fit", "tiles", "server"});
+
+  const auto* projectNode = root.get("project");
+  if (!projectNode) ctx.fail("no [project] table", 1, "add [project] with crs = \"EPSG:...\"");
+  const auto* project = projectNode->as_table();
+  if (!project) ctx.fail("'project' must be a table", lineOf(*projectNode));
+  checkKeys(ctx, *project, "[project]", {"name", "crs"});
+  config.name = getString(ctx, *project, "name", "project").value_or(file.stem().string());
+  const auto crs = getString(ctx, *project, "crs", "project");
+  if (!crs)
+    ctx.fail("[project] has no 'crs'", lineOf(*project),
+             "add crs = \"EPSG:...\" (projected, metres)");
+  config.crs = *crs;
+  try {
+    checkProjectCrs(config.crs, "project.crs");
+  } catch (const Error& e) {
+    ctx.fail(e.problem(), keyLine(*project, "crs"), e.hint());
+  }
+
+  const auto baseDir = config.file.parent_path();
+  if (const auto* layersNode = root.get("layer")) {
+    const auto* layers = layersNode->as_array();
+    if (!layers || !layers->is_array_of_tables()) {
+      ctx.fail("'layer' must be written as [[layer]] tables", lineOf(*layersNode));
+    }
+    for (std::size_t i = 0; i < layers->size(); ++i) {
+      config.layers.push_back(parseLayer(ctx, *layers->get(i)->as_table(), i, baseDir));
+    }
+  }
+  std::set<std::string> names;
+  for (const auto& layer : config.layers) {
+    if (!names.insert(layer.name).second) {
+      ctx.fail("two layers are named '" + layer.name + "'", layer.configLine,
+               "give one of them a 'name'");
+    }
+  }
+
+  if (const auto* tinNode = root.get("tin")) {
+    const auto* tin = tinNode->as_table();
+    if (!tin) ctx.fail("'tin' must be a table", lineOf(*tinNode));
+    checkKeys(ctx, *tin, "[tin]",
+              {"snap_tolerance", "flat_triangle_repair", "river_descent", "strict"});
+    config.tin.snapTolerance =
+        getNumber(ctx, *tin, "snap_tolerance", "tin").value_or(config.tin.snapTolerance);
+    if (config.tin.snapTolerance < 0.0) {
+      ctx.fail("tin.snap_tolerance must be 0 or more (metres)", keyLine(*tin, "snap_tolerance"));
+    }
+    config.tin.flatTriangleRepair =
+        getBool(ctx, *tin, "flat_triangle_repair", "tin").value_or(config.tin.flatTriangleRepair);
+    config.tin.riverDescent =
+        getBool(ctx, *tin, "river_descent", "tin").value_or(config.tin.riverDescent);
+    config.tin.strict = getBool(ctx, *tin, "strict", "tin").value_or(config.tin.strict);
+  }
+
+  for (const char* name : {"fit", "tiles", "server"}) {
+    if (const auto* node = root.get(name)) {
+      const auto* table = node->as_table();
+      if (!table) ctx.fail(std::string("'") + name + "' must be a table", lineOf(*node));
+      std::ostringstream out;
+      out << toml::table{{name, *table}};
+      config.extraTables[name] = {out.str(), lineOf(*node)};
+    }
+  }
+  return config;
+}
+
+ProjectConfig loadProjectConfig(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) {
+    SourceLocation where;
+    where.file = file.string();
+    throw inputError("config file not found", where, "check the path");
+  }
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in && !in.eof()) {
+    SourceLocation where;
+    where.file = file.string();
+    throw inputError("cannot read the config file", where, "check its permissions");
+  }
+  return parseProjectConfig(text.str(), file);
+}
+
+}  // namespace tinsmith::ingest

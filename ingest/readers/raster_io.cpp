@@ -1,0 +1,303 @@
+#include "ingest/readers/raster_io.hpp"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfMatrixAttribute.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "core/base/error.hpp"
+#include "ingest/base/gdal_runtime.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+SourceLocation at(const std::filesystem::path& path) {
+  SourceLocation where;
+  where.file = path.string();
+  return where;
+}
+
+std::string lastGdalError() {
+  const char* msg = CPLGetLastErrorMsg();
+  return msg && *msg ? std::string(" (GDAL: ") + msg + ")" : std::string();
+}
+
+bool isExr(const std::filesystem::path& path) {
+  auto ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".exr";
+}
+
+void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
+  if (grid.width <= 0 || grid.height <= 0 ||
+      grid.z.size() !=
+          static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height)) {
+    throw ioError("height grid is malformed: " + std::to_string(grid.width) + " x " +
+                      std::to_string(grid.height) + " with " + std::to_string(grid.z.size()) +
+                      " values",
+                  at(path));
+  }
+}
+
+// A temporary sibling path; renamed over `path` once complete.
+std::filesystem::path partPath(const std::filesystem::path& path) {
+  auto tmp = path;
+  tmp += ".part";
+  return tmp;
+}
+
+void commit(const std::filesystem::path& tmp, const std::filesystem::path& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw ioError("cannot move the finished file into place: " + ec.message(), at(path));
+  }
+}
+
+}  // namespace
+
+Point2 HeightGrid::cellCentre(int col, int row) const {
+  const double c = col + 0.5;
+  const double r = row + 0.5;
+  const auto& g = geotransform;
+  return {g[0] + c * g[1] + r * g[2], g[3] + c * g[4] + r * g[5]};
+}
+
+HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOptions& options) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw inputError("raster file not found", at(path), "check the path");
+  if (isExr(path)) {
+    auto grid = readExr(path);
+    if (options.nodata) {
+      const float nd = static_cast<float>(*options.nodata);
+      for (auto& v : grid.z) {
+        if (v == nd) v = std::numeric_limits<float>::quiet_NaN();
+      }
+    }
+    return grid;
+  }
+  ensureGdalReady();
+  CPLErrorReset();
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(
+      path.string().c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds) {
+    throw inputError("cannot open as a raster" + lastGdalError(), at(path),
+                     "give a GeoTIFF (or another GDAL raster) or an OpenEXR heightmap");
+  }
+  if (options.band < 1 || options.band > ds->GetRasterCount()) {
+    throw inputError("has no band " + std::to_string(options.band) + " (it has " +
+                         std::to_string(ds->GetRasterCount()) + ")",
+                     at(path), "set 'band' to an existing band");
+  }
+  HeightGrid grid;
+  grid.width = ds->GetRasterXSize();
+  grid.height = ds->GetRasterYSize();
+  if (ds->GetGeoTransform(grid.geotransform.data()) != CE_None) {
+    throw inputError("raster has no georeferencing (no geotransform)", at(path),
+                     "georeference it first, e.g. with gdal_translate -a_ullr … -a_srs …");
+  }
+  if (const auto* srs = ds->GetSpatialRef()) {
+    const char* name = srs->GetAuthorityName(nullptr);
+    const char* code = srs->GetAuthorityCode(nullptr);
+    if (name && code) {
+      grid.crs = std::string(name) + ":" + code;
+    } else {
+      char* wkt = nullptr;
+      srs->exportToWkt(&wkt);
+      grid.crs = wkt ? wkt : "";
+      CPLFree(wkt);
+    }
+  }
+  auto* band = ds->GetRasterBand(options.band);
+  grid.z.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height));
+  if (band->RasterIO(GF_Read, 0, 0, grid.width, grid.height, grid.z.data(), grid.width, grid.height,
+                     GDT_Float32, 0, 0, nullptr) != CE_None) {
+    throw inputError("cannot read the raster's cells" + lastGdalError(), at(path),
+                     "the file may be damaged");
+  }
+  int hasNodata = 0;
+  double nodata = band->GetNoDataValue(&hasNodata);
+  if (options.nodata) {
+    hasNodata = 1;
+    nodata = *options.nodata;
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (hasNodata && !std::isnan(nodata)) {
+    const float nd = static_cast<float>(nodata);
+    for (auto& v : grid.z) {
+      if (v == nd) v = nan;
+    }
+  }
+  for (auto& v : grid.z) {
+    if (!std::isfinite(v)) v = nan;  // infinities are never heights
+  }
+  return grid;
+}
+
+void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
+  checkGrid(grid, path);
+  ensureGdalReady();
+  auto* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  if (!driver) throw internalError("GDAL has no GTiff driver");
+  const auto tmp = partPath(path);
+  char** options = nullptr;
+  options = CSLSetNameValue(options, "COMPRESS", "DEFLATE");
+  options = CSLSetNameValue(options, "PREDICTOR", "3");
+  if (grid.width >= 512 && grid.height >= 512) options = CSLSetNameValue(options, "TILED", "YES");
+  CPLErrorReset();
+  std::unique_ptr<GDALDataset> ds(
+      driver->Create(tmp.string().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
+  CSLDestroy(options);
+  if (!ds)
+    throw ioError("cannot create the GeoTIFF" + lastGdalError(), at(path),
+                  "check the folder exists and is writable");
+  auto fail = [&](const std::string& what) {
+    ds.reset();
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw ioError(what + lastGdalError(), at(path));
+  };
+  auto gt = grid.geotransform;
+  if (ds->SetGeoTransform(gt.data()) != CE_None) fail("cannot write the geotransform");
+  if (!grid.crs.empty()) {
+    OGRSpatialReference srs;
+    if (srs.SetFromUserInput(grid.crs.c_str()) != OGRERR_NONE)
+      fail("unknown CRS '" + grid.crs + "'");
+    if (ds->SetSpatialRef(&srs) != CE_None) fail("cannot write the CRS");
+  }
+  auto* band = ds->GetRasterBand(1);
+  band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
+  if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, const_cast<float*>(grid.z.data()),
+                     grid.width, grid.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
+    fail("cannot write the cells");
+  }
+  CPLErrorReset();
+  ds->FlushCache(true);
+  if (CPLGetLastErrorType() >= CE_Failure) fail("cannot finish the GeoTIFF");
+  CPLErrorReset();
+  ds.reset();  // closes the file
+  if (CPLGetLastErrorType() >= CE_Failure) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw ioError("cannot finish the GeoTIFF" + lastGdalError(), at(path));
+  }
+  commit(tmp, path);
+}
+
+void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
+  checkGrid(grid, path);
+  const auto tmp = partPath(path);
+  try {
+    Imf::Header header(grid.width, grid.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+    const auto& g = grid.geotransform;
+    header.insert("geoTransform",
+                  Imf::M33dAttribute(Imath::M33d(g[1], g[2], g[0], g[4], g[5], g[3], 0, 0, 1)));
+    if (!grid.crs.empty()) header.insert("crs", Imf::StringAttribute(grid.crs));
+    Imf::OutputFile file(tmp.string().c_str(), header);
+    Imf::FrameBuffer frame;
+    frame.insert("Z",
+                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(grid.z.data())),
+                            sizeof(float), sizeof(float) * static_cast<std::size_t>(grid.width)));
+    file.setFrameBuffer(frame);
+    file.writePixels(grid.height);
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw ioError(std::string("cannot write the EXR heightmap (OpenEXR: ") + e.what() + ")",
+                  at(path), "check the folder exists and is writable");
+  }
+  commit(tmp, path);
+}
+
+HeightGrid readExr(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw inputError("EXR file not found", at(path), "check the path");
+  HeightGrid grid;
+  try {
+    Imf::InputFile file(path.string().c_str());
+    const auto& header = file.header();
+    const auto dw = header.dataWindow();
+    grid.width = dw.max.x - dw.min.x + 1;
+    grid.height = dw.max.y - dw.min.y + 1;
+    const auto& channels = header.channels();
+    std::string channel;
+    if (channels.findChannel("Z")) {
+      channel = "Z";
+    } else if (channels.findChannel("Y")) {
+      channel = "Y";
+    } else {
+      int count = 0;
+      for (auto it = channels.begin(); it != channels.end(); ++it) {
+        ++count;
+        channel = it.name();
+      }
+      if (count != 1) {
+        throw inputError("EXR has no 'Z' channel and " + std::to_string(count) + " others",
+                         at(path), "give a heightmap with one channel named Z");
+      }
+    }
+    if (const auto* gt = header.findTypedAttribute<Imf::M33dAttribute>("geoTransform")) {
+      const auto& m = gt->value();
+      grid.geotransform = {m[0][2], m[0][0], m[0][1], m[1][2], m[1][0], m[1][1]};
+    }
+    if (const auto* crs = header.findTypedAttribute<Imf::StringAttribute>("crs"))
+      grid.crs = crs->value();
+    grid.z.assign(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height),
+                  std::numeric_limits<float>::quiet_NaN());
+    Imf::FrameBuffer frame;
+    frame.insert(channel, Imf::Slice::Make(Imf::FLOAT, grid.z.data(), dw, sizeof(float),
+                                           sizeof(float) * static_cast<std::size_t>(grid.width)));
+    file.setFrameBuffer(frame);
+    file.readPixels(dw.min.y, dw.max.y);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw inputError(std::string("cannot read as an EXR heightmap (OpenEXR: ") + e.what() + ")",
+                     at(path), "the file may be damaged or not an OpenEXR file");
+  }
+  for (auto& v : grid.z) {
+    if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();
+  }
+  return grid;
+}
+
+std::vector<Point3> gridToPoints(const HeightGrid& grid, std::vector<std::int64_t>* cellIds) {
+  std::vector<Point3> points;
+  std::size_t valid = 0;
+  for (const float v : grid.z) valid += std::isnan(v) ? 0 : 1;
+  points.reserve(valid);
+  if (cellIds) {
+    cellIds->clear();
+    cellIds->reserve(valid);
+  }
+  for (int row = 0; row < grid.height; ++row) {
+    for (int col = 0; col < grid.width; ++col) {
+      const float v = grid.at(col, row);
+      if (std::isnan(v)) continue;
+      const auto c = grid.cellCentre(col, row);
+      points.push_back({c.x, c.y, static_cast<double>(v)});
+      if (cellIds) cellIds->push_back(static_cast<std::int64_t>(row) * grid.width + col);
+    }
+  }
+  return points;
+}
+
+}  // namespace tinsmith::ingest

@@ -1,0 +1,362 @@
+#include "ingest/tinfile/tin_file.hpp"
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <vector>
+
+#include "core/base/error.hpp"
+#include "ingest/tinfile/atomic_file.hpp"
+
+namespace tinsmith::ingest {
+
+namespace {
+
+constexpr std::array<std::uint8_t, 8> kMagic = {0x89, 'T', 'I', 'N', 0x0D, 0x0A, 0x1A, 0x0A};
+constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(FeatureKind::Raster);
+
+constexpr std::array<std::uint32_t, 256> makeCrcTable() {
+  std::array<std::uint32_t, 256> table{};
+  for (std::uint32_t i = 0; i < 256; ++i) {
+    std::uint32_t c = i;
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    table[i] = c;
+  }
+  return table;
+}
+constexpr auto kCrcTable = makeCrcTable();
+
+SourceLocation at(const std::string& name) { return {name, {}, {}, {}}; }
+
+// Little-endian encoding of the fixed-size fields, independent of the host.
+template <class T>
+void putLe(std::uint8_t* out, T value) {
+  using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
+                               std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
+  const U bits = std::bit_cast<U>(value);
+  for (std::size_t i = 0; i < sizeof(T); ++i) out[i] = static_cast<std::uint8_t>(bits >> (8 * i));
+}
+
+template <class T>
+T getLe(const std::uint8_t* in) {
+  using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
+                               std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
+  U bits = 0;
+  for (std::size_t i = 0; i < sizeof(T); ++i) bits |= static_cast<U>(static_cast<U>(in[i]) << (8 * i));
+  return std::bit_cast<T>(bits);
+}
+
+std::uint64_t payloadSize(const TinData& tin) {
+  std::uint64_t size = 4 + tin.crs.size();
+  size += 8 + 24ull * tin.vertices.size();
+  size += 8 + 12ull * tin.triangles.size();
+  size += 8;
+  for (const auto& f : tin.features) size += 1 + 4 + f.source.size();
+  size += 8 + 12ull * tin.constrainedEdges.size();
+  return size;
+}
+
+// Buffers payload bytes, keeps the running CRC, and hands full buffers to a sink.
+template <class Sink>
+class PayloadWriter {
+ public:
+  explicit PayloadWriter(Sink& sink) : sink_(sink) { buffer_.reserve(kBuffer); }
+  template <class T>
+  void put(T value) {
+    std::uint8_t bytes[sizeof(T)];
+    putLe(bytes, value);
+    append(bytes, sizeof(T));
+  }
+  void putString(const std::string& text) {
+    put(static_cast<std::uint32_t>(text.size()));
+    append(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+  }
+  void append(const std::uint8_t* data, std::size_t size) {
+    if (buffer_.size() + size > kBuffer) flush();
+    if (size > kBuffer) {
+      emit(data, size);
+      return;
+    }
+    buffer_.insert(buffer_.end(), data, data + size);
+  }
+  void flush() {
+    emit(buffer_.data(), buffer_.size());
+    buffer_.clear();
+  }
+  [[nodiscard]] std::uint32_t crc() const { return crc_; }
+
+ private:
+  static constexpr std::size_t kBuffer = 1 << 16;
+  void emit(const std::uint8_t* data, std::size_t size) {
+    crc_ = crc32({data, size}, crc_);
+    sink_(data, size);
+  }
+  Sink& sink_;
+  std::vector<std::uint8_t> buffer_;
+  std::uint32_t crc_ = 0;
+};
+
+template <class Sink>
+std::uint32_t writePayload(const TinData& tin, Sink& sink) {
+  PayloadWriter<Sink> w(sink);
+  w.putString(tin.crs);
+  w.put(static_cast<std::uint64_t>(tin.vertices.size()));
+  for (const auto& v : tin.vertices) {
+    w.put(v.x);
+    w.put(v.y);
+    w.put(v.z);
+  }
+  w.put(static_cast<std::uint64_t>(tin.triangles.size()));
+  for (const auto& t : tin.triangles)
+    for (auto i : t) w.put(i);
+  w.put(static_cast<std::uint64_t>(tin.features.size()));
+  for (const auto& f : tin.features) {
+    w.put(static_cast<std::uint8_t>(f.kind));
+    w.putString(f.source);
+  }
+  w.put(static_cast<std::uint64_t>(tin.constrainedEdges.size()));
+  for (const auto& e : tin.constrainedEdges) {
+    w.put(e.a);
+    w.put(e.b);
+    w.put(e.feature);
+  }
+  w.flush();
+  return w.crc();
+}
+
+std::array<std::uint8_t, kTinHeaderSize> makeHeader(std::uint64_t payload, std::uint32_t crc) {
+  std::array<std::uint8_t, kTinHeaderSize> h{};
+  std::memcpy(h.data(), kMagic.data(), kMagic.size());
+  putLe(h.data() + 8, kTinFormatVersion);
+  putLe(h.data() + 12, std::uint32_t{0});
+  putLe(h.data() + 16, payload);
+  putLe(h.data() + 24, crc);
+  putLe(h.data() + 28, crc32({h.data(), 28}));
+  return h;
+}
+
+// Bounds-checked reading of the payload: every count is checked against the
+// bytes that remain before anything is allocated, so a damaged count can
+// neither over-read nor ask for absurd memory.
+class PayloadReader {
+ public:
+  PayloadReader(const std::uint8_t* data, std::size_t size, const std::string& name)
+      : p_(data), end_(data + size), name_(name) {}
+  template <class T>
+  T get(const char* what) {
+    need(sizeof(T), what);
+    T value = getLe<T>(p_);
+    p_ += sizeof(T);
+    return value;
+  }
+  std::string getString(const char* what) {
+    const auto n = get<std::uint32_t>(what);
+    need(n, what);
+    std::string s(reinterpret_cast<const char*>(p_), n);
+    p_ += n;
+    return s;
+  }
+  std::size_t getCount(std::size_t recordSize, const char* what) {
+    const auto n = get<std::uint64_t>(what);
+    if (recordSize && n > static_cast<std::uint64_t>(end_ - p_) / recordSize)
+      corrupt(std::string("the ") + what + " count (" + std::to_string(n) +
+              ") does not fit in the file");
+    return static_cast<std::size_t>(n);
+  }
+  [[nodiscard]] std::size_t remaining() const { return static_cast<std::size_t>(end_ - p_); }
+  [[noreturn]] void corrupt(const std::string& what) const {
+    throw inputError("corrupt .tin file: " + what, at(name_),
+                     "the file is damaged; write it again with `tinsmith tin`");
+  }
+
+ private:
+  void need(std::size_t n, const char* what) const {
+    if (static_cast<std::size_t>(end_ - p_) < n)
+      corrupt(std::string("it ends inside the ") + what);
+  }
+  const std::uint8_t* p_;
+  const std::uint8_t* end_;
+  const std::string& name_;
+};
+
+}  // namespace
+
+std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc) {
+  crc = ~crc;
+  for (const std::uint8_t b : bytes) crc = kCrcTable[(crc ^ b) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+
+std::uint32_t crc32(std::string_view bytes, std::uint32_t crc) {
+  return crc32({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, crc);
+}
+
+std::string_view featureKindName(FeatureKind kind) {
+  switch (kind) {
+    case FeatureKind::Other: return "other";
+    case FeatureKind::SpotHeight: return "spot-height";
+    case FeatureKind::Contour: return "contour";
+    case FeatureKind::Road: return "road";
+    case FeatureKind::River: return "river";
+    case FeatureKind::Lake: return "lake";
+    case FeatureKind::Boundary: return "boundary";
+    case FeatureKind::Hole: return "hole";
+    case FeatureKind::Raster: return "raster";
+  }
+  return "unknown";
+}
+
+std::optional<FeatureKind> featureKindFromName(std::string_view name) {
+  for (std::uint8_t k = 0; k <= kLastKind; ++k) {
+    const auto kind = static_cast<FeatureKind>(k);
+    if (featureKindName(kind) == name) return kind;
+  }
+  return std::nullopt;
+}
+
+void checkTinContract(const TinData& tin, const std::string& name, bool forWriting) {
+  auto bad = [&](const std::string& what) {
+    if (forWriting) throw internalError("TinData for '" + name + "' is malformed: " + what);
+    throw inputError("corrupt .tin file: " + what, at(name),
+                     "the file is damaged; write it again with `tinsmith tin`");
+  };
+  const std::size_t nv = tin.vertices.size();
+  if (nv > 0xFFFFFFFFull) bad("more than 2^32 - 1 vertices");
+  for (std::size_t i = 0; i < nv; ++i) {
+    const auto& v = tin.vertices[i];
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+      bad("vertex " + std::to_string(i) + " has a non-finite coordinate");
+  }
+  for (std::size_t t = 0; t < tin.triangles.size(); ++t) {
+    const auto& tri = tin.triangles[t];
+    if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv)
+      bad("triangle " + std::to_string(t) + " refers to a vertex beyond the " +
+          std::to_string(nv) + " vertices");
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+      bad("triangle " + std::to_string(t) + " repeats a vertex");
+  }
+  for (std::size_t f = 0; f < tin.features.size(); ++f)
+    if (static_cast<std::uint8_t>(tin.features[f].kind) > kLastKind)
+      bad("feature " + std::to_string(f) + " has an unknown kind " +
+          std::to_string(static_cast<int>(tin.features[f].kind)));
+  for (std::size_t i = 0; i < tin.constrainedEdges.size(); ++i) {
+    const auto& e = tin.constrainedEdges[i];
+    if (e.a >= nv || e.b >= nv)
+      bad("constrained edge " + std::to_string(i) + " refers to a vertex out of range");
+    if (e.a >= e.b) bad("constrained edge " + std::to_string(i) + " does not have a < b");
+    if (e.feature >= tin.features.size())
+      bad("constrained edge " + std::to_string(i) + " refers to feature " +
+          std::to_string(e.feature) + " of " + std::to_string(tin.features.size()));
+  }
+}
+
+std::string encodeTin(const TinData& tin) {
+  checkTinContract(tin, "(memory)", true);
+  std::string out;
+  const std::uint64_t size = payloadSize(tin);
+  out.reserve(kTinHeaderSize + size);
+  out.resize(kTinHeaderSize);
+  auto sink = [&out](const std::uint8_t* data, std::size_t n) {
+    out.append(reinterpret_cast<const char*>(data), n);
+  };
+  const std::uint32_t crc = writePayload(tin, sink);
+  const auto header = makeHeader(size, crc);
+  std::memcpy(out.data(), header.data(), header.size());
+  return out;
+}
+
+void writeTinFile(const std::filesystem::path& path, const TinData& tin) {
+  checkTinContract(tin, path.string(), true);
+  AtomicFile file(path);
+  const std::uint64_t size = payloadSize(tin);
+  const auto placeholder = makeHeader(size, 0);
+  file.write(placeholder.data(), placeholder.size());
+  auto sink = [&file](const std::uint8_t* data, std::size_t n) { file.write(data, n); };
+  const std::uint32_t crc = writePayload(tin, sink);
+  const auto header = makeHeader(size, crc);
+  file.writeAt(0, header.data(), header.size());
+  file.commit();
+}
+
+TinData decodeTin(std::string_view bytes, const std::string& name) {
+  const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
+  if (bytes.size() < kMagic.size() || std::memcmp(data, kMagic.data(), kMagic.size()) != 0)
+    throw inputError("not a .tin file (wrong magic bytes)", at(name),
+                     "give a file written by `tinsmith tin`");
+  if (bytes.size() < kTinHeaderSize)
+    throw inputError("truncated .tin file: " + std::to_string(bytes.size()) +
+                         " bytes, shorter than the 32-byte header",
+                     at(name), "the file is incomplete; write it again with `tinsmith tin`");
+  const auto version = getLe<std::uint32_t>(data + 8);
+  if (getLe<std::uint32_t>(data + 28) != crc32({data, 28}))
+    throw inputError("corrupt .tin file: the header checksum does not match", at(name),
+                     "the file is damaged; write it again with `tinsmith tin`");
+  if (version > kTinFormatVersion)
+    throw inputError(".tin format version " + std::to_string(version) +
+                         " is newer than this tinsmith reads (version " +
+                         std::to_string(kTinFormatVersion) + ")",
+                     at(name), "use a newer tinsmith to read it");
+  if (version == 0) throw inputError("corrupt .tin file: format version 0", at(name));
+  const auto payload = getLe<std::uint64_t>(data + 16);
+  const std::uint64_t have = bytes.size() - kTinHeaderSize;
+  if (have < payload)
+    throw inputError("truncated .tin file: the header announces " + std::to_string(payload) +
+                         " payload bytes but only " + std::to_string(have) + " follow",
+                     at(name), "the file is incomplete; write it again with `tinsmith tin`");
+  if (have > payload)
+    throw inputError("corrupt .tin file: " + std::to_string(have - payload) +
+                         " unexpected bytes after the payload",
+                     at(name), "the file is damaged; write it again with `tinsmith tin`");
+  const std::span<const std::uint8_t> body(data + kTinHeaderSize, payload);
+  if (crc32(body) != getLe<std::uint32_t>(data + 24))
+    throw inputError("corrupt .tin file: the payload checksum does not match", at(name),
+                     "the file is damaged; write it again with `tinsmith tin`");
+
+  PayloadReader r(body.data(), body.size(), name);
+  TinData tin;
+  tin.crs = r.getString("CRS text");
+  tin.vertices.resize(r.getCount(24, "vertex"));
+  for (auto& v : tin.vertices) {
+    v.x = r.get<double>("vertices");
+    v.y = r.get<double>("vertices");
+    v.z = r.get<double>("vertices");
+  }
+  tin.triangles.resize(r.getCount(12, "triangle"));
+  for (auto& t : tin.triangles)
+    for (auto& i : t) i = r.get<std::uint32_t>("triangles");
+  tin.features.resize(r.getCount(5, "feature"));
+  for (auto& f : tin.features) {
+    f.kind = static_cast<FeatureKind>(r.get<std::uint8_t>("features"));
+    f.source = r.getString("features");
+  }
+  tin.constrainedEdges.resize(r.getCount(12, "constrained edge"));
+  for (auto& e : tin.constrainedEdges) {
+    e.a = r.get<std::uint32_t>("constrained edges");
+    e.b = r.get<std::uint32_t>("constrained edges");
+    e.feature = r.get<std::uint32_t>("constrained edges");
+  }
+  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+  checkTinContract(tin, name, false);
+  return tin;
+}
+
+TinData readTinFile(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw inputError("the .tin file does not exist", at(name), "check the path");
+  if (std::filesystem::is_directory(path, ec))
+    throw inputError("is a directory, not a .tin file", at(name));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw inputError("cannot open the .tin file for reading", at(name), "check permissions");
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw inputError("cannot read the .tin file: " + ec.message(), at(name));
+  std::string bytes(size, '\0');
+  if (!in.read(bytes.data(), static_cast<std::streamsize>(size)))
+    throw inputError("cannot read the .tin file", at(name), "check permissions");
+  return decodeTin(bytes, name);
+}
+
+}  // namespace tinsmith::ingest

@@ -1,0 +1,67 @@
+// The `.tin` file: one TinData (core/tin/tin_data.hpp) on disk, compact,
+// versioned and checksummed. Little-endian throughout, no padding, so the same
+// TinData always gives the same bytes on every machine.
+//
+//   header (32 bytes)
+//     0  magic          8 bytes  89 'T' 'I' 'N' 0D 0A 1A 0A  (PNG-style: catches
+//                                text-mode and 7-bit transfer damage)
+//     8  version        u32      kTinFormatVersion; readers refuse newer ones
+//    12  flags          u32      0 (reserved)
+//    16  payload size   u64      bytes after the header
+//    24  payload CRC    u32      CRC-32 (IEEE 802.3, as zlib's crc32) of the payload
+//    28  header CRC     u32      CRC-32 of header bytes 0..27
+//   payload
+//     crs               u32 length + UTF-8 bytes ("EPSG:26912" or WKT; may be empty)
+//     vertices          u64 n + n × (f64 x, f64 y, f64 z)
+//     triangles         u64 n + n × (u32 a, b, c), counter-clockwise
+//     features          u64 n + n × (u8 FeatureKind, u32 length + UTF-8 source)
+//     constrained edges u64 n + n × (u32 a, u32 b, u32 feature), a < b
+//
+// Python check of a file's payload: zlib.crc32(data[32:]) == header CRC.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith::ingest {
+
+inline constexpr std::uint32_t kTinFormatVersion = 1;
+inline constexpr std::size_t kTinHeaderSize = 32;
+
+/// Writes `tin` atomically (temp file + rename; a failure leaves no file).
+/// Throws internalError when `tin` breaks the TinData contract (an index out of
+/// range, a non-finite coordinate) and ioError when the file cannot be written.
+void writeTinFile(const std::filesystem::path& path, const TinData& tin);
+
+/// Reads a `.tin` file. Throws inputError naming the file for: a missing or
+/// unreadable file, a wrong magic (not a .tin file), a newer format version, a
+/// truncated file, a checksum mismatch, and any index out of range.
+TinData readTinFile(const std::filesystem::path& path);
+
+/// The exact bytes writeTinFile would write (for tests and tools).
+std::string encodeTin(const TinData& tin);
+/// Parses bytes as readTinFile does; `name` appears in error messages.
+TinData decodeTin(std::string_view bytes, const std::string& name);
+
+/// CRC-32 (IEEE, reflected, as zlib) continued from `crc` (0 to start).
+std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
+std::uint32_t crc32(std::string_view bytes, std::uint32_t crc = 0);
+
+/// Throws (internalError when `forWriting`, else inputError naming `name`)
+/// when `tin` breaks its contract: indices out of range, a triangle or edge
+/// with repeated vertices, an edge with a >= b, a non-finite coordinate or an
+/// unknown FeatureKind.
+void checkTinContract(const TinData& tin, const std::string& name, bool forWriting);
+
+/// "contour", "road", … — the names the config and the reports use.
+std::string_view featureKindName(FeatureKind kind);
+/// The inverse of featureKindName; nullopt for an unknown name.
+std::optional<FeatureKind> featureKindFromName(std::string_view name);
+
+}  // namespace tinsmith::ingest

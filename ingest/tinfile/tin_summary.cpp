@@ -1,0 +1,99 @@
+#include "ingest/tinfile/tin_summary.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "ingest/tinfile/tin_file.hpp"
+
+namespace tinsmith::ingest {
+
+TinSummary summariseTin(const TinData& tin) {
+  TinSummary s;
+  s.crs = tin.crs;
+  s.vertices = tin.vertices.size();
+  s.triangles = tin.triangles.size();
+  s.constrainedEdges = tin.constrainedEdges.size();
+  s.features = tin.features.size();
+  s.empty = tin.vertices.empty();
+  if (!s.empty) {
+    const auto& v0 = tin.vertices.front();
+    s.minX = s.maxX = v0.x;
+    s.minY = s.maxY = v0.y;
+    s.minZ = s.maxZ = v0.z;
+    for (const auto& v : tin.vertices) {
+      s.minX = std::min(s.minX, v.x);
+      s.maxX = std::max(s.maxX, v.x);
+      s.minY = std::min(s.minY, v.y);
+      s.maxY = std::max(s.maxY, v.y);
+      s.minZ = std::min(s.minZ, v.z);
+      s.maxZ = std::max(s.maxZ, v.z);
+    }
+  }
+  for (const auto& t : tin.triangles) {
+    const auto& a = tin.vertices[t[0]];
+    const auto& b = tin.vertices[t[1]];
+    const auto& c = tin.vertices[t[2]];
+    s.area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+  }
+  for (const auto& f : tin.features) ++s.kinds[std::string(featureKindName(f.kind))].features;
+  for (const auto& e : tin.constrainedEdges)
+    if (e.feature < tin.features.size())
+      ++s.kinds[std::string(featureKindName(tin.features[e.feature].kind))].edges;
+  return s;
+}
+
+std::string jsonString(const std::string& text) { return nlohmann::json(text).dump(); }
+
+std::string TinSummary::json() const {
+  nlohmann::ordered_json j;
+  if (!file.empty()) {
+    j["file"] = file;
+    j["bytes"] = fileBytes;
+    j["format_version"] = kTinFormatVersion;
+  }
+  j["crs"] = crs;
+  j["vertices"] = vertices;
+  j["triangles"] = triangles;
+  j["constrained_edges"] = constrainedEdges;
+  j["features"] = features;
+  if (empty) {
+    j["extent"] = nullptr;
+    j["z_range"] = nullptr;
+  } else {
+    j["extent"] = {minX, minY, maxX, maxY};
+    j["z_range"] = {minZ, maxZ};
+  }
+  j["area_m2"] = area;
+  nlohmann::ordered_json k = nlohmann::ordered_json::object();
+  for (const auto& [name, c] : kinds) k[name] = {{"features", c.features}, {"constrained_edges", c.edges}};
+  j["kinds"] = k;
+  return j.dump(2) + "\n";
+}
+
+std::string TinSummary::text() const {
+  std::ostringstream s;
+  char buf[256];
+  if (!file.empty())
+    s << file << ": tinsmith TIN, format version " << kTinFormatVersion << ", " << fileBytes
+      << " bytes\n";
+  s << "  CRS: " << (crs.empty() ? "(unknown)" : crs) << "\n";
+  s << "  " << vertices << " vertices, " << triangles << " triangles, " << constrainedEdges
+    << " constrained edges, " << features << " features\n";
+  if (!empty) {
+    std::snprintf(buf, sizeof buf, "  extent: x %.3f .. %.3f, y %.3f .. %.3f (%.1f × %.1f m)\n",
+                  minX, maxX, minY, maxY, maxX - minX, maxY - minY);
+    s << buf;
+    std::snprintf(buf, sizeof buf, "  z range: %.3f .. %.3f m\n  area: %.1f m²\n", minZ, maxZ, area);
+    s << buf;
+  }
+  if (!kinds.empty()) {
+    s << "  features by kind:\n";
+    for (const auto& [name, c] : kinds)
+      s << "    " << name << ": " << c.features << " features, " << c.edges << " constrained edges\n";
+  }
+  return s.str();
+}
+
+}  // namespace tinsmith::ingest

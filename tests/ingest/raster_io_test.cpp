@@ -1,0 +1,175 @@
+// readers.raster / writers.raster: GeoTIFF and EXR round trips with
+// georeferencing and nodata, DEM layers as points, the real dem.tif and SRTM.
+#include "ingest/readers/raster_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#include "core/base/error.hpp"
+#include "ingest/readers/layer_reader.hpp"
+#include "tests/support/run_command.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+const std::filesystem::path kData = TINSMITH_SHARED_DATA;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+HeightGrid sampleGrid() {
+  HeightGrid g;
+  g.width = 5;
+  g.height = 3;
+  g.geotransform = {431000.5, 2.0, 0.0, 4514000.25, 0.0, -2.0};
+  g.crs = "EPSG:26912";
+  for (int i = 0; i < g.width * g.height; ++i)
+    g.z.push_back(1600.0f + 0.25f * static_cast<float>(i));
+  g.z[7] = kNaN;
+  return g;
+}
+
+void expectSameGrid(const HeightGrid& a, const HeightGrid& b) {
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(a.geotransform[i], b.geotransform[i]) << i;
+  ASSERT_EQ(a.z.size(), b.z.size());
+  for (std::size_t i = 0; i < a.z.size(); ++i) {
+    if (std::isnan(a.z[i])) {
+      EXPECT_TRUE(std::isnan(b.z[i])) << i;
+    } else {
+      EXPECT_EQ(a.z[i], b.z[i]) << i;
+    }
+  }
+}
+
+TEST(RasterIo, GeoTiffRoundTrip) {
+  const auto dir = test::scratchDir("raster_tif");
+  const auto grid = sampleGrid();
+  writeGeoTiff(grid, dir / "h.tif");
+  EXPECT_FALSE(std::filesystem::exists(dir / "h.tif.part"));
+  const auto back = readHeightGrid(dir / "h.tif");
+  expectSameGrid(grid, back);
+  EXPECT_EQ(back.crs, "EPSG:26912");
+}
+
+TEST(RasterIo, ExrRoundTripKeepsGeoreferencing) {
+  const auto dir = test::scratchDir("raster_exr");
+  const auto grid = sampleGrid();
+  writeExr(grid, dir / "h.exr");
+  const auto back = readExr(dir / "h.exr");
+  expectSameGrid(grid, back);
+  EXPECT_EQ(back.crs, "EPSG:26912");
+  // Through the generic entry point too, with a nodata override.
+  RasterReadOptions options;
+  options.nodata = 1600.0;
+  const auto masked = readHeightGrid(dir / "h.exr", options);
+  EXPECT_TRUE(std::isnan(masked.z[0]));
+  EXPECT_EQ(masked.z[1], 1600.25f);
+}
+
+TEST(RasterIo, NodataBecomesNaNAndPointsSkipIt) {
+  const auto dir = test::scratchDir("raster_nodata");
+  auto grid = sampleGrid();
+  grid.z[3] = -9999.0f;
+  writeGeoTiff(grid, dir / "h.tif");
+  RasterReadOptions options;
+  options.nodata = -9999.0;
+  const auto back = readHeightGrid(dir / "h.tif", options);
+  EXPECT_TRUE(std::isnan(back.z[3]));
+
+  std::vector<std::int64_t> ids;
+  const auto points = gridToPoints(back, &ids);
+  EXPECT_EQ(points.size(), 13u);  // 15 cells, two nodata
+  // Cell (0, 0) centre: one half cell right and down of the corner.
+  EXPECT_EQ(points[0], (Point3{431001.5, 4513999.25, 1600.0}));
+  EXPECT_EQ(ids[3], 4);  // cells 3 (nodata) skipped
+  const auto c = back.cellCentre(4, 2);
+  EXPECT_EQ(points.back(), (Point3{c.x, c.y, 1603.5}));
+}
+
+TEST(RasterIo, DemLayer) {
+  const auto dir = test::scratchDir("raster_layer");
+  writeExr(sampleGrid(), dir / "h.exr");
+  LayerConfig config;
+  config.path = dir / "h.exr";
+  config.kind = LayerKind::Dem;
+  config.name = "h.exr";
+  const auto layer = readLayer(config);
+  EXPECT_EQ(layer.kind, FeatureKind::Raster);
+  EXPECT_EQ(layer.points.size(), 14u);
+  EXPECT_EQ(layer.sourceCrs, "EPSG:26912");
+  EXPECT_TRUE(layer.features.empty());
+}
+
+TEST(RasterIo, Errors) {
+  const auto dir = test::scratchDir("raster_errors");
+  auto expectMessage = [](auto&& f, const std::string& part) {
+    try {
+      f();
+      ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
+  };
+  expectMessage([&] { readHeightGrid(dir / "gone.tif"); }, "not found");
+  std::ofstream(dir / "junk.tif") << "not a tiff";
+  expectMessage([&] { readHeightGrid(dir / "junk.tif"); }, "cannot open as a raster");
+  std::ofstream(dir / "junk.exr") << "not an exr";
+  expectMessage([&] { readHeightGrid(dir / "junk.exr"); }, "junk.exr");
+  writeGeoTiff(sampleGrid(), dir / "h.tif");
+  RasterReadOptions band2;
+  band2.band = 2;
+  expectMessage([&] { readHeightGrid(dir / "h.tif", band2); }, "has no band 2");
+  HeightGrid bad = sampleGrid();
+  bad.z.pop_back();
+  expectMessage([&] { writeExr(bad, dir / "bad.exr"); }, "malformed");
+  expectMessage([&] { writeGeoTiff(sampleGrid(), dir / "no-such-dir" / "h.tif"); },
+                "cannot create");
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
+}
+
+TEST(RasterIo, RedButteDem) {
+  const auto grid = readHeightGrid(kData / "red-butte/dem.tif");
+  EXPECT_EQ(grid.width, 260);
+  EXPECT_EQ(grid.height, 268);
+  EXPECT_EQ(grid.crs, "EPSG:26912");
+  float lo = 1e9f, hi = -1e9f;
+  for (const float v : grid.z) {
+    if (std::isnan(v)) continue;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  EXPECT_GT(lo, 1570.0f);
+  EXPECT_LT(hi, 2530.0f);
+  EXPECT_GT(hi - lo, 800.0f);
+
+  // Through EXR and back: identical cells and georeferencing.
+  const auto dir = test::scratchDir("raster_red_butte");
+  writeExr(grid, dir / "dem.exr");
+  expectSameGrid(grid, readExr(dir / "dem.exr"));
+}
+
+TEST(RasterIo, SrtmHgt) {
+  const auto grid = readHeightGrid(kData / "srtm/N44W072.hgt");
+  EXPECT_EQ(grid.width, 1201);
+  EXPECT_EQ(grid.height, 1201);
+  EXPECT_EQ(grid.crs, "EPSG:4326");
+  // Cell centres sit on the 3" lattice: the first one is 44+1 N, 72 W.
+  const auto c = grid.cellCentre(0, 0);
+  EXPECT_NEAR(c.x, -72.0, 1e-9);
+  EXPECT_NEAR(c.y, 45.0, 1e-9);
+  const auto points = gridToPoints(grid);
+  EXPECT_GT(points.size(), 1400000u);
+  double lo = 1e9, hi = -1e9;
+  for (const auto& p : points) {
+    lo = std::min(lo, p.z);
+    hi = std::max(hi, p.z);
+  }
+  EXPECT_GE(lo, 100);
+  EXPECT_LE(hi, 1910);
+}
+
+}  // namespace
+}  // namespace tinsmith::ingest

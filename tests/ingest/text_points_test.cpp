@@ -1,0 +1,154 @@
+// readers.text: delimiter and header detection, column choice, errors with lines.
+#include "ingest/readers/text_points.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/base/error.hpp"
+#include "tests/support/run_command.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+std::filesystem::path writeText(const std::string& dirName, const std::string& name,
+                                const std::string& text) {
+  const auto dir = test::scratchDir(dirName);
+  const auto path = dir / name;
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+// Runs `f` expecting a tinsmith::Error; returns it.
+template <typename F>
+Error expectError(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no tinsmith::Error thrown";
+  return internalError("none");
+}
+
+TEST(TextPoints, CommaWithHeader) {
+  const auto t = parseTextPoints("x,y,elevation\n1.5,2.5,100\n3,4,101.25\n", "a.csv");
+  EXPECT_EQ(t.delimiter, TextDelimiter::Comma);
+  EXPECT_TRUE(t.hasHeader);
+  ASSERT_EQ(t.points.size(), 2u);
+  EXPECT_EQ(t.points[0], (Point3{1.5, 2.5, 100}));
+  EXPECT_EQ(t.points[1], (Point3{3, 4, 101.25}));
+  EXPECT_EQ(t.lines[1], 3);
+}
+
+TEST(TextPoints, SemicolonTabWhitespace) {
+  const auto s = parseTextPoints("1;2;3\n4;5;6\n", "s.csv");
+  EXPECT_EQ(s.delimiter, TextDelimiter::Semicolon);
+  EXPECT_FALSE(s.hasHeader);
+  EXPECT_EQ(s.points[1], (Point3{4, 5, 6}));
+
+  const auto t = parseTextPoints("x\ty\tz\n1\t2\t3\n", "t.tsv");
+  EXPECT_EQ(t.delimiter, TextDelimiter::Tab);
+  EXPECT_EQ(t.points[0], (Point3{1, 2, 3}));
+
+  const auto w = parseTextPoints("# survey\n  1   2  3\n\n4 5 6   \r\n", "w.xyz");
+  EXPECT_EQ(w.delimiter, TextDelimiter::Whitespace);
+  ASSERT_EQ(w.points.size(), 2u);
+  EXPECT_EQ(w.points[1], (Point3{4, 5, 6}));
+  EXPECT_EQ(w.lines[0], 2);
+  EXPECT_EQ(w.lines[1], 4);
+}
+
+TEST(TextPoints, HeaderNamesInAnyOrder) {
+  const auto t = parseTextPoints("id,Elevation,Northing,Easting\n7,100,2000,1000\n", "a.csv");
+  EXPECT_EQ(t.points[0], (Point3{1000, 2000, 100}));
+  EXPECT_EQ(t.xIndex, 3);
+  EXPECT_EQ(t.zIndex, 1);
+
+  const auto g = parseTextPoints("\"lat\",\"lon\",\"alt\"\n44.5,-71.5,900\n", "g.csv");
+  EXPECT_TRUE(g.geographicNames);
+  EXPECT_EQ(g.points[0], (Point3{-71.5, 44.5, 900}));
+}
+
+TEST(TextPoints, ConfigurableColumns) {
+  TextPointOptions byName;
+  byName.xColumn = "px";
+  byName.yColumn = "py";
+  byName.zColumn = "ground";
+  const auto t = parseTextPoints("ground,px,py\n5,1,2\n", "a.csv", byName);
+  EXPECT_EQ(t.points[0], (Point3{1, 2, 5}));
+
+  TextPointOptions byIndex;
+  byIndex.xIndex = 1;
+  byIndex.yIndex = 2;
+  byIndex.zIndex = 3;
+  const auto u = parseTextPoints("9 1 2 3\n", "a.xyz", byIndex);
+  EXPECT_EQ(u.points[0], (Point3{1, 2, 3}));
+
+  TextPointOptions fixed;
+  fixed.fixedZ = 0.0;
+  const auto f = parseTextPoints("1,2\n3,4\n", "a.csv", fixed);
+  EXPECT_EQ(f.points[1], (Point3{3, 4, 0}));
+
+  const auto e = expectError([&] { parseTextPoints("a,b,c\n1,2,3\n", "a.csv", byName); });
+  EXPECT_NE(std::string(e.what()).find("'px'"), std::string::npos) << e.what();
+}
+
+TEST(TextPoints, ErrorsNameTheLine) {
+  auto e = expectError([] { parseTextPoints("x,y,z\n1,2,3\n1,2,nan\n", "bad.csv"); });
+  EXPECT_EQ(e.kind(), ErrorKind::Input);
+  EXPECT_EQ(e.where().line, 3);
+  EXPECT_EQ(e.where().file, "bad.csv");
+  EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
+
+  e = expectError([] { parseTextPoints("x,y,z\n1,2,inf\n", "bad.csv"); });
+  EXPECT_EQ(e.where().line, 2);
+
+  e = expectError([] { parseTextPoints("x,y,z\n1,2,3\n\n1,2,abc\n", "bad.csv"); });
+  EXPECT_EQ(e.where().line, 4);
+  EXPECT_NE(std::string(e.what()).find("'abc' is not a number"), std::string::npos) << e.what();
+
+  e = expectError([] { parseTextPoints("1,2,3\n1,2\n", "bad.csv"); });
+  EXPECT_EQ(e.where().line, 2);
+  EXPECT_NE(std::string(e.what()).find("found 2"), std::string::npos) << e.what();
+
+  e = expectError([] { parseTextPoints("x,y,z\n# nothing\n", "empty.csv"); });
+  EXPECT_NE(std::string(e.what()).find("no points"), std::string::npos) << e.what();
+}
+
+TEST(TextPoints, FileErrors) {
+  auto e = expectError([] { readTextPoints("/nonexistent/points.csv"); });
+  EXPECT_EQ(e.kind(), ErrorKind::Input);
+  EXPECT_NE(std::string(e.what()).find("/nonexistent/points.csv"), std::string::npos);
+  EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos);
+
+  const auto binary = writeText("text_points_binary", "b.csv", std::string("1,2,3\n\0\0\x01", 9));
+  e = expectError([&] { readTextPoints(binary); });
+  EXPECT_NE(std::string(e.what()).find("not a text file"), std::string::npos) << e.what();
+}
+
+TEST(TextPoints, ReadsFromFile) {
+  const auto path = writeText("text_points_file", "p.csv", "easting;northing;height\n10;20;30\n");
+  const auto points = readTextPoints(path);
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_EQ(points[0], (Point3{10, 20, 30}));
+}
+
+TEST(TextPoints, RedButteSpotHeights) {
+  const auto t = readTextPointTable(std::filesystem::path(TINSMITH_SHARED_DATA) /
+                                    "red-butte/spot-heights.csv");
+  EXPECT_EQ(t.points.size(), 400u);
+  EXPECT_TRUE(t.hasHeader);
+  for (const auto& p : t.points) {
+    // NAD83 / UTM 12N around Red Butte Canyon; DEM range 1580–2520 m.
+    EXPECT_GT(p.x, 420000);
+    EXPECT_LT(p.x, 440000);
+    EXPECT_GT(p.y, 4505000);
+    EXPECT_LT(p.y, 4525000);
+    EXPECT_GE(p.z, 1570);
+    EXPECT_LE(p.z, 2530);
+  }
+}
+
+}  // namespace
+}  // namespace tinsmith::ingest

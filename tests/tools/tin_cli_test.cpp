@@ -1,0 +1,404 @@
+// `tinsmith tin | validate | info | export | query` driven as a user would:
+// plain inputs, the Red Butte config end to end (checked by the independent
+// ../shared/tools/check_tin.py), and bad input — each a clear error with no
+// partial output left behind.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+
+#include "tests/support/run_command.hpp"
+
+namespace tinsmith {
+namespace {
+
+namespace fs = std::filesystem;
+using test::readFile;
+using test::runCommand;
+using test::runTinsmith;
+
+const fs::path kShared = TINSMITH_SHARED_DATA;
+const fs::path kSource = TINSMITH_SOURCE_DIR;
+const std::string kChecker = (kShared.parent_path() / "tools/check_tin.py").string();
+
+double plane(double x, double y) { return 1500.0 + 0.25 * x - 0.125 * y; }
+
+void writeText(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+// Plain inputs: scattered points on a plane at UTM-sized coordinates, two
+// crossing 3D GeoJSON break lines and one text polyline.
+struct PlainInputs {
+  fs::path dir, points, geojson, text;
+};
+
+PlainInputs makePlainInputs(const std::string& name) {
+  PlainInputs in;
+  in.dir = test::scratchDir(name);
+  in.points = in.dir / "points.xyz";
+  in.geojson = in.dir / "lines.geojson";
+  in.text = in.dir / "ridge.txt";
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 400.0);
+  std::string pts;
+  char buf[128];
+  for (int i = 0; i < 300; ++i) {
+    const double x = u(rng), y = u(rng);
+    std::snprintf(buf, sizeof buf, "%.6f %.6f %.6f\n", 431000 + x, 4512000 + y, plane(x, y));
+    pts += buf;
+  }
+  writeText(in.points, pts);
+  auto c = [](double x, double y) {
+    char b[128];
+    std::snprintf(b, sizeof b, "[%.3f, %.3f, %.6f]", 431000 + x, 4512000 + y, plane(x, y));
+    return std::string(b);
+  };
+  writeText(in.geojson,
+            "{\"type\": \"FeatureCollection\", \"features\": [\n"
+            "{\"type\": \"Feature\", \"properties\": {}, \"geometry\": {\"type\": \"LineString\", "
+            "\"coordinates\": [" + c(20, 20) + ", " + c(200, 180) + ", " + c(380, 370) + "]}},\n"
+            "{\"type\": \"Feature\", \"properties\": {}, \"geometry\": {\"type\": \"MultiLineString\", "
+            "\"coordinates\": [[" + c(20, 380) + ", " + c(380, 30) + "], [" + c(50, 200) + ", " + c(120, 210) + "]]}}\n"
+            "]}\n");
+  writeText(in.text, "# a ridge\n431100 4512300 " + std::to_string(plane(100, 300)) +
+                         "\n431300 4512310 " + std::to_string(plane(300, 310)) + "\n\n431250 4512050 " +
+                         std::to_string(plane(250, 50)) + "\n431260 4512150 " +
+                         std::to_string(plane(260, 150)) + "\n");
+  return in;
+}
+
+std::size_t filesIn(const fs::path& dir) {
+  return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+TEST(TinCli, PlainPointsAndBreakLinesMakeAValidTinThatTheCheckerAccepts) {
+  const auto in = makePlainInputs("cli-plain");
+  const fs::path tin = in.dir / "out.tin", obj = in.dir / "out.obj";
+  auto r = runTinsmith("tin --points " + in.points.string() + " --breaklines " + in.geojson.string() +
+                       " --breaklines " + in.text.string() + " -o " + tin.string() + " --crs EPSG:26912");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("validation: ok"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("crossings split: "), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("crossings split: 0"), std::string::npos) << r.err;
+  r = runTinsmith("validate " + tin.string());
+  EXPECT_EQ(r.exitCode, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("valid"), std::string::npos);
+  r = runTinsmith("export " + tin.string() + " --format obj -o " + obj.string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  // The text polylines as GeoJSON for the checker (it reads GeoJSON only).
+  const fs::path allLines = in.dir / "all-lines.geojson";
+  std::string geo = readFile(in.geojson);
+  geo.insert(geo.rfind(']'),
+             ",{\"type\": \"Feature\", \"properties\": {}, \"geometry\": {\"type\": \"LineString\", "
+             "\"coordinates\": [[431100, 4512300], [431300, 4512310]]}},"
+             "{\"type\": \"Feature\", \"properties\": {}, \"geometry\": {\"type\": \"LineString\", "
+             "\"coordinates\": [[431250, 4512050], [431260, 4512150]]}}\n");
+  writeText(allLines, geo);
+  r = runCommand("python3 " + kChecker + " " + obj.string() + " " + in.points.string() + " " + allLines.string());
+  EXPECT_EQ(r.exitCode, 0) << r.out << r.err;
+  EXPECT_EQ(r.out.rfind("ok", 0), 0u) << r.out;
+}
+
+TEST(TinCli, InfoAndQueryDescribeTheTin) {
+  const auto in = makePlainInputs("cli-info");
+  const fs::path tin = in.dir / "out.tin";
+  ASSERT_EQ(runTinsmith("tin -q --points " + in.points.string() + " -o " + tin.string() + " --crs EPSG:26912").exitCode, 0);
+  auto r = runTinsmith("info " + tin.string() + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["crs"], "EPSG:26912");
+  EXPECT_EQ(j["vertices"], 300);
+  EXPECT_EQ(j["format_version"], 1);
+  EXPECT_GT(j["z_range"][1].get<double>(), j["z_range"][0].get<double>());
+  r = runTinsmith("info " + tin.string());
+  EXPECT_NE(r.out.find("EPSG:26912"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("300 vertices"), std::string::npos) << r.out;
+
+  // The points lie on a plane, so the TIN reproduces it exactly (to rounding).
+  r = runTinsmith("query " + tin.string() + " 431200 4512200 --json");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto q = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(q["z"].get<double>(), plane(200, 200), 1e-6);
+  const double slope = std::hypot(0.25, 0.125);
+  // (The input z has 6 decimals, so the plane is recovered to about 1e-8.)
+  EXPECT_NEAR(q["slope"].get<double>(), slope, 1e-7);
+  EXPECT_NEAR(q["normal"][2].get<double>(), 1 / std::sqrt(1 + slope * slope), 1e-7);
+  r = runTinsmith("query " + tin.string() + " 431200 4512200");
+  EXPECT_EQ(r.exitCode, 0);
+  EXPECT_NE(r.out.find("z 1525.000"), std::string::npos) << r.out;
+
+  // Many points at once; one outside is null, not an error.
+  const fs::path qp = in.dir / "q.txt";
+  writeText(qp, "x y\n431200 4512200\n0 0\n431100 4512300\n");
+  r = runTinsmith("query " + tin.string() + " --points " + qp.string() + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto many = nlohmann::json::parse(r.out);
+  ASSERT_EQ(many.size(), 3u);
+  EXPECT_TRUE(many[1]["z"].is_null());
+  EXPECT_NEAR(many[2]["z"].get<double>(), plane(100, 300), 1e-6);
+
+  // A single point outside is a clear input error.
+  r = runTinsmith("query " + tin.string() + " 0 0");
+  EXPECT_EQ(r.exitCode, 3);
+  EXPECT_NE(r.err.find("outside the TIN"), std::string::npos) << r.err;
+  r = runTinsmith("query " + tin.string() + " 0 0 --json");
+  EXPECT_EQ(r.exitCode, 0);
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["z"].is_null());
+}
+
+TEST(TinCli, ExportFormats) {
+  const auto in = makePlainInputs("cli-export");
+  const fs::path tin = in.dir / "out.tin";
+  ASSERT_EQ(runTinsmith("tin -q --points " + in.points.string() + " -o " + tin.string() + " --crs EPSG:26912").exitCode, 0);
+  EXPECT_EQ(runTinsmith("export " + tin.string() + " --format ply -o " + (in.dir / "a.ply").string()).exitCode, 0);
+  EXPECT_EQ(readFile(in.dir / "a.ply").rfind("ply\nformat ascii 1.0\n", 0), 0u);
+  auto r = runTinsmith("export " + tin.string() + " --format tif --cell 10 -o " + (in.dir / "a.tif").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  // The cell holding (431205, 4512195) carries the plane's z at its centre.
+  r = runCommand("gdalinfo -json " + (in.dir / "a.tif").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto gt = nlohmann::json::parse(r.out)["geoTransform"];
+  EXPECT_EQ(gt[1].get<double>(), 10.0);
+  EXPECT_EQ(gt[5].get<double>(), -10.0);
+  const double col = std::floor((431205 - gt[0].get<double>()) / 10.0);
+  const double row = std::floor((gt[3].get<double>() - 4512195) / 10.0);
+  const double cx = gt[0].get<double>() + (col + 0.5) * 10.0, cy = gt[3].get<double>() - (row + 0.5) * 10.0;
+  r = runCommand("gdallocationinfo -valonly " + (in.dir / "a.tif").string() + " " +
+                 std::to_string(static_cast<int>(col)) + " " + std::to_string(static_cast<int>(row)));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NEAR(std::stod(r.out), plane(cx - 431000, cy - 4512000), 1e-3) << r.out;
+  r = runTinsmith("export " + tin.string() + " --format exr --cell 10 -o " + (in.dir / "a.exr").string());
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(fs::file_size(in.dir / "a.exr") > 0);
+  r = runTinsmith("export " + tin.string() + " --format exr -o " + (in.dir / "b.exr").string());
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.err.find("--cell"), std::string::npos);
+  r = runTinsmith("export " + tin.string() + " --format glb -o " + (in.dir / "a.glb").string());
+  EXPECT_EQ(r.exitCode, 6);
+  EXPECT_NE(r.err.find("not implemented yet"), std::string::npos) << r.err;
+  r = runTinsmith("export " + tin.string() + " --format stl -o " + (in.dir / "a.stl").string());
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_FALSE(fs::exists(in.dir / "b.exr"));
+  EXPECT_FALSE(fs::exists(in.dir / "a.glb"));
+}
+
+// Red Butte: the full config → tin → validate → info → OBJ.
+TEST(TinCli, RedButteEndToEnd) {
+  const auto dir = test::scratchDir("cli-red-butte");
+  const fs::path tin = dir / "red-butte.tin", report = dir / "report.json";
+  auto r = runTinsmith("tin " + (kSource / "config/red-butte.toml").string() + " -o " + tin.string() +
+                       " --report " + report.string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("bridge candidates"), std::string::npos) << r.err;
+  r = runTinsmith("validate " + tin.string() + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["valid"].get<bool>());
+
+  // Break lines are present as constrained edges of every kind.
+  r = runTinsmith("info " + tin.string() + " --json");
+  ASSERT_EQ(r.exitCode, 0);
+  const auto info = nlohmann::json::parse(r.out);
+  for (const char* kind : {"contour", "road", "river", "lake", "boundary"})
+    EXPECT_GT(info["kinds"][kind]["constrained_edges"].get<int>(), 0) << kind;
+  EXPECT_EQ(info["crs"], "EPSG:26912");
+
+  const auto rep = nlohmann::json::parse(readFile(report));
+  EXPECT_TRUE(rep["result"]["valid"].get<bool>());
+  EXPECT_EQ(rep["layers"].size(), 6u);
+  EXPECT_GT(rep["rivers"]["draped"].get<int>(), 0);
+  EXPECT_EQ(rep["roads"]["draped"], 1);
+  EXPECT_EQ(rep["lakes"].size(), 1u);
+  EXPECT_GT(rep["flat_triangles"]["before"].get<int>(), 100);
+  EXPECT_LE(rep["flat_triangles"]["after"].get<int>(), rep["flat_triangles"]["before"].get<int>() / 100);
+  EXPECT_GE(rep["triangulation"]["bridge_candidates"].size(), 1u);
+  // The lake is flat: its level lies within the z range and is reported.
+  EXPECT_GT(rep["lakes"][0]["level_m"].get<double>(), 1500.0);
+
+  r = runTinsmith("export " + tin.string() + " --format obj -o " + (dir / "red-butte.obj").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_GT(fs::file_size(dir / "red-butte.obj"), 1000000u);
+}
+
+// The independent checker wants the TIN to tile the convex hull, so it runs on
+// the Red Butte layers without the boundary and the lake: contours, spot
+// heights, road and streams — every input point a vertex, every contour, road
+// and stream segment a chain of edges, all other edges Delaunay.
+TEST(TinCli, RedButteWithoutDomainPassesTheIndependentChecker) {
+  const auto dir = test::scratchDir("cli-red-butte-check");
+  const fs::path data = kShared / "red-butte";
+  writeText(dir / "rb.toml", "[project]\ncrs = \"EPSG:26912\"\n"
+                             "[[layer]]\npath = \"" + (data / "contours.gpkg").string() +
+                                 "\"\nlayer = \"contours\"\nkind = \"contours\"\nz = \"elev\"\n"
+                             "[[layer]]\npath = \"" + (data / "spot-heights.csv").string() +
+                                 "\"\nkind = \"points\"\ncrs = \"EPSG:26912\"\nz = \"elevation\"\n"
+                             "[[layer]]\npath = \"" + (data / "road.geojson").string() + "\"\nkind = \"road\"\n"
+                             "[[layer]]\npath = \"" + (data / "streams.geojson").string() + "\"\nkind = \"river\"\n");
+  auto r = runTinsmith("tin -q " + (dir / "rb.toml").string() + " -o " + (dir / "rb.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  ASSERT_EQ(runTinsmith("export " + (dir / "rb.tin").string() + " --format obj -o " + (dir / "rb.obj").string()).exitCode, 0);
+  r = runCommand("ogr2ogr -f GeoJSON " + (dir / "contours.geojson").string() + " " +
+                 (data / "contours.gpkg").string() + " contours");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  // One GeoJSON with every break line; spot heights as "x y z".
+  auto lines = nlohmann::json::parse(readFile(dir / "contours.geojson"));
+  for (const char* f : {"road.geojson", "streams.geojson"}) {
+    const auto more = nlohmann::json::parse(readFile(data / f));
+    for (const auto& feature : more["features"]) lines["features"].push_back(feature);
+  }
+  ASSERT_EQ(lines["features"].size(), 152u + 1u + 23u);
+  writeText(dir / "lines.geojson", lines.dump());
+  std::string csv = readFile(data / "spot-heights.csv");
+  csv = csv.substr(csv.find('\n') + 1);
+  for (char& c : csv)
+    if (c == ',') c = ' ';
+  writeText(dir / "points.xyz", csv);
+  // --tol 0.01: the config's snap tolerance (points that close to a break-line
+  // vertex are merged into it).
+  r = runCommand("python3 " + kChecker + " " + (dir / "rb.obj").string() + " " + (dir / "points.xyz").string() +
+                 " " + (dir / "lines.geojson").string() + " --tol 0.01");
+  EXPECT_EQ(r.exitCode, 0) << r.out << r.err;
+  EXPECT_EQ(r.out.rfind("ok", 0), 0u) << r.out;
+}
+
+// --- bad input: a clear error, the documented exit code, no output ---------
+
+struct BadCase {
+  const char* name;
+  std::string args;  ///< after "tin", before "-o"
+  int exitCode;
+  const char* mentions;
+};
+
+TEST(TinCli, BadInputFailsClearlyAndLeavesNoFile) {
+  const auto in = makePlainInputs("cli-bad");
+  const fs::path& d = in.dir;
+  writeText(d / "nan.xyz", "1 2 3\n4 5 6\n7 nan 9\n");
+  writeText(d / "words.xyz", "1 2 3\n4 five 6\n");
+  writeText(d / "collinear.xyz", "0 0 1\n1 1 2\n2 2 3\n3 3 4\n");
+  writeText(d / "single.txt", "1 2 3\n4 5 6\n\n7 8 9\n");
+  writeText(d / "flat.geojson",
+            "{\"type\": \"FeatureCollection\", \"features\": [{\"type\": \"Feature\", \"properties\": {}, "
+            "\"geometry\": {\"type\": \"LineString\", \"coordinates\": [[431000, 4512000], [431100, 4512100]]}}]}");
+  writeText(d / "unknown-key.toml", "[project]\ncrs = \"EPSG:26912\"\ncolour = \"red\"\n");
+  writeText(d / "no-layers.toml", "[project]\ncrs = \"EPSG:26912\"\n");
+  const std::string pts = in.points.string();
+  const std::vector<BadCase> cases = {
+      {"missing points file", "--points " + (d / "none.xyz").string(), 3, "none.xyz"},
+      {"NaN coordinate", "--points " + (d / "nan.xyz").string(), 3, "nan.xyz"},
+      {"non-numeric field", "--points " + (d / "words.xyz").string(), 3, "line 2"},
+      {"collinear points", "--points " + (d / "collinear.xyz").string(), 4, "collinear"},
+      {"one-vertex polyline", "--points " + pts + " --breaklines " + (d / "single.txt").string(), 3, "line 4"},
+      {"2D GeoJSON break line", "--points " + pts + " --breaklines " + (d / "flat.geojson").string(), 3, "no z"},
+      {"missing config", (d / "none.toml").string(), 3, "none.toml"},
+      {"unknown config key", (d / "unknown-key.toml").string(), 3, "colour"},
+      {"config and points", (d / "no-layers.toml").string() + " --points " + pts, 2, "not both"},
+      {"nothing to do", "", 2, "nothing to triangulate"},
+  };
+  for (const auto& c : cases) {
+    const fs::path out = d / "out" / (std::string(c.name) + ".tin");
+    fs::create_directories(out.parent_path());
+    const auto r = runTinsmith("tin " + c.args + " -o \"" + out.string() + "\"");
+    EXPECT_EQ(r.exitCode, c.exitCode) << c.name << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("ERROR: ", 0), 0u) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.mentions), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_EQ(filesIn(out.parent_path()), 0u) << c.name << " left a file behind";
+  }
+}
+
+TEST(TinCli, AFailedRunKeepsTheOldOutputAndAMissingDirectoryIsAnIoError) {
+  const auto in = makePlainInputs("cli-keep");
+  const fs::path out = in.dir / "keep.tin";
+  writeText(out, "previous");
+  writeText(in.dir / "bad.xyz", "1 2 x\n");
+  auto r = runTinsmith("tin --points " + (in.dir / "bad.xyz").string() + " -o " + out.string());
+  EXPECT_EQ(r.exitCode, 3);
+  EXPECT_EQ(readFile(out), "previous");
+  const auto before = filesIn(in.dir);
+  r = runTinsmith("tin --points " + in.points.string() + " -o " + (in.dir / "no/such/dir/x.tin").string());
+  EXPECT_EQ(r.exitCode, 5) << r.err;
+  EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+  r = runTinsmith("tin --points " + in.points.string() + " -o " + out.string() + " --report " +
+                  (in.dir / "nope/r.json").string());
+  EXPECT_EQ(r.exitCode, 5) << r.err;
+  EXPECT_EQ(readFile(out), "previous");
+  EXPECT_EQ(filesIn(in.dir), before);
+}
+
+// A .tin written by hand from the documented layout (ingest/tinfile/tin_file.hpp):
+// an independent check of the format, and a way to hand `validate` a file
+// whose bytes are sound but whose mesh is not.
+std::uint32_t crc32(const std::string& bytes) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char b : bytes) {
+    crc ^= b;
+    for (int k = 0; k < 8; ++k) crc = (crc & 1u) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
+  }
+  return ~crc;
+}
+
+template <class T>
+void put(std::string& out, T v) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));  // the test machine is little-endian, like the format
+  out.append(reinterpret_cast<const char*>(b), sizeof(T));
+}
+
+std::string handMadeTin(const std::vector<std::array<double, 3>>& v,
+                        const std::vector<std::array<std::uint32_t, 3>>& t) {
+  std::string payload;
+  put<std::uint32_t>(payload, 0);  // no CRS
+  put<std::uint64_t>(payload, v.size());
+  for (const auto& p : v)
+    for (double c : p) put(payload, c);
+  put<std::uint64_t>(payload, t.size());
+  for (const auto& tri : t)
+    for (auto i : tri) put(payload, i);
+  put<std::uint64_t>(payload, 0);  // features
+  put<std::uint64_t>(payload, 0);  // constrained edges
+  std::string h("\x89TIN\r\n\x1a\n", 8);
+  put<std::uint32_t>(h, 1);
+  put<std::uint32_t>(h, 0);
+  put<std::uint64_t>(h, payload.size());
+  put<std::uint32_t>(h, crc32(payload));
+  put<std::uint32_t>(h, crc32(h));
+  return h + payload;
+}
+
+TEST(TinCli, ValidateExitsOneAndListsProblemsForABrokenMesh) {
+  const auto dir = test::scratchDir("cli-validate");
+  const std::vector<std::array<double, 3>> v = {{0, 0, 1}, {10, 0, 2}, {10, 10, 3}, {0, 10, 4}};
+  writeText(dir / "good.tin", handMadeTin(v, {{{0, 1, 2}}, {{0, 2, 3}}}));
+  auto r = runTinsmith("validate " + (dir / "good.tin").string());
+  EXPECT_EQ(r.exitCode, 0) << r.out << r.err;
+  // Second triangle clockwise.
+  writeText(dir / "bad.tin", handMadeTin(v, {{{0, 1, 2}}, {{0, 3, 2}}}));
+  r = runTinsmith("validate " + (dir / "bad.tin").string());
+  EXPECT_EQ(r.exitCode, 1) << r.out << r.err;
+  EXPECT_NE(r.out.find("INVALID"), std::string::npos) << r.out;
+  r = runTinsmith("validate " + (dir / "bad.tin").string() + " --json");
+  EXPECT_EQ(r.exitCode, 1);
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["valid"].get<bool>());
+  EXPECT_FALSE(j["problems"].empty());
+  // Damaged bytes are an input error naming the file, not a failed check.
+  std::string damaged = readFile(dir / "good.tin");
+  damaged[40] ^= 0x01;
+  writeText(dir / "damaged.tin", damaged);
+  r = runTinsmith("validate " + (dir / "damaged.tin").string());
+  EXPECT_EQ(r.exitCode, 3);
+  EXPECT_NE(r.err.find("damaged.tin"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("checksum"), std::string::npos) << r.err;
+  writeText(dir / "text.tin", "hello");
+  r = runTinsmith("info " + (dir / "text.tin").string());
+  EXPECT_EQ(r.exitCode, 3);
+  EXPECT_NE(r.err.find("not a .tin file"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace tinsmith
