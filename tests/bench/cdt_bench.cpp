@@ -237,8 +237,10 @@ int main(int argc, char** argv) {
   for (const Case& c : cases) {
     if (!only.empty() && c.kind != only) continue;
     Result best[2];
-    for (int lib = 0; lib < (haveCgal ? 2 : 1); ++lib) {
-      for (int r = 0; r < reps; ++r) {
+    // Repetitions alternate between the libraries so that load changes on a
+    // shared machine hit both alike.
+    for (int r = 0; r < reps; ++r) {
+      for (int lib = 0; lib < (haveCgal ? 2 : 1); ++lib) {
         const Result x = measure(c.kind, c.n, lib == 1, smoke);
         if (x.seconds < 0) {
           ++failures;
