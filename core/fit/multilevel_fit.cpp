@@ -274,6 +274,11 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     std::vector<Point2> positions(nv);
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
+    // The smoothing matrix first: its temporaries are gone before the
+    // per-part moments are allocated (lower peak memory).
+    SparseMatrix energy;
+    if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
+
     // Triangles of Δ_{k−1} that were not split keep their path: their points
     // stay put. The others' points continue their descent from there.
     std::vector<std::uint32_t> remap(previousPaths.size());
@@ -311,9 +316,9 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     SparseMatrix a;
     Vector rhs;
     if (options.smoothing != Smoothing::None) {
-      const SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
       PenalizedSystem sys = assemblePenalized(triVerts, moments[0], energy, options.lambdaFactor, options.lambdaAbsolute);
       st.lambda = sys.lambda;
+      energy = SparseMatrix();
       a = std::move(sys.a);
       rhs = std::move(sys.b);
     } else {
