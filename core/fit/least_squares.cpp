@@ -256,20 +256,24 @@ SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const T
   // E = DᵀD with one row √L_e β_e per interior edge (4 entries), so that
   // cᵀEc = Σ_e L_e (T_e f)²; built as a sparse product to keep memory low.
   const auto edges = meshEdges(vertices.size(), triangles);
-  std::vector<Triplet> triplets;
-  triplets.reserve(edges.size() * 4);
+  std::size_t interior = 0;
+  for (const auto& e : edges) interior += e.right == MeshEdge::kNone ? 0 : 1;
+  // D is filled row by row with its four entries (sorted by column), straight
+  // into compressed storage: no triplet list.
+  SparseMatrix d(static_cast<Eigen::Index>(interior), static_cast<Eigen::Index>(vertices.size()));
+  d.reserve(Eigen::VectorXi::Constant(static_cast<Eigen::Index>(interior), 4));
   int row = 0;
   for (const auto& e : edges) {
     if (e.right == MeshEdge::kNone) continue;
     const auto beta = thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
     const double w = std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
-    const std::uint32_t idx[4] = {e.s, e.t, e.left, e.right};
-    for (int i = 0; i < 4; ++i) triplets.emplace_back(row, static_cast<int>(idx[i]), w * beta[i]);
+    std::array<std::pair<std::uint32_t, double>, 4> entries{
+        {{e.s, w * beta[0]}, {e.t, w * beta[1]}, {e.left, w * beta[2]}, {e.right, w * beta[3]}}};
+    std::sort(entries.begin(), entries.end());
+    for (const auto& [col, value] : entries) d.insert(row, static_cast<int>(col)) = value;
     ++row;
   }
-  SparseMatrix d(row, static_cast<Eigen::Index>(vertices.size()));
-  d.setFromTriplets(triplets.begin(), triplets.end());
-  triplets = {};
+  d.makeCompressed();
   SparseMatrix e = SparseMatrix(d.transpose()) * d;
   e.makeCompressed();
   return e;

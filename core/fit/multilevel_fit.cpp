@@ -43,21 +43,29 @@ std::uint64_t compactBits(std::uint64_t v) {
   return v;
 }
 
-/// Runs f(begin, end, worker) over [0, n) split into `threads` chunks.
+/// The points are split into this many fixed parts, whatever the number of
+/// threads, and per-part sums are combined in part order: the result does not
+/// depend on the thread count (same input and options, same bytes).
+constexpr int kParts = 2;
+
+/// Runs f(begin, end, part) for the kParts parts of [0, n), on up to `threads`
+/// threads.
 template <class F>
-void parallelFor(std::size_t n, int threads, F&& f) {
+void forEachPart(std::size_t n, int threads, F&& f) {
+  const std::size_t chunk = (n + kParts - 1) / kParts;
+  auto range = [&](int part) {
+    const std::size_t b = std::min(n, chunk * static_cast<std::size_t>(part));
+    return std::pair{b, std::min(n, b + chunk)};
+  };
   if (threads <= 1 || n < 16384) {
-    f(std::size_t{0}, n, 0);
+    for (int part = 0; part < kParts; ++part) f(range(part).first, range(part).second, part);
     return;
   }
   std::vector<std::thread> pool;
-  const std::size_t chunk = (n + static_cast<std::size_t>(threads) - 1) / static_cast<std::size_t>(threads);
-  for (int t = 1; t < threads; ++t) {
-    const std::size_t b = std::min(n, chunk * static_cast<std::size_t>(t));
-    const std::size_t e = std::min(n, b + chunk);
-    pool.emplace_back([&f, b, e, t] { f(b, e, t); });
+  for (int part = 1; part < kParts; ++part) {
+    pool.emplace_back([&f, r = range(part), part] { f(r.first, r.second, part); });
   }
-  f(std::size_t{0}, std::min(n, chunk), 0);
+  f(range(0).first, range(0).second, 0);
   for (auto& th : pool) th.join();
 }
 
@@ -266,14 +274,19 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     std::vector<Point2> positions(nv);
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
+    // The smoothing matrix first: its temporaries are gone before the
+    // per-part moments are allocated (lower peak memory).
+    SparseMatrix energy;
+    if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
+
     // Triangles of Δ_{k−1} that were not split keep their path: their points
     // stay put. The others' points continue their descent from there.
     std::vector<std::uint32_t> remap(previousPaths.size());
     for (std::size_t t = 0; t < previousPaths.size(); ++t) remap[t] = triIndex.find(previousPaths[t]);
 
     // Locate the points and accumulate per-triangle moments, one copy per worker.
-    std::vector<std::vector<TriangleMoments>> moments(static_cast<std::size_t>(threads));
-    parallelFor(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+    std::vector<std::vector<TriangleMoments>> moments(kParts);
+    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
       auto& mine = moments[static_cast<std::size_t>(worker)];
       mine.assign(tris.size(), TriangleMoments{});
       for (std::size_t i = b; i < e; ++i) {
@@ -303,9 +316,9 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     SparseMatrix a;
     Vector rhs;
     if (options.smoothing != Smoothing::None) {
-      const SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
       PenalizedSystem sys = assemblePenalized(triVerts, moments[0], energy, options.lambdaFactor, options.lambdaAbsolute);
       st.lambda = sys.lambda;
+      energy = SparseMatrix();
       a = std::move(sys.a);
       rhs = std::move(sys.b);
     } else {
@@ -322,9 +335,9 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
 
     // Errors at the data and per-cell records of Ψ_level (contiguous runs).
     const int shift = 2 * (gridLevels - level);
-    std::vector<std::vector<CellRecord>> records(static_cast<std::size_t>(threads));
-    std::vector<double> maxErr(static_cast<std::size_t>(threads), 0.0), sumSq(static_cast<std::size_t>(threads), 0.0);
-    parallelFor(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+    std::vector<std::vector<CellRecord>> records(kParts);
+    std::vector<double> maxErr(kParts, 0.0), sumSq(kParts, 0.0);
+    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
       auto& rec = records[static_cast<std::size_t>(worker)];
       double mx = 0.0, ss = 0.0;
       for (std::size_t i = b; i < e; ++i) {

@@ -53,7 +53,10 @@ struct MultilevelOptions {
   std::vector<Point3> fixed;
   /// Per-point weights w_k (8.8); empty means all 1. Must be > 0.
   std::vector<double> weights;
-  int threads = 0;  ///< 0: std::thread::hardware_concurrency()
+  /// Worker threads (0: std::thread::hardware_concurrency()). The points are
+  /// split into two fixed parts, so at most two are used and the result is the
+  /// same bit for bit for any thread count.
+  int threads = 0;
   /// Called after each level with a one-line summary (optional).
   std::function<void(const std::string&)> progress;
 };

@@ -4,10 +4,14 @@
 // (ru_maxrss), bytes per point and final vertices, and per-level statistics.
 //
 //   fit_scale_bench franke N [--tolerance PCT] [--threads T] [--lambda K] [--max-level L]
-//   fit_scale_bench xyz FILE [--tolerance PCT | --max-error M] ...
+//   fit_scale_bench xyz FILE [--tolerance PCT | --max-error M] [--count N] [--check REF.xyz] ...
+// --check evaluates the fitted surface at every point of REF.xyz (e.g. all
+// cells of a DEM) and prints max error and RMSE against them.
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -65,6 +69,7 @@ int main(int argc, char** argv) {
   try {
     MultilevelOptions opt;
     opt.criteria.errorPercent = 0.1;
+    const char* check = nullptr;
     for (int i = 3; i + 1 < argc; i += 2) {
       const std::string a = argv[i];
       const double v = std::atof(argv[i + 1]);
@@ -74,6 +79,9 @@ int main(int argc, char** argv) {
       else if (a == "--lambda") opt.lambdaFactor = v;
       else if (a == "--max-level") opt.maxLevel = static_cast<int>(v);
       else if (a == "--count") opt.criteria.countAbove = static_cast<std::size_t>(v);
+      else if (a == "--count-only") opt.criteria.errorPercent.reset(), opt.criteria.countAbove = static_cast<std::size_t>(v);
+      else if (a == "--check") check = argv[i + 1];
+      else if (a == "--smoothing") opt.smoothing = std::strcmp(argv[i + 1], "membrane") == 0 ? Smoothing::Membrane : Smoothing::ThinPlate;
       else if (a == "--solver") opt.solver = std::strcmp(argv[i + 1], "cg") == 0 ? SolverKind::ConjugateGradient : SolverKind::GaussSeidel;
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -93,6 +101,24 @@ int main(int argc, char** argv) {
                 pts.size(), std::chrono::duration<double>(t1 - t0).count(), secs, mb, baseMb,
                 (mb - baseMb) * 1024.0 * 1024.0 / static_cast<double>(pts.size()), last.level, last.vertices,
                 last.triangles, last.maxError, last.rmsError);
+    if (check) {
+      const std::vector<Point3> ref = readXyz(check);
+      double mx = 0.0, ss = 0.0;
+      std::size_t outside = 0;
+      for (const auto& p : ref) {
+        const Point2 o = fit.mesh().origin();
+        const double sz = fit.mesh().size();
+        if (p.x < o.x || p.y < o.y || p.x > o.x + sz || p.y > o.y + sz) {
+          ++outside;
+          continue;
+        }
+        const double e = std::abs(fit.evaluate(p.xy()) - p.z);
+        mx = std::max(mx, e);
+        ss += e * e;
+      }
+      std::printf("check against %s: %zu points (%zu outside the domain), max error %.4g, RMSE %.4g\n", check,
+                  ref.size(), outside, mx, std::sqrt(ss / static_cast<double>(ref.size() - outside)));
+    }
   } catch (const Error& e) {
     std::fprintf(stderr, "ERROR: %s\n", e.what());
     return 1;
