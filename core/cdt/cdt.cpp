@@ -115,6 +115,7 @@ struct Cdt::Impl {
   bool finalized = false;
 
   std::uint32_t lastTriangle = 0;
+  bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
   std::vector<std::uint32_t> visitStamp;
@@ -154,18 +155,31 @@ struct Cdt::Impl {
 
   std::uint32_t newTriangle() {
     const auto t = triCount();
-    tv.insert(tv.end(), 3, kNone);
-    opp.insert(opp.end(), 3, kNone);
-    cons.insert(cons.end(), 3, 0);
+    const std::size_t n = tv.size() + 3;
+    tv.resize(n, kNone);
+    opp.resize(n, kNone);
+    cons.resize(n, 0);
     return t;
   }
   void setTri(std::uint32_t t, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     tv[3 * t] = a;
     tv[3 * t + 1] = b;
     tv[3 * t + 2] = c;
-    if (a != kInf) vhe[a] = 3 * t;
-    if (b != kInf) vhe[b] = 3 * t + 1;
-    if (c != kInf) vhe[c] = 3 * t + 2;
+    if (trackVhe) {
+      if (a != kInf) vhe[a] = 3 * t;
+      if (b != kInf) vhe[b] = 3 * t + 1;
+      if (c != kInf) vhe[c] = 3 * t + 2;
+    }
+  }
+  /// Recomputes vhe from the triangles and keeps it current from now on
+  /// (bulk point insertion does not need it and skips the upkeep).
+  void startTrackingVhe() {
+    if (trackVhe) return;
+    vhe.assign(xy.size(), kNone);
+    for (std::uint32_t h = 0; h < tv.size(); ++h) {
+      if (tv[h] != kInf) vhe[tv[h]] = h;
+    }
+    trackVhe = true;
   }
   void link(std::uint32_t h, std::uint32_t g) {
     opp[h] = g;
@@ -252,6 +266,7 @@ struct Cdt::Impl {
     cons[3 * n1] = c1;
     link(3 * n2, o2);
     cons[3 * n2] = c2;
+    cons[3 * t + 1] = cons[3 * t + 2] = 0;  // the reused slot's inner edges are new
     link(3 * t + 1, 3 * n1 + 2);
     link(3 * t + 2, 3 * n2 + 1);
     link(3 * n1 + 1, 3 * n2 + 2);
@@ -462,12 +477,15 @@ struct Cdt::Impl {
       return;
     }
     rep[v] = v;
+    // After the flips, the split triangle's slot still touches v's
+    // neighbourhood: a good start for the next walk.
     if (loc.kind == LocKind::OnEdge) {
+      lastTriangle = loc.h / 3;
       splitEdge(loc.h, v);
     } else {
+      lastTriangle = loc.t;
       splitTriangle(loc.t, v);
     }
-    lastTriangle = vhe[v] / 3;
   }
 
   /// Builds the first triangle from pending vertices in `order`; returns the
@@ -543,7 +561,7 @@ struct Cdt::Impl {
     }
     radixSortHigh32(keys);
     for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
-    if (vhe.size() < n) vhe.resize(n, kNone);
+    trackVhe = false;
     insertedUpTo = n;
     if (order.empty()) return;
 
@@ -656,6 +674,7 @@ struct Cdt::Impl {
       vhe.push_back(kNone);
       insertedUpTo = xy.size();
       splitEdge(e, v);
+      lopAround(v);
     }
     ev.vertex = VertexId(v);
     ev.at = {xy[v].x, xy[v].y, z[v]};
@@ -741,16 +760,16 @@ struct Cdt::Impl {
         targets.push_back(crossingVertex(cur, tgt, e, f));
         continue;
       }
-      removeCrossings(cur, end, crossed);
-      addEdgeFeature(cur, end, f);
+      removeCrossings(cur, end, crossed, f);
       cur = end;
     }
   }
 
-  /// Swaps away every edge crossing cur→end (Sloan; book 6.5), then restores
-  /// the Delaunay property on the new edges.
+  /// Swaps away every edge crossing a→b (Sloan; book 6.5), marks a–b
+  /// constrained for f, then restores the Delaunay property from the new edges.
   void removeCrossings(std::uint32_t a, std::uint32_t b,
-                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed) {
+                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed,
+                       FeatureId f) {
     std::deque<std::pair<std::uint32_t, std::uint32_t>> queue(crossed.begin(), crossed.end());
     std::vector<std::pair<std::uint32_t, std::uint32_t>> fresh;
     std::size_t guard = 0;
@@ -767,6 +786,11 @@ struct Cdt::Impl {
         continue;
       }
       flip(h);
+      // The quad's sides now face new triangles: check them in the LOP too.
+      fresh.emplace_back(p, c);
+      fresh.emplace_back(c, q);
+      fresh.emplace_back(q, d);
+      fresh.emplace_back(d, p);
       const bool endC = c == a || c == b, endD = d == a || d == b;
       if (!endC && !endD && orient(a, b, c) * orient(a, b, d) < 0) {
         queue.emplace_back(c, d);
@@ -774,26 +798,53 @@ struct Cdt::Impl {
         fresh.emplace_back(c, d);
       }
     }
-    bool changed = true;
-    while (changed) {
-      changed = false;
-      for (auto& [p, q] : fresh) {
-        if ((p == a && q == b) || (p == b && q == a)) continue;
-        const std::uint32_t h = findHalfedge(p, q);
-        if (h == kNone || cons[h]) continue;
-        const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
-        if (c == kInf || d == kInf) continue;
-        if (incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
-          flip(h);
-          p = c;
-          q = d;
-          changed = true;
+    addEdgeFeature(a, b, f);  // constrained before the LOP so it is never flipped
+    lop(fresh);
+  }
+
+  /// Lawson's LOP (book 4.2) from the given edges (vertex pairs): flips every
+  /// unconstrained edge that is not locally Delaunay, queueing the four edges
+  /// around each flip. Consumes `todo`.
+  void lop(std::vector<std::pair<std::uint32_t, std::uint32_t>>& todo) {
+    std::size_t flips = 0;
+    while (!todo.empty()) {
+      const auto [p, q] = todo.back();
+      todo.pop_back();
+      if (p == kInf || q == kInf) continue;
+      const std::uint32_t h = findHalfedge(p, q);
+      if (h == kNone || cons[h]) continue;
+      const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
+      if (c == kInf || d == kInf) continue;
+      if (incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
+        if (++flips > 64 + 64 * xy.size()) {
+          throw internalError("edge legalization did not terminate");
         }
+        flip(h);
+        todo.emplace_back(p, c);
+        todo.emplace_back(c, q);
+        todo.emplace_back(q, d);
+        todo.emplace_back(d, p);
       }
     }
   }
 
+  /// Runs the LOP on every edge of the triangles around v — needed after a
+  /// forced split at a rounded intersection point, where v may lie off the
+  /// split edge and edges at v itself can be non-Delaunay.
+  void lopAround(std::uint32_t v) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo;
+    const std::uint32_t start = vhe[v];
+    std::uint32_t h = start;
+    do {
+      todo.emplace_back(v, tv[nxt(h)]);
+      todo.emplace_back(tv[nxt(h)], tv[prv(h)]);
+      h = opp[prv(h)];
+    } while (h != start);
+    lop(todo);
+  }
+
   void insertPendingSegments() {
+    if (segmentsDone < segments.size()) startTrackingVhe();
     for (; segmentsDone < segments.size(); ++segmentsDone) {
       const Segment s = segments[segmentsDone];
       const std::uint32_t a = find(s.a), b = find(s.b);
@@ -898,10 +949,15 @@ VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
 
 VertexId Cdt::insertPoints(std::span<const Point3> points, FeatureId feature) {
   const auto first = VertexId(static_cast<std::uint32_t>(impl_->xy.size()));
-  impl_->xy.reserve(impl_->xy.size() + points.size());
-  impl_->z.reserve(impl_->z.size() + points.size());
-  impl_->vfeat.reserve(impl_->vfeat.size() + points.size());
-  impl_->rep.reserve(impl_->rep.size() + points.size());
+  // Grow geometrically: many small polylines must not reallocate each time.
+  const std::size_t need = impl_->xy.size() + points.size();
+  if (need > impl_->xy.capacity()) {
+    const std::size_t cap = std::max(need, 2 * impl_->xy.capacity());
+    impl_->xy.reserve(cap);
+    impl_->z.reserve(cap);
+    impl_->vfeat.reserve(cap);
+    impl_->rep.reserve(cap);
+  }
   for (const Point3& p : points) insertPoint(p, feature);
   return first;
 }
@@ -1000,14 +1056,16 @@ void Cdt::finalize() {
     }
   }
   std::sort(hf.begin(), hf.end());
-  mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
-  mesh.featureIds_.reserve(hf.size());
-  for (const auto& [h, f] : hf) {
-    ++mesh.featureBegin_[h + 1];
-    mesh.featureIds_.push_back(f);
-  }
-  for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
-    mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
+  if (!hf.empty()) {
+    mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
+    mesh.featureIds_.reserve(hf.size());
+    for (const auto& [h, f] : hf) {
+      ++mesh.featureBegin_[h + 1];
+      mesh.featureIds_.push_back(f);
+    }
+    for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
+      mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
+    }
   }
   mesh.outgoing_.assign(outV, HalfedgeId());
   for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {

@@ -77,10 +77,6 @@ Point2 BinaryTriangulation::position(std::uint64_t k) const {
   return {origin_.x + static_cast<double>(column(k)) * scale, origin_.y + static_cast<double>(row(k)) * scale};
 }
 
-Point2 BinaryTriangulation::toGrid(Point2 p) const {
-  const double scale = static_cast<double>(side_) / size_;
-  return {(p.x - origin_.x) * scale, (p.y - origin_.y) * scale};
-}
 
 int BinaryTriangulation::depth(std::uint64_t k) const {
   const std::uint64_t i = column(k), j = row(k);
@@ -234,20 +230,29 @@ BinaryTriangle BinaryTriangulation::triangleFromPath(std::uint64_t path) const {
 
 BinaryLocation BinaryTriangulation::descend(Point2 g, BinaryTriangle t) const {
   const int maxDepth = 2 * gridLevels_ - 2;
+  // Grid coordinates ride along with the keys (midpoints are means of both),
+  // so the loop needs no integer division.
   auto grid = [&](std::uint64_t k) { return Point2{static_cast<double>(column(k)), static_cast<double>(row(k))}; };
+  Point2 pl = grid(t.l), pa = grid(t.a), pr = grid(t.r);
   while (t.depth <= maxDepth) {
     const std::uint64_t j = (t.l + t.r) / 2;
     if (!isActive(j)) break;
-    const Point2 pa = grid(t.a), pj = grid(j), pl = grid(t.l);
+    const Point2 pj{0.5 * (pl.x + pr.x), 0.5 * (pl.y + pr.y)};
     // The line a–j splits (l, r, a); p goes with l when on l's side.
     const bool lSide = orient(pa, pj, g) * orient(pa, pj, pl) >= 0.0;
     if (lSide) {
       t = BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1};
+      const Point2 oldA = pa;
+      pr = pl;
+      pl = oldA;
+      pa = pj;
     } else {
       t = BinaryTriangle{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1};
+      pl = pr;
+      pr = pa;
+      pa = pj;
     }
   }
-  const Point2 pl = grid(t.l), pr = grid(t.r), pa = grid(t.a);
   const double area = orient(pl, pr, pa);
   const double bl = orient(g, pr, pa) / area;
   const double br = orient(pl, g, pa) / area;

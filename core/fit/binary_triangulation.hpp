@@ -147,7 +147,10 @@ class BinaryTriangulation {
   [[nodiscard]] BinaryTriangle triangleFromPath(std::uint64_t path) const;
 
   /// Grid coordinates (units of the finest cell) of a domain point.
-  [[nodiscard]] Point2 toGrid(Point2 p) const;
+  [[nodiscard]] Point2 toGrid(Point2 p) const {
+    const double scale = static_cast<double>(side_) / size_;
+    return {(p.x - origin_.x) * scale, (p.y - origin_.y) * scale};
+  }
 
  private:
   [[nodiscard]] std::array<BinaryTriangle, 4> roots() const;

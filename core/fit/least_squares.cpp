@@ -147,24 +147,66 @@ NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const
   return scatterMoments(vertexCount, triangles, moments);
 }
 
-SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
-  checkTriangles(vertices.size(), triangles);
-  std::vector<Triplet> triplets;
-  triplets.reserve(triangles.size() * 9);
-  for (const auto& t : triangles) {
-    const Point2 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
-    const double area2 = doubleArea(a, b, c);  // 2A
-    if (area2 == 0.0) throw geometryError("degenerate triangle in the membrane energy");
-    const double eta[3] = {b.y - c.y, c.y - a.y, a.y - b.y};
-    const double mu[3] = {c.x - b.x, a.x - c.x, b.x - a.x};
-    const double scale = 1.0 / (2.0 * std::abs(area2));  // 1 / 4A
+PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
+                                  const SparseMatrix& energy, double lambdaFactor,
+                                  std::optional<double> lambdaAbsolute) {
+  PenalizedSystem sys;
+  SparseMatrix btb = energy;
+  std::fill(btb.valuePtr(), btb.valuePtr() + btb.nonZeros(), 0.0);
+  sys.b = Vector::Zero(energy.rows());
+  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& m = moments[t];
+    const auto& tri = triangles[t];
+    bool empty = true;
+    for (double v : m.bb) empty = empty && v == 0.0;
+    if (empty) continue;
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) {
-        triplets.emplace_back(static_cast<int>(t[i]), static_cast<int>(t[j]), (eta[i] * eta[j] + mu[i] * mu[j]) * scale);
-      }
+      sys.b[tri[i]] += m.bz[i];
+      for (int j = 0; j < 3; ++j) btb.coeffRef(tri[i], tri[j]) += m.bb[kIndex[i][j]];
     }
   }
-  return fromTriplets(vertices.size(), triplets);
+  btb.makeCompressed();
+  sys.lambdaDefault = defaultLambda(btb, energy);
+  sys.lambda = lambdaAbsolute ? *lambdaAbsolute : lambdaFactor * sys.lambdaDefault;
+  if (btb.nonZeros() == energy.nonZeros()) {  // no entry was inserted: same pattern
+    sys.a = std::move(btb);
+    double* v = sys.a.valuePtr();
+    const double* e = energy.valuePtr();
+    for (Eigen::Index k = 0; k < sys.a.nonZeros(); ++k) v[k] += sys.lambda * e[k];
+  } else {
+    sys.a = btb + sys.lambda * energy;
+    sys.a.makeCompressed();
+  }
+  return sys;
+}
+
+SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
+  checkTriangles(vertices.size(), triangles);
+  // E = GᵀG with two rows per triangle, √A_t ∇g_t = (Σ η_i c_i, Σ μ_i c_i) / (2√A_t):
+  // Σ_t A_t |∇g_t|² = Σ_t (η_i η_j + μ_i μ_j) / 4A_t. A product of sparse
+  // matrices needs far less memory than 9 triplets per triangle.
+  std::vector<Triplet> triplets;
+  triplets.reserve(triangles.size() * 6);
+  for (std::size_t k = 0; k < triangles.size(); ++k) {
+    const auto& t = triangles[k];
+    const Point2 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+    const double area2 = std::abs(doubleArea(a, b, c));  // 2A
+    if (area2 == 0.0) throw geometryError("degenerate triangle " + std::to_string(k) + " in the membrane energy");
+    const double eta[3] = {b.y - c.y, c.y - a.y, a.y - b.y};
+    const double mu[3] = {c.x - b.x, a.x - c.x, b.x - a.x};
+    const double scale = 1.0 / std::sqrt(2.0 * area2);  // 1 / (2√A)
+    for (int i = 0; i < 3; ++i) {
+      triplets.emplace_back(static_cast<int>(2 * k), static_cast<int>(t[i]), eta[i] * scale);
+      triplets.emplace_back(static_cast<int>(2 * k + 1), static_cast<int>(t[i]), mu[i] * scale);
+    }
+  }
+  SparseMatrix g(static_cast<Eigen::Index>(2 * triangles.size()), static_cast<Eigen::Index>(vertices.size()));
+  g.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  SparseMatrix e = SparseMatrix(g.transpose()) * g;
+  e.makeCompressed();
+  return e;
 }
 
 SparseMatrix umbrellaEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles, bool weighted) {
@@ -211,21 +253,26 @@ std::array<double, 4> thinPlateBetas(const Point2& s, const Point2& t, const Poi
 }
 
 SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
+  // E = DᵀD with one row √L_e β_e per interior edge (4 entries), so that
+  // cᵀEc = Σ_e L_e (T_e f)²; built as a sparse product to keep memory low.
   const auto edges = meshEdges(vertices.size(), triangles);
   std::vector<Triplet> triplets;
-  triplets.reserve(edges.size() * 16);
+  triplets.reserve(edges.size() * 4);
+  int row = 0;
   for (const auto& e : edges) {
     if (e.right == MeshEdge::kNone) continue;
     const auto beta = thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
-    const double length = std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y);
+    const double w = std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
     const std::uint32_t idx[4] = {e.s, e.t, e.left, e.right};
-    for (int i = 0; i < 4; ++i) {
-      for (int j = 0; j < 4; ++j) {
-        triplets.emplace_back(static_cast<int>(idx[i]), static_cast<int>(idx[j]), length * beta[i] * beta[j]);
-      }
-    }
+    for (int i = 0; i < 4; ++i) triplets.emplace_back(row, static_cast<int>(idx[i]), w * beta[i]);
+    ++row;
   }
-  return fromTriplets(vertices.size(), triplets);
+  SparseMatrix d(row, static_cast<Eigen::Index>(vertices.size()));
+  d.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  SparseMatrix e = SparseMatrix(d.transpose()) * d;
+  e.makeCompressed();
+  return e;
 }
 
 SparseMatrix smoothingMatrix(Smoothing kind, std::span<const Point2> vertices, std::span<const Triangle> triangles) {

@@ -85,6 +85,20 @@ NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const
 NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
                                std::span<const TriangleMoments> moments);
 
+/// BᵀWB + λE assembled straight into E's sparsity pattern (which holds every
+/// vertex pair of a triangle for the membrane, umbrella and thin-plate terms
+/// on meshes with an interior edge), without the triplet list of
+/// scatterMoments. λ = lambdaAbsolute if given, else lambdaFactor · λ_d.
+struct PenalizedSystem {
+  SparseMatrix a;
+  Vector b;
+  double lambda = 0.0;
+  double lambdaDefault = 0.0;
+};
+PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
+                                  const SparseMatrix& energy, double lambdaFactor,
+                                  std::optional<double> lambdaAbsolute);
+
 /// Membrane energy matrix (section 8.6): symmetric PSD, annihilates constants.
 SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles);
 

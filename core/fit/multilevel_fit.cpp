@@ -225,6 +225,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   const bool useError = crit.errorAbsolute.has_value() || crit.errorPercent.has_value();
 
   std::vector<std::uint64_t> paths(n, 0);
+  std::vector<std::uint64_t> previousPaths;
   std::vector<std::uint32_t> triOf(n, 0);
   Vector coefficients;
   std::vector<LevelStats> stats;
@@ -265,39 +266,57 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     std::vector<Point2> positions(nv);
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
+    // Triangles of Δ_{k−1} that were not split keep their path: their points
+    // stay put. The others' points continue their descent from there.
+    std::vector<std::uint32_t> remap(previousPaths.size());
+    for (std::size_t t = 0; t < previousPaths.size(); ++t) remap[t] = triIndex.find(previousPaths[t]);
+
     // Locate the points and accumulate per-triangle moments, one copy per worker.
     std::vector<std::vector<TriangleMoments>> moments(static_cast<std::size_t>(threads));
     parallelFor(n, threads, [&](std::size_t b, std::size_t e, int worker) {
       auto& mine = moments[static_cast<std::size_t>(worker)];
       mine.assign(tris.size(), TriangleMoments{});
       for (std::size_t i = b; i < e; ++i) {
-        const BinaryLocation loc = level == 1 ? mesh.locate(pts[i].xy()) : mesh.locateFrom(pts[i].xy(), paths[i]);
-        paths[i] = loc.triangle.path;
-        const std::uint32_t t = triIndex.find(paths[i]);
+        const std::uint32_t kept = level == 1 ? KeyIndexMap::kNone : remap[triOf[i]];
+        std::uint32_t t = kept;
+        std::array<double, 3> bc;
+        if (kept != KeyIndexMap::kNone) {
+          const Triangle& tv = triVerts[t];
+          bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
+        } else {
+          const BinaryLocation loc = level == 1 ? mesh.locate(pts[i].xy()) : mesh.locateFrom(pts[i].xy(), paths[i]);
+          paths[i] = loc.triangle.path;
+          t = triIndex.find(paths[i]);
+          bc = loc.barycentric;
+        }
         triOf[i] = t;
-        mine[t].add(loc.barycentric, pts[i].z, weights.empty() ? 1.0 : weights[i]);
+        mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
       }
     });
+    previousPaths.resize(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) previousPaths[t] = tris[t].path;
     for (std::size_t w = 1; w < moments.size(); ++w) {
       if (moments[w].empty()) continue;
       for (std::size_t t = 0; t < tris.size(); ++t) moments[0][t].merge(moments[w][t]);
     }
-    NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
-    moments.clear();
-    moments.shrink_to_fit();
-
-    SparseMatrix a = eq.btb;
-    SparseMatrix energy;
+    for (std::size_t w = 1; w < moments.size(); ++w) moments[w] = {};
+    SparseMatrix a;
+    Vector rhs;
     if (options.smoothing != Smoothing::None) {
-      energy = smoothingMatrix(options.smoothing, positions, triVerts);
-      st.lambda = options.lambdaAbsolute ? *options.lambdaAbsolute
-                                         : options.lambdaFactor * defaultLambda(eq.btb, energy);
-      a = eq.btb + st.lambda * energy;
-      a.makeCompressed();
+      const SparseMatrix energy = smoothingMatrix(options.smoothing, positions, triVerts);
+      PenalizedSystem sys = assemblePenalized(triVerts, moments[0], energy, options.lambdaFactor, options.lambdaAbsolute);
+      st.lambda = sys.lambda;
+      a = std::move(sys.a);
+      rhs = std::move(sys.b);
+    } else {
+      NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
+      a = std::move(eq.btb);
+      rhs = std::move(eq.btz);
     }
-    applyFixedVertices(a, eq.btz, fixed);
+    moments = {};
+    applyFixedVertices(a, rhs, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
-    const SolveReport report = solveSystem(a, eq.btz, coefficients, st.solver, options.control);
+    const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);
     st.iterations = report.iterations;
     st.relativeResidual = report.relativeResidual;
 

@@ -4,9 +4,10 @@
 // (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast Robust
 // Geometric Predicates", 1997); otherwise it falls back to exact expansion
 // arithmetic (predicates.cpp). The result is the sign of the exact real
-// determinant for every finite double input (no overflow/underflow handling
-// beyond IEEE: inputs whose squared differences overflow, |coordinate| >
-// ~1e150, are outside the contract). Only x, y are looked at.
+// determinant for every finite double input whose intermediate products
+// neither overflow nor underflow: coordinate differences (when non-zero)
+// between ~1e-70 and ~1e70 in magnitude for incircle (degree 4), ~1e-140 and
+// ~1e150 for orient2d — far beyond any terrain. Only x, y are looked at.
 #pragma once
 
 #include <cmath>

@@ -118,13 +118,15 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
   }
   std::sort(hf.begin(), hf.end());
   hf.erase(std::unique(hf.begin(), hf.end()), hf.end());
-  m.featureBegin_.assign(nh + 1, 0);
-  m.featureIds_.reserve(hf.size());
-  for (const auto& [h, f] : hf) {
-    ++m.featureBegin_[h + 1];
-    m.featureIds_.push_back(f);
+  if (!hf.empty()) {
+    m.featureBegin_.assign(nh + 1, 0);
+    m.featureIds_.reserve(hf.size());
+    for (const auto& [h, f] : hf) {
+      ++m.featureBegin_[h + 1];
+      m.featureIds_.push_back(f);
+    }
+    for (std::uint32_t h = 0; h < nh; ++h) m.featureBegin_[h + 1] += m.featureBegin_[h];
   }
-  for (std::uint32_t h = 0; h < nh; ++h) m.featureBegin_[h + 1] += m.featureBegin_[h];
   return m;
 }
 

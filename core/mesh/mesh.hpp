@@ -113,10 +113,11 @@ class Mesh {
 
   // --- constraints -------------------------------------------------------
   [[nodiscard]] bool isConstrained(HalfedgeId h) const {
-    return featureBegin_[h.value] != featureBegin_[h.value + 1];
+    return !featureBegin_.empty() && featureBegin_[h.value] != featureBegin_[h.value + 1];
   }
   /// Feature ids (into features()) of the edge of h, ascending; empty if unconstrained.
   [[nodiscard]] std::span<const std::uint32_t> edgeFeatures(HalfedgeId h) const {
+    if (featureBegin_.empty()) return {};
     return {featureIds_.data() + featureBegin_[h.value],
             featureIds_.data() + featureBegin_[h.value + 1]};
   }
@@ -140,7 +141,7 @@ class Mesh {
   std::vector<std::uint32_t> corners_;       // 3 per triangle
   std::vector<HalfedgeId> twins_;            // per half-edge
   std::vector<HalfedgeId> outgoing_;         // per vertex
-  std::vector<std::uint32_t> featureBegin_;  // per half-edge + 1 (CSR)
+  std::vector<std::uint32_t> featureBegin_;  // per half-edge + 1 (CSR); empty: no constraints
   std::vector<std::uint32_t> featureIds_;
   std::vector<TinFeature> features_;
   std::string crs_;

@@ -2,7 +2,6 @@
 #include "core/mesh/validate.hpp"
 
 #include <cmath>
-#include <numbers>
 #include <sstream>
 
 #include "core/geometry/predicates.hpp"
@@ -113,6 +112,9 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     double area = 0;
     HalfedgeId h(i);
     bool broken = false;
+    bool haveMin = false;
+    Point2 minV;
+    int turn = 0;
     for (std::size_t steps = 0; !seen[h.value]; ++steps) {
       seen[h.value] = 1;
       const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
@@ -125,13 +127,22 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
         broken = true;
         break;
       }
+      // The loop's turn at its lexicographically smallest vertex gives its
+      // orientation exactly (the float area can be wrong for slivers).
+      const Point2 v = b;
+      if (!haveMin || v.x < minV.x || (v.x == minV.x && v.y < minV.y)) {
+        haveMin = true;
+        minV = v;
+        turn = geometry::orient2d(a, b, m.xy(m.target(g)));
+      }
       h = g;
     }
     if (broken) {
       problems.add("boundary loop through half-edge " + std::to_string(i) + " does not close");
       continue;
     }
-    loopSum += area > 0 ? 1 : -1;
+    if (turn == 0) turn = area > 0 ? 1 : -1;
+    loopSum += turn;
   }
   r.boundaryLoops = loops;
 
@@ -147,19 +158,22 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     if (boundaryOut[v] > 1) pinch += boundaryOut[v] - 1;
     // An interior vertex's fan must wind exactly once around it.
     if (boundaryOut[v] == 0) {
-      double angle = 0;
-      std::size_t fan = 0;
+      // Winding number, exactly: each CCW step turns by less than π, so count
+      // the steps from the lower half-plane [π, 2π) into the upper [0, π).
+      std::size_t fan = 0, winding = 0;
       const Point2 c = m.xy(VertexId(v));
-      m.forEachOutgoing(VertexId(v), [&](HalfedgeId h) {
+      auto upper = [&c](const Point2& w) { return w.y > c.y || (w.y == c.y && w.x > c.x); };
+      const HalfedgeId start = m.outgoing(VertexId(v));
+      HalfedgeId h = start;
+      do {
         ++fan;
-        const Point2 a = m.xy(m.target(h)), b = m.xy(m.origin(Mesh::prev(h)));
-        angle += std::atan2((a.x - c.x) * (b.y - c.y) - (a.y - c.y) * (b.x - c.x),
-                            (a.x - c.x) * (b.x - c.x) + (a.y - c.y) * (b.y - c.y));
-      });
+        if (!upper(m.xy(m.target(h))) && upper(m.xy(m.origin(Mesh::prev(h))))) ++winding;
+        h = m.twin(Mesh::prev(h));
+      } while (h.valid() && h != start && fan <= cornersAt[v]);
       if (fan != cornersAt[v]) {
         problems.add("vertex " + std::to_string(v) + " has " + std::to_string(cornersAt[v]) +
                      " triangles but its star has " + std::to_string(fan) + " (non-manifold)");
-      } else if (std::fabs(angle - 2 * std::numbers::pi) > 1e-6) {
+      } else if (winding != 1) {
         problems.add("the star of interior vertex " + std::to_string(v) +
                      " does not wind once around it (folded triangles)");
       }

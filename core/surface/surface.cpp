@@ -258,15 +258,14 @@ std::vector<ProfilePoint> Surface::profile(std::span<const Point2> polyline) con
     }
     for (double& t : params) t = std::clamp(t, 0.0, 1.0);
     std::sort(params.begin(), params.end());
-    double last = -1;
+    std::vector<double> ts;
     for (double t : params) {
-      if (last >= 0 && (t - last) * std::max(len, 1.0) <= 1e-12 * std::max(len, 1.0)) continue;
-      // Skip the start of a segment that repeats the previous segment's end.
-      if (t == 0.0 && s > 0) {
-        last = t;
+      if (!ts.empty() && (t - ts.back()) * std::max(len, 1.0) <= 1e-12 * std::max(len, 1.0)) {
         continue;
       }
-      last = t;
+      ts.push_back(t);
+    }
+    auto emit = [&](double t) {
       ProfilePoint pp;
       pp.distance = base + t * len;
       pp.point = {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y),
@@ -281,6 +280,17 @@ std::vector<ProfilePoint> Surface::profile(std::span<const Point2> polyline) con
         pp.inside = true;
       }
       out.push_back(pp);
+    };
+    for (std::size_t k = 0; k < ts.size(); ++k) {
+      // The start of a segment repeats the previous segment's end.
+      if (!(k == 0 && s > 0)) emit(ts[k]);
+      if (k + 1 < ts.size()) {
+        // Between two crossings the surface is linear — unless there is a gap
+        // (hole, outside); a midpoint sample marks it.
+        const double mid = 0.5 * (ts[k] + ts[k + 1]);
+        const Point2 m{a.x + mid * (b.x - a.x), a.y + mid * (b.y - a.y)};
+        if (!locate(m, hint)) emit(mid);
+      }
     }
     base += len;
     if (polyline.size() == 1) break;

@@ -69,7 +69,9 @@ class Surface {
   [[nodiscard]] std::vector<double> zGrid(const SampleGrid& grid) const;
 
   /// Profile along a polyline: its vertices plus every crossing of a mesh
-  /// edge, ordered by distance; duplicates within 1e-12 of the length removed.
+  /// edge, ordered by distance (duplicates within 1e-12 of the length
+  /// removed); where the line leaves the TIN (outside, holes) a sample at the
+  /// middle of the gap with inside == false and z NaN. Linear in between.
   [[nodiscard]] std::vector<ProfilePoint> profile(std::span<const Point2> polyline) const;
 
  private:

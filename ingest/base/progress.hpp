@@ -29,8 +29,8 @@ struct Progress {
 };
 
 /// Calls `progress` (which may be null) — the form library code uses.
-inline void reportProgress(const Progress* progress, std::string_view stage, std::string_view detail,
-                           std::uint64_t done, std::uint64_t total) {
+inline void reportProgress(const Progress* progress, std::string_view stage,
+                           std::string_view detail, std::uint64_t done, std::uint64_t total) {
   if (progress) progress->report(stage, detail, done, total);
 }
 
@@ -39,7 +39,10 @@ class ProgressTicker {
  public:
   ProgressTicker(const Progress* progress, std::string_view stage, std::string_view detail,
                  std::uint64_t total)
-      : progress_(progress), stage_(stage), detail_(detail), total_(total),
+      : progress_(progress),
+        stage_(stage),
+        detail_(detail),
+        total_(total),
         every_(total / 100 ? total / 100 : 1) {
     reportProgress(progress_, stage_, detail_, 0, total_);
   }

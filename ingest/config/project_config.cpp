@@ -1,12 +1,12 @@
 #include "ingest/config/project_config.hpp"
 
 #include <ogr_spatialref.h>
+#include <toml++/toml.h>
 
 #include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
@@ -15,21 +15,29 @@ namespace tinsmith::ingest {
 
 std::string_view toString(LayerKind kind) {
   switch (kind) {
-    case LayerKind::Contours: return "contours";
-    case LayerKind::Points: return "points";
-    case LayerKind::Road: return "road";
-    case LayerKind::River: return "river";
-    case LayerKind::Boundary: return "boundary";
-    case LayerKind::Hole: return "hole";
-    case LayerKind::Lake: return "lake";
-    case LayerKind::Dem: return "dem";
+    case LayerKind::Contours:
+      return "contours";
+    case LayerKind::Points:
+      return "points";
+    case LayerKind::Road:
+      return "road";
+    case LayerKind::River:
+      return "river";
+    case LayerKind::Boundary:
+      return "boundary";
+    case LayerKind::Hole:
+      return "hole";
+    case LayerKind::Lake:
+      return "lake";
+    case LayerKind::Dem:
+      return "dem";
   }
   return "?";
 }
 
 std::optional<LayerKind> parseLayerKind(std::string_view name) {
-  for (auto k : {LayerKind::Contours, LayerKind::Points, LayerKind::Road, LayerKind::River, LayerKind::Boundary,
-                 LayerKind::Hole, LayerKind::Lake, LayerKind::Dem}) {
+  for (auto k : {LayerKind::Contours, LayerKind::Points, LayerKind::Road, LayerKind::River,
+                 LayerKind::Boundary, LayerKind::Hole, LayerKind::Lake, LayerKind::Dem}) {
     if (toString(k) == name) return k;
   }
   return std::nullopt;
@@ -37,28 +45,40 @@ std::optional<LayerKind> parseLayerKind(std::string_view name) {
 
 FeatureKind featureKind(LayerKind kind) {
   switch (kind) {
-    case LayerKind::Contours: return FeatureKind::Contour;
-    case LayerKind::Points: return FeatureKind::SpotHeight;
-    case LayerKind::Road: return FeatureKind::Road;
-    case LayerKind::River: return FeatureKind::River;
-    case LayerKind::Boundary: return FeatureKind::Boundary;
-    case LayerKind::Hole: return FeatureKind::Hole;
-    case LayerKind::Lake: return FeatureKind::Lake;
-    case LayerKind::Dem: return FeatureKind::Raster;
+    case LayerKind::Contours:
+      return FeatureKind::Contour;
+    case LayerKind::Points:
+      return FeatureKind::SpotHeight;
+    case LayerKind::Road:
+      return FeatureKind::Road;
+    case LayerKind::River:
+      return FeatureKind::River;
+    case LayerKind::Boundary:
+      return FeatureKind::Boundary;
+    case LayerKind::Hole:
+      return FeatureKind::Hole;
+    case LayerKind::Lake:
+      return FeatureKind::Lake;
+    case LayerKind::Dem:
+      return FeatureKind::Raster;
   }
   return FeatureKind::Other;
 }
 
 GeometryClass geometryClass(LayerKind kind) {
   switch (kind) {
-    case LayerKind::Points: return GeometryClass::Points;
+    case LayerKind::Points:
+      return GeometryClass::Points;
     case LayerKind::Contours:
     case LayerKind::Road:
-    case LayerKind::River: return GeometryClass::Lines;
+    case LayerKind::River:
+      return GeometryClass::Lines;
     case LayerKind::Boundary:
     case LayerKind::Hole:
-    case LayerKind::Lake: return GeometryClass::Areas;
-    case LayerKind::Dem: return GeometryClass::Raster;
+    case LayerKind::Lake:
+      return GeometryClass::Areas;
+    case LayerKind::Dem:
+      return GeometryClass::Raster;
   }
   return GeometryClass::Points;
 }
@@ -71,9 +91,11 @@ void checkProjectCrs(const std::string& crs, const std::string& where) {
                      "write it as \"EPSG:code\" (e.g. \"EPSG:32612\" for UTM 12N) or as WKT");
   }
   if (srs.IsGeographic() || !srs.IsProjected()) {
-    throw inputError(where + ": '" + crs + "' (" + (srs.GetName() ? srs.GetName() : "?") +
-                         ") is not a projected CRS; tinsmith builds TINs in projected metres",
-                     {}, "choose a projected CRS in metres, such as the UTM zone of the data (e.g. \"EPSG:32619\")");
+    throw inputError(
+        where + ": '" + crs + "' (" + (srs.GetName() ? srs.GetName() : "?") +
+            ") is not a projected CRS; tinsmith builds TINs in projected metres",
+        {},
+        "choose a projected CRS in metres, such as the UTM zone of the data (e.g. \"EPSG:32619\")");
   }
   const char* unitName = nullptr;
   const double unit = srs.GetLinearUnits(&unitName);
@@ -89,7 +111,8 @@ namespace {
 struct Context {
   std::string file;  // config file name for messages
 
-  [[noreturn]] void fail(const std::string& problem, std::int64_t line, const std::string& hint = {}) const {
+  [[noreturn]] void fail(const std::string& problem, std::int64_t line,
+                         const std::string& hint = {}) const {
     SourceLocation where;
     where.file = file;
     if (line > 0) where.line = line;
@@ -97,17 +120,26 @@ struct Context {
   }
 };
 
-std::int64_t lineOf(const toml::node& node) { return static_cast<std::int64_t>(node.source().begin.line); }
+std::int64_t lineOf(const toml::node& node) {
+  return static_cast<std::int64_t>(node.source().begin.line);
+}
 
 const char* typeName(const toml::node& node) {
   switch (node.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    default: return "a date/time";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    default:
+      return "a date/time";
   }
 }
 
@@ -123,8 +155,8 @@ void checkKeys(const Context& ctx, const toml::table& table, const std::string& 
   }
 }
 
-std::optional<std::string> getString(const Context& ctx, const toml::table& t, const std::string& key,
-                                     const std::string& tableName) {
+std::optional<std::string> getString(const Context& ctx, const toml::table& t,
+                                     const std::string& key, const std::string& tableName) {
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* s = node->as_string()) return s->get();
@@ -136,15 +168,16 @@ std::optional<double> getNumber(const Context& ctx, const toml::table& t, const 
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* f = node->as_floating_point()) {
-    if (!std::isfinite(f->get())) ctx.fail(tableName + "." + key + " must be finite", lineOf(*node));
+    if (!std::isfinite(f->get()))
+      ctx.fail(tableName + "." + key + " must be finite", lineOf(*node));
     return f->get();
   }
   if (const auto* i = node->as_integer()) return static_cast<double>(i->get());
   ctx.fail(tableName + "." + key + " must be a number, not " + typeName(*node), lineOf(*node));
 }
 
-std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t, const std::string& key,
-                                       const std::string& tableName) {
+std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t,
+                                       const std::string& key, const std::string& tableName) {
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* i = node->as_integer()) return i->get();
@@ -168,20 +201,22 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
                        const std::filesystem::path& baseDir) {
   const std::string tn = "[[layer]] #" + std::to_string(index + 1);
   checkKeys(ctx, t, tn,
-            {"path", "layer", "kind", "z", "z_value", "crs", "weight", "name", "x", "y", "delimiter", "header",
-             "band", "nodata"});
+            {"path", "layer", "kind", "z", "z_value", "crs", "weight", "name", "x", "y",
+             "delimiter", "header", "band", "nodata"});
   LayerConfig layer;
   layer.configLine = lineOf(t);
 
   const auto path = getString(ctx, t, "path", tn);
-  if (!path || path->empty()) ctx.fail(tn + " has no 'path'", layer.configLine, "give the data file's path");
+  if (!path || path->empty())
+    ctx.fail(tn + " has no 'path'", layer.configLine, "give the data file's path");
   layer.path = std::filesystem::path(*path);
   if (layer.path.is_relative()) layer.path = baseDir / layer.path;
   layer.path = layer.path.lexically_normal();
 
   const auto kind = getString(ctx, t, "kind", tn);
-  if (!kind) ctx.fail(tn + " has no 'kind'", layer.configLine,
-                      "kind = contours | points | road | river | boundary | hole | lake | dem");
+  if (!kind)
+    ctx.fail(tn + " has no 'kind'", layer.configLine,
+             "kind = contours | points | road | river | boundary | hole | lake | dem");
   const auto parsed = parseLayerKind(*kind);
   if (!parsed) {
     ctx.fail(tn + ".kind: unknown kind '" + *kind + "'", keyLine(t, "kind"),
@@ -193,7 +228,8 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
   layer.zAttribute = getString(ctx, t, "z", tn).value_or("");
   layer.zValue = getNumber(ctx, t, "z_value", tn);
   if (layer.zValue && !layer.zAttribute.empty()) {
-    ctx.fail(tn + ": give either 'z' (an attribute) or 'z_value' (a fixed z), not both", keyLine(t, "z_value"));
+    ctx.fail(tn + ": give either 'z' (an attribute) or 'z_value' (a fixed z), not both",
+             keyLine(t, "z_value"));
   }
   layer.crs = getString(ctx, t, "crs", tn).value_or("");
   if (!layer.crs.empty()) {
@@ -210,15 +246,22 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
   layer.xColumn = getString(ctx, t, "x", tn).value_or("");
   layer.yColumn = getString(ctx, t, "y", tn).value_or("");
   if (const auto d = getString(ctx, t, "delimiter", tn)) {
-    if (*d == "auto") layer.delimiter = TextDelimiter::Auto;
-    else if (*d == "comma" || *d == ",") layer.delimiter = TextDelimiter::Comma;
-    else if (*d == "semicolon" || *d == ";") layer.delimiter = TextDelimiter::Semicolon;
-    else if (*d == "tab" || *d == "\t") layer.delimiter = TextDelimiter::Tab;
-    else if (*d == "whitespace" || *d == " ") layer.delimiter = TextDelimiter::Whitespace;
-    else ctx.fail(tn + ".delimiter: unknown delimiter '" + *d + "'", keyLine(t, "delimiter"),
-                  "delimiter = auto | comma | semicolon | tab | whitespace");
+    if (*d == "auto")
+      layer.delimiter = TextDelimiter::Auto;
+    else if (*d == "comma" || *d == ",")
+      layer.delimiter = TextDelimiter::Comma;
+    else if (*d == "semicolon" || *d == ";")
+      layer.delimiter = TextDelimiter::Semicolon;
+    else if (*d == "tab" || *d == "\t")
+      layer.delimiter = TextDelimiter::Tab;
+    else if (*d == "whitespace" || *d == " ")
+      layer.delimiter = TextDelimiter::Whitespace;
+    else
+      ctx.fail(tn + ".delimiter: unknown delimiter '" + *d + "'", keyLine(t, "delimiter"),
+               "delimiter = auto | comma | semicolon | tab | whitespace");
   }
-  if (const auto h = getBool(ctx, t, "header", tn)) layer.header = *h ? TextHeader::Present : TextHeader::Absent;
+  if (const auto h = getBool(ctx, t, "header", tn))
+    layer.header = *h ? TextHeader::Present : TextHeader::Absent;
   if (const auto b = getInteger(ctx, t, "band", tn)) {
     if (*b < 1 || *b > 65535) ctx.fail(tn + ".band must be 1 or more", keyLine(t, "band"));
     layer.band = static_cast<int>(*b);
@@ -227,7 +270,8 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
 
   const bool rasterKey = t.contains("band") || t.contains("nodata");
   if (rasterKey && layer.kind != LayerKind::Dem) {
-    ctx.fail(tn + ": 'band' and 'nodata' apply to kind = \"dem\" only", keyLine(t, t.contains("band") ? "band" : "nodata"));
+    ctx.fail(tn + ": 'band' and 'nodata' apply to kind = \"dem\" only",
+             keyLine(t, t.contains("band") ? "band" : "nodata"));
   }
 
   std::error_code ec;
@@ -253,7 +297,8 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
   try {
     root = toml::parse(text, file.string());
   } catch (const toml::parse_error& e) {
-    ctx.fail("not valid TOML: " + std::string(e.description()), static_cast<std::int64_t>(e.source().begin.line));
+    ctx.fail("not valid TOML: " + std::string(e.description()),
+             static_cast<std::int64_t>(e.source().begin.line));
   }
 
   ProjectConfig config;
@@ -267,7 +312,9 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
   checkKeys(ctx, *project, "[project]", {"name", "crs"});
   config.name = getString(ctx, *project, "name", "project").value_or(file.stem().string());
   const auto crs = getString(ctx, *project, "crs", "project");
-  if (!crs) ctx.fail("[project] has no 'crs'", lineOf(*project), "add crs = \"EPSG:...\" (projected, metres)");
+  if (!crs)
+    ctx.fail("[project] has no 'crs'", lineOf(*project),
+             "add crs = \"EPSG:...\" (projected, metres)");
   config.crs = *crs;
   try {
     checkProjectCrs(config.crs, "project.crs");
@@ -288,21 +335,25 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
   std::set<std::string> names;
   for (const auto& layer : config.layers) {
     if (!names.insert(layer.name).second) {
-      ctx.fail("two layers are named '" + layer.name + "'", layer.configLine, "give one of them a 'name'");
+      ctx.fail("two layers are named '" + layer.name + "'", layer.configLine,
+               "give one of them a 'name'");
     }
   }
 
   if (const auto* tinNode = root.get("tin")) {
     const auto* tin = tinNode->as_table();
     if (!tin) ctx.fail("'tin' must be a table", lineOf(*tinNode));
-    checkKeys(ctx, *tin, "[tin]", {"snap_tolerance", "flat_triangle_repair", "river_descent", "strict"});
-    config.tin.snapTolerance = getNumber(ctx, *tin, "snap_tolerance", "tin").value_or(config.tin.snapTolerance);
+    checkKeys(ctx, *tin, "[tin]",
+              {"snap_tolerance", "flat_triangle_repair", "river_descent", "strict"});
+    config.tin.snapTolerance =
+        getNumber(ctx, *tin, "snap_tolerance", "tin").value_or(config.tin.snapTolerance);
     if (config.tin.snapTolerance < 0.0) {
       ctx.fail("tin.snap_tolerance must be 0 or more (metres)", keyLine(*tin, "snap_tolerance"));
     }
     config.tin.flatTriangleRepair =
         getBool(ctx, *tin, "flat_triangle_repair", "tin").value_or(config.tin.flatTriangleRepair);
-    config.tin.riverDescent = getBool(ctx, *tin, "river_descent", "tin").value_or(config.tin.riverDescent);
+    config.tin.riverDescent =
+        getBool(ctx, *tin, "river_descent", "tin").value_or(config.tin.riverDescent);
     config.tin.strict = getBool(ctx, *tin, "strict", "tin").value_or(config.tin.strict);
   }
 

@@ -38,29 +38,29 @@ enum class GeometryClass { Points, Lines, Areas, Raster };
 GeometryClass geometryClass(LayerKind kind);
 
 struct LayerConfig {
-  std::string name;             ///< `name`, else the file name (plus ":layer")
-  std::filesystem::path path;   ///< absolute: resolved against the config's folder
-  std::string layer;            ///< layer inside a multi-layer dataset; empty: the first
+  std::string name;            ///< `name`, else the file name (plus ":layer")
+  std::filesystem::path path;  ///< absolute: resolved against the config's folder
+  std::string layer;           ///< layer inside a multi-layer dataset; empty: the first
   LayerKind kind = LayerKind::Points;
-  std::string zAttribute;       ///< `z`: attribute (or CSV column) holding z; empty: 3D geometry
-  std::optional<double> zValue; ///< `z_value`: every vertex gets this z (e.g. a coastline at 0)
-  std::string crs;              ///< `crs` override of the file's own CRS; empty: the file's
-  double weight = 1.0;          ///< `weight` (> 0), used by the fitter
+  std::string zAttribute;        ///< `z`: attribute (or CSV column) holding z; empty: 3D geometry
+  std::optional<double> zValue;  ///< `z_value`: every vertex gets this z (e.g. a coastline at 0)
+  std::string crs;               ///< `crs` override of the file's own CRS; empty: the file's
+  double weight = 1.0;           ///< `weight` (> 0), used by the fitter
   // Text point files (.csv, .txt, .xyz, .tsv).
-  std::string xColumn, yColumn; ///< `x`, `y` column names; empty: detect
+  std::string xColumn, yColumn;                   ///< `x`, `y` column names; empty: detect
   TextDelimiter delimiter = TextDelimiter::Auto;  ///< `delimiter`
   TextHeader header = TextHeader::Auto;           ///< `header` = true | false
   // Rasters (kind = "dem").
-  int band = 1;                    ///< `band`, 1-based
-  std::optional<double> nodata;    ///< `nodata` override of the raster's own
-  std::int64_t configLine = 0;     ///< line of the [[layer]] in the config file
+  int band = 1;                  ///< `band`, 1-based
+  std::optional<double> nodata;  ///< `nodata` override of the raster's own
+  std::int64_t configLine = 0;   ///< line of the [[layer]] in the config file
 };
 
 struct TinOptions {
-  double snapTolerance = 0.001;   ///< metres: points and vertices closer than this are merged
+  double snapTolerance = 0.001;  ///< metres: points and vertices closer than this are merged
   bool flatTriangleRepair = true;
   bool riverDescent = true;
-  bool strict = false;            ///< data errors (crossing contours) are fatal
+  bool strict = false;  ///< data errors (crossing contours) are fatal
 };
 
 struct ProjectConfig {

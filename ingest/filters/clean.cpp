@@ -5,12 +5,16 @@
 #include <cstdio>
 #include <limits>
 #include <numeric>
+#include <tuple>
 
 #include "core/base/error.hpp"
-#include "ingest/filters/grid_hash.hpp"
+#include "core/geometry/predicates.hpp"
+#include "ingest/filters/cell_grid.hpp"
 
 namespace tinsmith::ingest {
 namespace {
+
+constexpr std::uint32_t kNoItem = 0xffffffffu;
 
 struct Extent {
   double minX = std::numeric_limits<double>::infinity();
@@ -33,16 +37,10 @@ double dist2(const Point3& a, const Point3& b) {
   return dx * dx + dy * dy;
 }
 
-// Hash cell for merging within `tolerance`: at least the tolerance (so the
-// 3 x 3 block holds every neighbour), and coarse enough that cell indices fit
-// in 32 bits.
-double mergeCell(double tolerance, const Extent& extent) {
-  return std::max({tolerance, extent.size() / 1.0e9, 1.0e-6});
-}
-
 // Features (layer, index) of line and area layers, highest constraintPriority
 // first, then config order.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> featureOrder(const std::vector<IngestedLayer>& layers) {
+std::vector<std::pair<std::uint32_t, std::uint32_t>> featureOrder(
+    const std::vector<IngestedLayer>& layers) {
   std::vector<std::uint32_t> layerOrder(layers.size());
   std::iota(layerOrder.begin(), layerOrder.end(), 0u);
   std::stable_sort(layerOrder.begin(), layerOrder.end(), [&](std::uint32_t a, std::uint32_t b) {
@@ -55,50 +53,56 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> featureOrder(const std::vec
   return order;
 }
 
-// Rule 1.
-void snapVertices(std::vector<IngestedLayer>& layers, double tolerance, const Extent& extent, std::size_t vertexCount,
-                  CleaningReport& report) {
-  if (tolerance <= 0.0) return;  // exact duplicates are already identical
+// Rule 1. Vertices are visited in priority order; a vertex snaps onto the
+// nearest earlier, unsnapped vertex of another feature within the tolerance.
+void snapVertices(std::vector<IngestedLayer>& layers, double tolerance, const Extent& extent,
+                  std::size_t vertexCount, CleaningReport& report) {
+  if (tolerance <= 0.0 || vertexCount == 0) return;  // exact duplicates are already identical
   const auto order = featureOrder(layers);
-  GridHash hash(extent.minX, extent.minY, mergeCell(tolerance, extent), vertexCount);
-  std::vector<Point2> kept;
+  std::vector<Point3*> vertex;
   std::vector<std::uint32_t> owner;
-  kept.reserve(vertexCount);
+  vertex.reserve(vertexCount);
   owner.reserve(vertexCount);
-  const double tol2 = tolerance * tolerance;
-  std::uint32_t ordinal = 0;
-  for (const auto& [l, fi] : order) {
-    for (auto& v : layers[l].features[fi].vertices) {
-      double best = std::numeric_limits<double>::infinity();
-      std::uint32_t bestIndex = GridHash::kNone;
-      hash.forEachNear(v.x, v.y, [&](std::uint32_t i) {
-        if (owner[i] == ordinal) return;
-        const double dx = kept[i].x - v.x;
-        const double dy = kept[i].y - v.y;
-        const double d = dx * dx + dy * dy;
-        if (d <= tol2 && (d < best || (d == best && i < bestIndex))) {
-          best = d;
-          bestIndex = i;
-        }
-      });
-      if (bestIndex != GridHash::kNone) {
-        if (kept[bestIndex].x != v.x || kept[bestIndex].y != v.y) {
-          v.x = kept[bestIndex].x;
-          v.y = kept[bestIndex].y;
-          ++report.verticesSnapped;
-        }
-        continue;  // the position is in the hash already
-      }
-      hash.insert(v.x, v.y);
-      kept.push_back({v.x, v.y});
-      owner.push_back(ordinal);
+  for (std::uint32_t k = 0; k < order.size(); ++k) {
+    for (auto& v : layers[order[k].first].features[order[k].second].vertices) {
+      vertex.push_back(&v);
+      owner.push_back(k);
     }
-    ++ordinal;
+  }
+  CellGrid grid(extent.minX, extent.minY, extent.maxX, extent.maxY,
+                CellGrid::cellFor(extent.maxX - extent.minX, extent.maxY - extent.minY,
+                                  vertex.size(), tolerance));
+  grid.build(vertex.size(), [&](std::size_t i, auto&& emit) {
+    emit(grid.index(grid.cellX(vertex[i]->x), grid.cellY(vertex[i]->y)));
+  });
+  std::vector<char> snapped(vertex.size(), 0);
+  const double tol2 = tolerance * tolerance;
+  for (std::uint32_t p = 0; p < vertex.size(); ++p) {
+    Point3& v = *vertex[p];
+    double best = std::numeric_limits<double>::infinity();
+    std::uint32_t bestIndex = kNoItem;
+    grid.forEachNear(v.x, v.y, tolerance, [&](std::uint32_t u) {
+      if (u >= p || snapped[u] || owner[u] == owner[p]) return;
+      const double d = dist2(*vertex[u], v);
+      if (d <= tol2 && (d < best || (d == best && u < bestIndex))) {
+        best = d;
+        bestIndex = u;
+      }
+    });
+    if (bestIndex == kNoItem) continue;
+    snapped[p] = 1;
+    const Point3& target = *vertex[bestIndex];
+    if (target.x != v.x || target.y != v.y) {
+      v.x = target.x;
+      v.y = target.y;
+      ++report.verticesSnapped;
+    }
   }
 }
 
 // Rules 2 and 3.
-void dropRepeatedVertices(std::vector<IngestedLayer>& layers, double tolerance, CleaningReport& report) {
+void dropRepeatedVertices(std::vector<IngestedLayer>& layers, double tolerance,
+                          CleaningReport& report) {
   const double tol2 = tolerance * tolerance;
   for (auto& layer : layers) {
     auto& features = layer.features;
@@ -132,57 +136,62 @@ void dropRepeatedVertices(std::vector<IngestedLayer>& layers, double tolerance, 
   }
 }
 
-// Rule 4.
-void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zConflict, const Extent& extent,
-                 std::size_t vertexCount, CleaningReport& report) {
+// Rule 4. Line vertices come first in the grid's order, then the points by
+// layer priority; a point is dropped when an earlier, kept item is within the
+// tolerance.
+void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zConflict,
+                 const Extent& extent, CleaningReport& report) {
   std::size_t pointCount = 0;
-  for (const auto& l : layers) pointCount += l.points.size();
-  if (pointCount == 0) return;
-  GridHash hash(extent.minX, extent.minY, mergeCell(tolerance, extent), vertexCount);
-  std::vector<Point3> kept;
-  std::vector<char> isLineVertex;
-  kept.reserve(vertexCount);
-  isLineVertex.reserve(vertexCount);
-  for (const auto& layer : layers) {
-    for (const auto& f : layer.features) {
-      for (const auto& v : f.vertices) {
-        hash.insert(v.x, v.y);
-        kept.push_back(v);
-        isLineVertex.push_back(1);
-      }
-    }
+  std::size_t lineVertices = 0;
+  for (const auto& l : layers) {
+    pointCount += l.points.size();
+    for (const auto& f : l.features) lineVertices += f.vertices.size();
   }
+  if (pointCount == 0) return;
   std::vector<std::uint32_t> layerOrder(layers.size());
   std::iota(layerOrder.begin(), layerOrder.end(), 0u);
   std::stable_sort(layerOrder.begin(), layerOrder.end(), [&](std::uint32_t a, std::uint32_t b) {
     return constraintPriority(layers[a].kind) > constraintPriority(layers[b].kind);
   });
+  std::vector<Point3> position;
+  position.reserve(lineVertices + pointCount);
+  for (const auto& layer : layers) {
+    for (const auto& f : layer.features)
+      position.insert(position.end(), f.vertices.begin(), f.vertices.end());
+  }
+  for (const auto l : layerOrder)
+    position.insert(position.end(), layers[l].points.begin(), layers[l].points.end());
+
+  CellGrid grid(extent.minX, extent.minY, extent.maxX, extent.maxY,
+                CellGrid::cellFor(extent.maxX - extent.minX, extent.maxY - extent.minY,
+                                  position.size(), tolerance));
+  grid.build(position.size(), [&](std::size_t i, auto&& emit) {
+    emit(grid.index(grid.cellX(position[i].x), grid.cellY(position[i].y)));
+  });
+  std::vector<char> dropped(position.size(), 0);
   const double tol2 = tolerance * tolerance;
+  auto p = static_cast<std::uint32_t>(lineVertices);
   for (const auto l : layerOrder) {
     auto& layer = layers[l];
     std::size_t w = 0;
-    for (std::size_t r = 0; r < layer.points.size(); ++r) {
-      const Point3 p = layer.points[r];
-      std::uint32_t match = GridHash::kNone;
-      bool onLine = false;
-      hash.forEachNear(p.x, p.y, [&](std::uint32_t i) {
-        if (dist2(kept[i], p) > tol2) return;
-        if (isLineVertex[i]) onLine = true;
-        if (match == GridHash::kNone || i < match) match = i;
+    for (std::size_t r = 0; r < layer.points.size(); ++r, ++p) {
+      const Point3& point = position[p];
+      std::uint32_t match = kNoItem;
+      grid.forEachNear(point.x, point.y, tolerance, [&](std::uint32_t u) {
+        if (u >= p || dropped[u] || dist2(position[u], point) > tol2) return;
+        match = std::min(match, u);
       });
-      if (onLine) {
-        ++report.pointsOnBreakLineVertices;
+      if (match != kNoItem) {
+        dropped[p] = 1;
+        if (match < lineVertices) {
+          ++report.pointsOnBreakLineVertices;
+        } else {
+          ++report.duplicatePointsMerged;
+          if (std::abs(position[match].z - point.z) > zConflict) ++report.duplicatePointZConflicts;
+        }
         continue;
       }
-      if (match != GridHash::kNone) {
-        ++report.duplicatePointsMerged;
-        if (std::abs(kept[match].z - p.z) > zConflict) ++report.duplicatePointZConflicts;
-        continue;
-      }
-      hash.insert(p.x, p.y);
-      kept.push_back(p);
-      isLineVertex.push_back(0);
-      layer.points[w] = p;
+      layer.points[w] = point;
       layer.pointIds[w] = layer.pointIds[r];
       ++w;
     }
@@ -193,44 +202,38 @@ void mergePoints(std::vector<IngestedLayer>& layers, double tolerance, double zC
 
 // ---- Rule 5: contour crossings -------------------------------------------
 
-double orient(const Point3& a, const Point3& b, const Point3& c) {
-  // Relative to a, which keeps UTM-sized coordinates from cancelling.
-  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-}
-
-bool onSegment(const Point3& a, const Point3& b, const Point3& p) {
-  return std::min(a.x, b.x) <= p.x && p.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= p.y &&
-         p.y <= std::max(a.y, b.y);
-}
-
-// Whether segments ab and cd meet (cross or touch); `at` gets a meeting point.
+// Whether segments ab and cd meet (cross or touch), decided with the exact
+// predicates; `at` gets a meeting point (rounded where they cross properly).
 bool segmentsMeet(const Point3& a, const Point3& b, const Point3& c, const Point3& d, Point2& at) {
-  if (std::max(a.x, b.x) < std::min(c.x, d.x) || std::max(c.x, d.x) < std::min(a.x, b.x) ||
-      std::max(a.y, b.y) < std::min(c.y, d.y) || std::max(c.y, d.y) < std::min(a.y, b.y)) {
-    return false;
-  }
-  const double o1 = orient(a, b, c);
-  const double o2 = orient(a, b, d);
-  const double o3 = orient(c, d, a);
-  const double o4 = orient(c, d, b);
-  if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) {
-    const double t = o3 / (o3 - o4);
-    at = {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)};
+  using geometry::SegmentIntersection;
+  const auto kind = geometry::segmentIntersection(a.xy(), b.xy(), c.xy(), d.xy());
+  if (kind == SegmentIntersection::None) return false;
+  if (kind == SegmentIntersection::Proper) {
+    at = geometry::intersectionPoint(a.xy(), b.xy(), c.xy(), d.xy());
     return true;
   }
-  if (o1 == 0 && onSegment(a, b, c)) return at = c.xy(), true;
-  if (o2 == 0 && onSegment(a, b, d)) return at = d.xy(), true;
-  if (o3 == 0 && onSegment(c, d, a)) return at = a.xy(), true;
-  if (o4 == 0 && onSegment(c, d, b)) return at = b.xy(), true;
-  return false;
+  // Touching or overlapping: some endpoint lies on the other segment.
+  for (const auto& [p, q0, q1] :
+       {std::tuple{c, a, b}, std::tuple{d, a, b}, std::tuple{a, c, d}, std::tuple{b, c, d}}) {
+    if (geometry::onSegment(q0.xy(), q1.xy(), p.xy())) {
+      at = p.xy();
+      return true;
+    }
+  }
+  at = c.xy();
+  return true;
 }
 
 struct ContourRef {
   std::uint32_t layer;
   std::uint32_t feature;
+  std::uint32_t vertexCount;
+  bool closed;
 };
 
 struct Segment {
+  const Point3* a;  // start and end vertex
+  const Point3* b;
   std::uint32_t contour;  // index into the ContourRef list
   std::uint32_t index;    // segment i joins vertices i and i+1 (mod n when closed)
 };
@@ -240,8 +243,8 @@ struct Hit {
   Point2 at;
 };
 
-void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& options, const Extent& extent,
-                   const Progress* progress, CleaningReport& report) {
+void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& options,
+                   const Extent& extent, const Progress* progress, CleaningReport& report) {
   std::vector<ContourRef> contours;
   std::vector<Segment> segments;
   double totalLength = 0.0;
@@ -252,93 +255,94 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
       const auto& v = feature.vertices;
       const auto n = static_cast<std::uint32_t>(feature.closed ? v.size() : v.size() - 1);
       for (std::uint32_t i = 0; i < n; ++i) {
-        segments.push_back({static_cast<std::uint32_t>(contours.size()), i});
-        totalLength += std::sqrt(dist2(v[i], v[(i + 1) % v.size()]));
+        const Point3* a = &v[i];
+        const Point3* b = &v[(i + 1) % v.size()];
+        segments.push_back({a, b, static_cast<std::uint32_t>(contours.size()), i});
+        totalLength += std::sqrt(dist2(*a, *b));
       }
-      contours.push_back({l, f});
+      contours.push_back({l, f, static_cast<std::uint32_t>(v.size()), feature.closed});
     }
   }
   if (segments.empty()) return;
-  auto vertex = [&](const Segment& s, std::uint32_t k) -> const Point3& {
-    const auto& ref = contours[s.contour];
-    const auto& v = layers[ref.layer].features[ref.feature].vertices;
-    return v[(s.index + k) % v.size()];
-  };
 
-  // A segment grid: each segment goes into every cell it passes through,
-  // row by row; the cell is about twice the mean segment length.
-  const double cell = std::max({2.0 * totalLength / static_cast<double>(segments.size()), extent.size() / 1.0e6, 1.0e-6});
-  GridHash grid(extent.minX, extent.minY, cell, segments.size() * 3);
-  std::vector<std::uint32_t> entrySegment;
-  entrySegment.reserve(segments.size() * 3);
-  const std::string stage = "filters.clean";
-  ProgressTicker ticker(progress, stage, "contour crossings", segments.size() * 2);
-  for (std::uint32_t s = 0; s < segments.size(); ++s) {
-    ticker.step(s);
-    const Point3& a = vertex(segments[s], 0);
-    const Point3& b = vertex(segments[s], 1);
+  // A segment grid: each segment goes into every cell it passes through, row
+  // by row. Cells about the mean segment length keep a few segments per cell.
+  const double width = extent.maxX - extent.minX;
+  const double height = extent.maxY - extent.minY;
+  const double cell = std::max(totalLength / static_cast<double>(segments.size()),
+                               CellGrid::cellFor(width, height, segments.size(), 0.0));
+  CellGrid grid(extent.minX, extent.minY, extent.maxX, extent.maxY, cell);
+  auto cellsOf = [&](std::size_t s, auto&& emit) {
+    const Point3& a = *segments[s].a;
+    const Point3& b = *segments[s].b;
     const auto cy0 = grid.cellY(std::min(a.y, b.y));
     const auto cy1 = grid.cellY(std::max(a.y, b.y));
     for (auto cy = cy0; cy <= cy1; ++cy) {
       double xLo = std::min(a.x, b.x);
       double xHi = std::max(a.x, b.x);
       if (cy0 != cy1) {
-        // Clip the segment to this row's y band.
-        const double y0 = std::max(std::min(a.y, b.y), extent.minY + static_cast<double>(cy) * cell);
-        const double y1 = std::min(std::max(a.y, b.y), extent.minY + static_cast<double>(cy + 1) * cell);
+        // Clip the segment to this row's y band (a little wider, for rounding).
+        const double y0 =
+            std::max(std::min(a.y, b.y), grid.originY() + static_cast<double>(cy) * cell);
+        const double y1 =
+            std::min(std::max(a.y, b.y), grid.originY() + static_cast<double>(cy + 1) * cell);
         const double x0 = a.x + (b.x - a.x) * (y0 - a.y) / (b.y - a.y);
         const double x1 = a.x + (b.x - a.x) * (y1 - a.y) / (b.y - a.y);
         xLo = std::max(xLo, std::min(x0, x1) - 1e-6 * cell);
         xHi = std::min(xHi, std::max(x0, x1) + 1e-6 * cell);
       }
-      for (auto cx = grid.cellX(xLo); cx <= grid.cellX(xHi); ++cx) {
-        grid.insertInCell(cx, cy);
-        entrySegment.push_back(s);
-      }
+      for (auto cx = grid.cellX(xLo); cx <= grid.cellX(xHi); ++cx) emit(grid.index(cx, cy));
     }
-  }
+  };
+  const std::string stage = "filters.clean";
+  ProgressTicker ticker(progress, stage, "contour crossings", grid.cellCount());
+  grid.build(segments.size(), cellsOf);
 
   std::vector<Hit> hits;
-  std::vector<std::uint32_t> inCell;
-  std::uint64_t visited = 0;
-  grid.forEachCell([&](std::uint32_t head, const std::vector<std::uint32_t>& next) {
-    inCell.clear();
-    for (auto e = head; e != GridHash::kNone; e = next[e]) inCell.push_back(entrySegment[e]);
-    visited += inCell.size();
-    ticker.step(segments.size() + visited / 3);
-    for (std::size_t i = 0; i < inCell.size(); ++i) {
-      for (std::size_t j = i + 1; j < inCell.size(); ++j) {
-        Segment sa = segments[inCell[i]];
-        Segment sb = segments[inCell[j]];
-        if (sa.contour == sb.contour) {
-          const auto& ref = contours[sa.contour];
-          const auto& feature = layers[ref.layer].features[ref.feature];
-          const auto n = static_cast<std::uint32_t>(feature.vertices.size());
-          const auto lo = std::min(sa.index, sb.index);
-          const auto hi = std::max(sa.index, sb.index);
-          if (hi == lo + 1) continue;                                // neighbours share a vertex
-          if (feature.closed && lo == 0 && hi == n - 1) continue;  // across the ring's seam
-        } else {
-          const double za = vertex(sa, 0).z;
-          const double zb = vertex(sb, 0).z;
-          if (std::abs(za - zb) <= 1e-9) continue;  // same height: may meet
+  for (std::size_t c = 0; c < grid.cellCount(); ++c) {
+    ticker.step(c);
+    const std::uint32_t count = grid.cellSize(c);
+    if (count < 2) continue;
+    const std::uint32_t* items = grid.cellItems(c);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const Segment& s1 = segments[items[i]];
+      const double loX = std::min(s1.a->x, s1.b->x), hiX = std::max(s1.a->x, s1.b->x);
+      const double loY = std::min(s1.a->y, s1.b->y), hiY = std::max(s1.a->y, s1.b->y);
+      for (std::uint32_t j = i + 1; j < count; ++j) {
+        const Segment& s2 = segments[items[j]];
+        if (std::max(s2.a->x, s2.b->x) < loX || std::min(s2.a->x, s2.b->x) > hiX ||
+            std::max(s2.a->y, s2.b->y) < loY || std::min(s2.a->y, s2.b->y) > hiY) {
+          continue;
+        }
+        if (s1.contour == s2.contour) {
+          const auto& ref = contours[s1.contour];
+          const auto lo = std::min(s1.index, s2.index);
+          const auto hi = std::max(s1.index, s2.index);
+          if (hi == lo + 1) continue;  // neighbours share a vertex
+          if (ref.closed && lo == 0 && hi == ref.vertexCount - 1)
+            continue;  // across the ring's seam
+        } else if (std::abs(s1.a->z - s2.a->z) <= 1e-9) {
+          continue;  // same height: may meet
         }
         Point2 at;
-        if (!segmentsMeet(vertex(sa, 0), vertex(sa, 1), vertex(sb, 0), vertex(sb, 1), at)) continue;
+        if (!segmentsMeet(*s1.a, *s1.b, *s2.a, *s2.b, at)) continue;
+        Segment sa = s1, sb = s2;
         auto key = [](const Segment& s) { return (std::uint64_t{s.contour} << 32) | s.index; };
         if (key(sb) < key(sa)) std::swap(sa, sb);
         hits.push_back({sa, sb, at});
       }
     }
-  });
+  }
   ticker.finish();
   if (hits.empty()) return;
 
   auto hitKey = [](const Hit& h) {
     return std::tuple(h.a.contour, h.a.index, h.b.contour, h.b.index);
   };
-  std::sort(hits.begin(), hits.end(), [&](const Hit& x, const Hit& y) { return hitKey(x) < hitKey(y); });
-  hits.erase(std::unique(hits.begin(), hits.end(), [&](const Hit& x, const Hit& y) { return hitKey(x) == hitKey(y); }),
+  std::sort(hits.begin(), hits.end(),
+            [&](const Hit& x, const Hit& y) { return hitKey(x) < hitKey(y); });
+  hits.erase(std::unique(hits.begin(), hits.end(),
+                         [&](const Hit& x, const Hit& y) { return hitKey(x) == hitKey(y); }),
              hits.end());
 
   std::vector<std::pair<std::uint32_t, std::uint32_t>> bad;  // (contour, segment index)
@@ -352,8 +356,8 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
     c.layerB = layers[rb.layer].config.name;
     c.fidA = fa.fid;
     c.fidB = fb.fid;
-    c.zA = vertex(h.a, 0).z;
-    c.zB = vertex(h.b, 0).z;
+    c.zA = h.a.a->z;
+    c.zB = h.b.a->z;
     c.at = h.at;
     c.self = h.a.contour == h.b.contour;
     (c.self ? report.contourSelfCrossings : report.contourCrossings) += 1;
@@ -366,8 +370,11 @@ void findCrossings(std::vector<IngestedLayer>& layers, const CleanOptions& optio
     SourceLocation where;
     where.layer = first.layerA;
     where.feature = first.fidA;
-    throw inputError(std::to_string(report.crossings.size()) + " contour crossing(s); the first: " + describe(first),
-                     where, "fix the contours (a contour may not cross itself or another height), or leave strict mode off to cut the crossing segments out");
+    throw inputError(std::to_string(report.crossings.size()) +
+                         " contour crossing(s); the first: " + describe(first),
+                     where,
+                     "fix the contours (a contour may not cross itself or another height), or "
+                     "leave strict mode off to cut the crossing segments out");
   }
 
   // Cut the crossing segments out: each affected feature becomes the runs of
@@ -440,14 +447,18 @@ std::string describe(const ContourCrossing& c) {
   std::snprintf(za, sizeof za, "%g", c.zA);
   std::snprintf(zb, sizeof zb, "%g", c.zB);
   if (c.self) {
-    return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za + ") crosses itself at " + at;
+    return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za +
+           ") crosses itself at " + at;
   }
-  return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za + ") crosses '" + c.layerB +
-         "' feature " + std::to_string(c.fidB) + " (z " + zb + ") at " + at;
+  return "contour '" + c.layerA + "' feature " + std::to_string(c.fidA) + " (z " + za +
+         ") crosses '" + c.layerB + "' feature " + std::to_string(c.fidB) + " (z " + zb + ") at " +
+         at;
 }
 
-CleaningReport cleanLayers(std::vector<IngestedLayer>& layers, const CleanOptions& options, const Progress* progress) {
-  if (!(options.tolerance >= 0.0)) throw usageError("the cleaning tolerance must be 0 or more metres");
+CleaningReport cleanLayers(std::vector<IngestedLayer>& layers, const CleanOptions& options,
+                           const Progress* progress) {
+  if (!(options.tolerance >= 0.0))
+    throw usageError("the cleaning tolerance must be 0 or more metres");
   CleaningReport report;
   Extent extent;
   std::size_t vertexCount = 0;
@@ -465,7 +476,7 @@ CleaningReport cleanLayers(std::vector<IngestedLayer>& layers, const CleanOption
   reportProgress(progress, stage, "repeated vertices", 1, 4);
   dropRepeatedVertices(layers, options.tolerance, report);
   reportProgress(progress, stage, "points", 2, 4);
-  mergePoints(layers, options.tolerance, options.zConflict, extent, vertexCount, report);
+  mergePoints(layers, options.tolerance, options.zConflict, extent, report);
   reportProgress(progress, stage, "contour crossings", 3, 4);
   findCrossings(layers, options, extent, progress, report);
   reportProgress(progress, stage, "", 4, 4);

@@ -43,11 +43,11 @@ struct CleanOptions {
 
 /// A contour crossing found by rule 5.
 struct ContourCrossing {
-  std::string layerA, layerB;      ///< layer names (config `name`)
+  std::string layerA, layerB;       ///< layer names (config `name`)
   std::int64_t fidA = 0, fidB = 0;  ///< feature ids
   double zA = 0.0, zB = 0.0;
-  Point2 at;                        ///< where, in the project CRS
-  bool self = false;                ///< a contour crossing itself (A == B)
+  Point2 at;          ///< where, in the project CRS
+  bool self = false;  ///< a contour crossing itself (A == B)
 };
 
 struct CleaningReport {

@@ -21,7 +21,8 @@ std::vector<IngestedLayer> readLayers(const ProjectConfig& config, const Progres
   return layers;
 }
 
-void reprojectLayers(std::vector<IngestedLayer>& layers, const std::string& crs, const Progress* progress) {
+void reprojectLayers(std::vector<IngestedLayer>& layers, const std::string& crs,
+                     const Progress* progress) {
   for (auto& layer : layers) reprojectLayer(layer, crs, progress);
 }
 

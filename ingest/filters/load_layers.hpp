@@ -49,7 +49,9 @@ struct IngestResult {
 IngestResult loadLayers(const ProjectConfig& config, const Progress* progress = nullptr);
 
 /// The stages one at a time, for tools and benchmarks that time them apart.
-std::vector<IngestedLayer> readLayers(const ProjectConfig& config, const Progress* progress = nullptr);
-void reprojectLayers(std::vector<IngestedLayer>& layers, const std::string& crs, const Progress* progress = nullptr);
+std::vector<IngestedLayer> readLayers(const ProjectConfig& config,
+                                      const Progress* progress = nullptr);
+void reprojectLayers(std::vector<IngestedLayer>& layers, const std::string& crs,
+                     const Progress* progress = nullptr);
 
 }  // namespace tinsmith::ingest

@@ -41,6 +41,7 @@ class CrsTransform {
 };
 
 /// Moves `layer` into `targetCrs` (layer.crs becomes targetCrs).
-void reprojectLayer(IngestedLayer& layer, const std::string& targetCrs, const Progress* progress = nullptr);
+void reprojectLayer(IngestedLayer& layer, const std::string& targetCrs,
+                    const Progress* progress = nullptr);
 
 }  // namespace tinsmith::ingest

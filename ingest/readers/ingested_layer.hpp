@@ -48,7 +48,7 @@ struct IngestedLayer {
   bool hasZ = false;      ///< all vertices carry a real z
   std::vector<IngestedFeature> features;  ///< line and area kinds
   std::vector<Point3> points;             ///< point kinds (points, dem)
-  std::vector<std::int64_t> pointIds;     ///< per point: fid, text line, or raster cell row*width+col
+  std::vector<std::int64_t> pointIds;  ///< per point: fid, text line, or raster cell row*width+col
   std::uint64_t nullGeometriesSkipped = 0;  ///< features without geometry (not an error)
 
   [[nodiscard]] std::size_t vertexCount() const {
@@ -59,6 +59,7 @@ struct IngestedLayer {
 };
 
 /// "contours.gpkg, layer 'contours'" — where-prefix for messages about a layer.
-SourceLocation layerLocation(const LayerConfig& config, std::optional<std::int64_t> fid = std::nullopt);
+SourceLocation layerLocation(const LayerConfig& config,
+                             std::optional<std::int64_t> fid = std::nullopt);
 
 }  // namespace tinsmith::ingest

@@ -52,24 +52,34 @@ std::string crsString(const OGRSpatialReference* srs) {
   return out;
 }
 
-bool needsZ(LayerKind kind) { return kind == LayerKind::Contours || kind == LayerKind::Points; }
+bool needsZ(LayerKind kind) {
+  return kind == LayerKind::Contours || kind == LayerKind::Points;
+}
 
 const char* geometryNoun(GeometryClass c) {
   switch (c) {
-    case GeometryClass::Points: return "points (Point, MultiPoint)";
-    case GeometryClass::Lines: return "lines (LineString, MultiLineString)";
-    case GeometryClass::Areas: return "polygons (Polygon, MultiPolygon) or closed lines";
-    case GeometryClass::Raster: return "a raster";
+    case GeometryClass::Points:
+      return "points (Point, MultiPoint)";
+    case GeometryClass::Lines:
+      return "lines (LineString, MultiLineString)";
+    case GeometryClass::Areas:
+      return "polygons (Polygon, MultiPolygon) or closed lines";
+    case GeometryClass::Raster:
+      return "a raster";
   }
   return "?";
 }
 
 std::string kindHint(GeometryClass found) {
   switch (found) {
-    case GeometryClass::Points: return "for point data use kind = \"points\"";
-    case GeometryClass::Lines: return "for lines use kind = \"contours\", \"road\" or \"river\"";
-    case GeometryClass::Areas: return "for polygons use kind = \"lake\", \"boundary\" or \"hole\"";
-    case GeometryClass::Raster: return "for a raster use kind = \"dem\"";
+    case GeometryClass::Points:
+      return "for point data use kind = \"points\"";
+    case GeometryClass::Lines:
+      return "for lines use kind = \"contours\", \"road\" or \"river\"";
+    case GeometryClass::Areas:
+      return "for polygons use kind = \"lake\", \"boundary\" or \"hole\"";
+    case GeometryClass::Raster:
+      return "for a raster use kind = \"dem\"";
   }
   return {};
 }
@@ -94,15 +104,18 @@ class OgrLayerReader {
         for (int i = 0; i < defn->GetFieldCount(); ++i) {
           const auto type = defn->GetFieldDefn(i)->GetType();
           if (type == OFTInteger || type == OFTInteger64 || type == OFTReal) {
-            numeric += (numeric.empty() ? "" : ", ") + std::string(defn->GetFieldDefn(i)->GetNameRef());
+            numeric +=
+                (numeric.empty() ? "" : ", ") + std::string(defn->GetFieldDefn(i)->GetNameRef());
           }
         }
         throw inputError("has no attribute '" + config_.zAttribute + "'", layerLocation(config_),
-                         numeric.empty() ? "the layer has no numeric attributes; give 3D geometries or z_value"
-                                         : "numeric attributes here: " + numeric + "; set z to one of them");
+                         numeric.empty()
+                             ? "the layer has no numeric attributes; give 3D geometries or z_value"
+                             : "numeric attributes here: " + numeric + "; set z to one of them");
       }
       zType_ = defn->GetFieldDefn(zField_)->GetType();
-      if (zType_ != OFTInteger && zType_ != OFTInteger64 && zType_ != OFTReal && zType_ != OFTString) {
+      if (zType_ != OFTInteger && zType_ != OFTInteger64 && zType_ != OFTReal &&
+          zType_ != OFTString) {
         throw inputError("attribute '" + config_.zAttribute + "' is of type " +
                              OGRFieldDefn::GetFieldTypeName(zType_) + ", not a number",
                          layerLocation(config_), "choose a numeric attribute for z");
@@ -113,7 +126,8 @@ class OgrLayerReader {
 
     const GIntBig total = layer.GetFeatureCount(FALSE);
     const std::string detail = config_.name;
-    ProgressTicker ticker(progress, "readers.ogr", detail, total > 0 ? static_cast<std::uint64_t>(total) : 0);
+    ProgressTicker ticker(progress, "readers.ogr", detail,
+                          total > 0 ? static_cast<std::uint64_t>(total) : 0);
     std::uint64_t done = 0;
     layer.ResetReading();
     for (const auto& feature : layer) {
@@ -122,8 +136,9 @@ class OgrLayerReader {
     }
     ticker.finish();
     if (out_.points.empty() && out_.features.empty()) {
-      throw inputError(out_.nullGeometriesSkipped ? "has features but none has a geometry" : "holds no features",
-                       layerLocation(config_), "check the file and the layer name, or remove the layer");
+      throw inputError(
+          out_.nullGeometriesSkipped ? "has features but none has a geometry" : "holds no features",
+          layerLocation(config_), "check the file and the layer name, or remove the layer");
     }
     out_.hasZ = allHaveZ_;
   }
@@ -156,22 +171,24 @@ class OgrLayerReader {
       while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
       const auto result = std::from_chars(text.data(), text.data() + text.size(), z);
       if (text.empty() || result.ec != std::errc() || result.ptr != text.data() + text.size()) {
-        throw inputError("attribute '" + config_.zAttribute + "' is not numeric ('" + std::string(text) + "')", where,
-                         "give every feature a numeric elevation or drop the feature");
+        throw inputError(
+            "attribute '" + config_.zAttribute + "' is not numeric ('" + std::string(text) + "')",
+            where, "give every feature a numeric elevation or drop the feature");
       }
     } else {
       z = feature.GetFieldAsDouble(zField_);
     }
     if (!std::isfinite(z)) {
-      throw inputError("attribute '" + config_.zAttribute + "' is not finite (NaN or infinity)", where,
-                       "give the feature a real elevation or drop it");
+      throw inputError("attribute '" + config_.zAttribute + "' is not finite (NaN or infinity)",
+                       where, "give the feature a real elevation or drop it");
     }
     return z;
   }
 
   [[noreturn]] void wrongGeometry(const OGRGeometry& g, GeometryClass found) const {
     throw inputError(std::string("is a ") + g.getGeometryName() + ", but kind = \"" +
-                         std::string(toString(config_.kind)) + "\" takes " + geometryNoun(wantClass_),
+                         std::string(toString(config_.kind)) + "\" takes " +
+                         geometryNoun(wantClass_),
                      layerLocation(config_, fid_), kindHint(found));
   }
 
@@ -212,8 +229,9 @@ class OgrLayerReader {
         break;
       }
       default:
-        throw inputError(std::string("has a geometry type tinsmith does not read (") + g.getGeometryName() + ")",
-                         layerLocation(config_, fid_), "convert it to points, lines or polygons");
+        throw inputError(
+            std::string("has a geometry type tinsmith does not read (") + g.getGeometryName() + ")",
+            layerLocation(config_, fid_), "convert it to points, lines or polygons");
     }
   }
 
@@ -232,8 +250,9 @@ class OgrLayerReader {
         p.z = z;
       } else {
         if (needsZ(config_.kind)) {
-          throw inputError("has 2D geometry and no z attribute is configured", layerLocation(config_, fid_),
-                           "set z = \"<attribute>\" (or z_value) in the layer, or give 3D geometries");
+          throw inputError(
+              "has 2D geometry and no z attribute is configured", layerLocation(config_, fid_),
+              "set z = \"<attribute>\" (or z_value) in the layer, or give 3D geometries");
         }
         allHaveZ_ = false;
       }
@@ -291,7 +310,8 @@ void checkExists(const LayerConfig& config) {
   if (!std::filesystem::exists(config.path, ec)) {
     SourceLocation where;
     where.file = config.path.string();
-    throw inputError("file not found", where, "check the layer's path (relative to the config file)");
+    throw inputError("file not found", where,
+                     "check the layer's path (relative to the config file)");
   }
 }
 
@@ -299,7 +319,8 @@ void checkExists(const LayerConfig& config) {
 
 bool isTextPointFile(const std::filesystem::path& path) {
   auto ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".csv" || ext == ".txt" || ext == ".xyz" || ext == ".tsv" || ext == ".pts";
 }
 
@@ -307,13 +328,14 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
   checkExists(config);
   ensureGdalReady();
   CPLErrorReset();
-  GDALDatasetUniquePtr ds(
-      GDALDataset::Open(config.path.string().c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  GDALDatasetUniquePtr ds(GDALDataset::Open(
+      config.path.string().c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds) {
     std::string hint = "give a GeoPackage, Shapefile, GeoJSON or another OGR vector format";
     if (config.kind != LayerKind::Dem) {
-      std::unique_ptr<GDALDataset> raster(
-          GDALDataset::Open(config.path.string().c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+      std::unique_ptr<GDALDataset> raster(GDALDataset::Open(config.path.string().c_str(),
+                                                            GDAL_OF_RASTER | GDAL_OF_READONLY,
+                                                            nullptr, nullptr, nullptr));
       if (raster) hint = "this is a raster: use kind = \"dem\"";
     }
     CPLErrorReset();
@@ -324,7 +346,8 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
   OGRLayer* layer = nullptr;
   auto layerNames = [&] {
     std::string names;
-    for (auto* l : ds->GetLayers()) names += (names.empty() ? "'" : ", '") + std::string(l->GetName()) + "'";
+    for (auto* l : ds->GetLayers())
+      names += (names.empty() ? "'" : ", '") + std::string(l->GetName()) + "'";
     return names;
   };
   if (!config.layer.empty()) {
@@ -332,7 +355,8 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
     if (!layer) {
       SourceLocation where;
       where.file = config.path.filename().string();
-      throw inputError("has no layer '" + config.layer + "'", where, "layers in the file: " + layerNames());
+      throw inputError("has no layer '" + config.layer + "'", where,
+                       "layers in the file: " + layerNames());
     }
   } else if (ds->GetLayerCount() == 0) {
     throw inputError("holds no layers", layerLocation(config), "check the file");
@@ -354,9 +378,10 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
 IngestedLayer readTextLayer(const LayerConfig& config) {
   checkExists(config);
   if (config.kind != LayerKind::Points) {
-    throw inputError("is a text point file, but kind = \"" + std::string(toString(config.kind)) + "\" takes " +
-                         geometryNoun(geometryClass(config.kind)),
-                     layerLocation(config), "use kind = \"points\", or give lines/polygons in an OGR format");
+    throw inputError("is a text point file, but kind = \"" + std::string(toString(config.kind)) +
+                         "\" takes " + geometryNoun(geometryClass(config.kind)),
+                     layerLocation(config),
+                     "use kind = \"points\", or give lines/polygons in an OGR format");
   }
   TextPointOptions options;
   options.delimiter = config.delimiter;

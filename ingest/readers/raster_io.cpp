@@ -36,15 +36,18 @@ std::string lastGdalError() {
 
 bool isExr(const std::filesystem::path& path) {
   auto ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".exr";
 }
 
 void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
   if (grid.width <= 0 || grid.height <= 0 ||
-      grid.z.size() != static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height)) {
-    throw ioError("height grid is malformed: " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
-                      " with " + std::to_string(grid.z.size()) + " values",
+      grid.z.size() !=
+          static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height)) {
+    throw ioError("height grid is malformed: " + std::to_string(grid.width) + " x " +
+                      std::to_string(grid.height) + " with " + std::to_string(grid.z.size()) +
+                      " values",
                   at(path));
   }
 }
@@ -76,7 +79,8 @@ Point2 HeightGrid::cellCentre(int col, int row) const {
 
 HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOptions& options) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw inputError("raster file not found", at(path), "check the path");
+  if (!std::filesystem::exists(path, ec))
+    throw inputError("raster file not found", at(path), "check the path");
   if (isExr(path)) {
     auto grid = readExr(path);
     if (options.nodata) {
@@ -89,8 +93,8 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
   }
   ensureGdalReady();
   CPLErrorReset();
-  std::unique_ptr<GDALDataset> ds(
-      GDALDataset::Open(path.string().c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(
+      path.string().c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds) {
     throw inputError("cannot open as a raster" + lastGdalError(), at(path),
                      "give a GeoTIFF (or another GDAL raster) or an OpenEXR heightmap");
@@ -121,9 +125,10 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
   }
   auto* band = ds->GetRasterBand(options.band);
   grid.z.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height));
-  if (band->RasterIO(GF_Read, 0, 0, grid.width, grid.height, grid.z.data(), grid.width, grid.height, GDT_Float32,
-                     0, 0, nullptr) != CE_None) {
-    throw inputError("cannot read the raster's cells" + lastGdalError(), at(path), "the file may be damaged");
+  if (band->RasterIO(GF_Read, 0, 0, grid.width, grid.height, grid.z.data(), grid.width, grid.height,
+                     GDT_Float32, 0, 0, nullptr) != CE_None) {
+    throw inputError("cannot read the raster's cells" + lastGdalError(), at(path),
+                     "the file may be damaged");
   }
   int hasNodata = 0;
   double nodata = band->GetNoDataValue(&hasNodata);
@@ -155,9 +160,12 @@ void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
   options = CSLSetNameValue(options, "PREDICTOR", "3");
   if (grid.width >= 512 && grid.height >= 512) options = CSLSetNameValue(options, "TILED", "YES");
   CPLErrorReset();
-  std::unique_ptr<GDALDataset> ds(driver->Create(tmp.string().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
+  std::unique_ptr<GDALDataset> ds(
+      driver->Create(tmp.string().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
   CSLDestroy(options);
-  if (!ds) throw ioError("cannot create the GeoTIFF" + lastGdalError(), at(path), "check the folder exists and is writable");
+  if (!ds)
+    throw ioError("cannot create the GeoTIFF" + lastGdalError(), at(path),
+                  "check the folder exists and is writable");
   auto fail = [&](const std::string& what) {
     ds.reset();
     std::error_code ec;
@@ -168,13 +176,14 @@ void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
   if (ds->SetGeoTransform(gt.data()) != CE_None) fail("cannot write the geotransform");
   if (!grid.crs.empty()) {
     OGRSpatialReference srs;
-    if (srs.SetFromUserInput(grid.crs.c_str()) != OGRERR_NONE) fail("unknown CRS '" + grid.crs + "'");
+    if (srs.SetFromUserInput(grid.crs.c_str()) != OGRERR_NONE)
+      fail("unknown CRS '" + grid.crs + "'");
     if (ds->SetSpatialRef(&srs) != CE_None) fail("cannot write the CRS");
   }
   auto* band = ds->GetRasterBand(1);
   band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
-  if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, const_cast<float*>(grid.z.data()), grid.width,
-                     grid.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
+  if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, const_cast<float*>(grid.z.data()),
+                     grid.width, grid.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
     fail("cannot write the cells");
   }
   CPLErrorReset();
@@ -198,26 +207,29 @@ void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
     header.compression() = Imf::ZIP_COMPRESSION;
     header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
     const auto& g = grid.geotransform;
-    header.insert("geoTransform", Imf::M33dAttribute(Imath::M33d(g[1], g[2], g[0], g[4], g[5], g[3], 0, 0, 1)));
+    header.insert("geoTransform",
+                  Imf::M33dAttribute(Imath::M33d(g[1], g[2], g[0], g[4], g[5], g[3], 0, 0, 1)));
     if (!grid.crs.empty()) header.insert("crs", Imf::StringAttribute(grid.crs));
     Imf::OutputFile file(tmp.string().c_str(), header);
     Imf::FrameBuffer frame;
-    frame.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(grid.z.data())),
-                                 sizeof(float), sizeof(float) * static_cast<std::size_t>(grid.width)));
+    frame.insert("Z",
+                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(grid.z.data())),
+                            sizeof(float), sizeof(float) * static_cast<std::size_t>(grid.width)));
     file.setFrameBuffer(frame);
     file.writePixels(grid.height);
   } catch (const std::exception& e) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);
-    throw ioError(std::string("cannot write the EXR heightmap (OpenEXR: ") + e.what() + ")", at(path),
-                  "check the folder exists and is writable");
+    throw ioError(std::string("cannot write the EXR heightmap (OpenEXR: ") + e.what() + ")",
+                  at(path), "check the folder exists and is writable");
   }
   commit(tmp, path);
 }
 
 HeightGrid readExr(const std::filesystem::path& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw inputError("EXR file not found", at(path), "check the path");
+  if (!std::filesystem::exists(path, ec))
+    throw inputError("EXR file not found", at(path), "check the path");
   HeightGrid grid;
   try {
     Imf::InputFile file(path.string().c_str());
@@ -238,15 +250,16 @@ HeightGrid readExr(const std::filesystem::path& path) {
         channel = it.name();
       }
       if (count != 1) {
-        throw inputError("EXR has no 'Z' channel and " + std::to_string(count) + " others", at(path),
-                         "give a heightmap with one channel named Z");
+        throw inputError("EXR has no 'Z' channel and " + std::to_string(count) + " others",
+                         at(path), "give a heightmap with one channel named Z");
       }
     }
     if (const auto* gt = header.findTypedAttribute<Imf::M33dAttribute>("geoTransform")) {
       const auto& m = gt->value();
       grid.geotransform = {m[0][2], m[0][0], m[0][1], m[1][2], m[1][0], m[1][1]};
     }
-    if (const auto* crs = header.findTypedAttribute<Imf::StringAttribute>("crs")) grid.crs = crs->value();
+    if (const auto* crs = header.findTypedAttribute<Imf::StringAttribute>("crs"))
+      grid.crs = crs->value();
     grid.z.assign(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height),
                   std::numeric_limits<float>::quiet_NaN());
     Imf::FrameBuffer frame;
@@ -257,8 +270,8 @@ HeightGrid readExr(const std::filesystem::path& path) {
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
-    throw inputError(std::string("cannot read as an EXR heightmap (OpenEXR: ") + e.what() + ")", at(path),
-                     "the file may be damaged or not an OpenEXR file");
+    throw inputError(std::string("cannot read as an EXR heightmap (OpenEXR: ") + e.what() + ")",
+                     at(path), "the file may be damaged or not an OpenEXR file");
   }
   for (auto& v : grid.z) {
     if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();

@@ -36,7 +36,8 @@ struct HeightGrid {
   std::vector<float> z;  ///< row-major, width * height; NaN = nodata
 
   [[nodiscard]] float at(int col, int row) const {
-    return z[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) + static_cast<std::size_t>(col)];
+    return z[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) +
+             static_cast<std::size_t>(col)];
   }
   /// CRS coordinates of the centre of cell (col, row).
   [[nodiscard]] Point2 cellCentre(int col, int row) const;
@@ -68,6 +69,7 @@ HeightGrid readExr(const std::filesystem::path& path);
 
 /// The grid's valid cells as points at cell centres (row-major order), and in
 /// `cellIds` (if given) each point's row * width + col.
-std::vector<Point3> gridToPoints(const HeightGrid& grid, std::vector<std::int64_t>* cellIds = nullptr);
+std::vector<Point3> gridToPoints(const HeightGrid& grid,
+                                 std::vector<std::int64_t>* cellIds = nullptr);
 
 }  // namespace tinsmith::ingest

@@ -23,8 +23,10 @@ SourceLocation atLine(const std::string& file, std::optional<std::int64_t> line 
 }
 
 std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r'))
+    s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
   return s;
 }
 
@@ -43,7 +45,8 @@ std::string lower(std::string_view s) {
 }
 
 // Splits `line` into fields; returns the count. Fields are views into `line`.
-void splitFields(std::string_view line, TextDelimiter delimiter, std::vector<std::string_view>& out) {
+void splitFields(std::string_view line, TextDelimiter delimiter,
+                 std::vector<std::string_view>& out) {
   out.clear();
   if (delimiter == TextDelimiter::Whitespace) {
     std::size_t i = 0;
@@ -56,7 +59,9 @@ void splitFields(std::string_view line, TextDelimiter delimiter, std::vector<std
     }
     return;
   }
-  const char sep = delimiter == TextDelimiter::Comma ? ',' : delimiter == TextDelimiter::Semicolon ? ';' : '\t';
+  const char sep = delimiter == TextDelimiter::Comma       ? ','
+                   : delimiter == TextDelimiter::Semicolon ? ';'
+                                                           : '\t';
   std::size_t start = 0;
   while (true) {
     const std::size_t pos = line.find(sep, start);
@@ -72,7 +77,8 @@ void splitFields(std::string_view line, TextDelimiter delimiter, std::vector<std
 }
 
 TextDelimiter detectDelimiter(std::string_view line) {
-  if (line.find('\t') != std::string_view::npos && line.find_first_not_of(" \t\r") != std::string_view::npos) {
+  if (line.find('\t') != std::string_view::npos &&
+      line.find_first_not_of(" \t\r") != std::string_view::npos) {
     // Tabs with other separators around: a tab-separated file.
     if (line.find(',') == std::string_view::npos && line.find(';') == std::string_view::npos) {
       return TextDelimiter::Tab;
@@ -101,7 +107,8 @@ NumberStatus parseNumber(std::string_view field, double& value) {
   return std::isfinite(value) ? NumberStatus::Ok : NumberStatus::NonFinite;
 }
 
-int findColumn(const std::vector<std::string>& names, std::initializer_list<std::string_view> candidates) {
+int findColumn(const std::vector<std::string>& names,
+               std::initializer_list<std::string_view> candidates) {
   for (const auto candidate : candidates) {
     for (std::size_t i = 0; i < names.size(); ++i) {
       if (names[i] == candidate) return static_cast<int>(i);
@@ -118,17 +125,23 @@ int namedColumn(const std::vector<std::string>& names, const std::string& wanted
   }
   std::string list;
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-  throw inputError(std::string(role) + " column '" + wanted + "' is not in the header (" + list + ")",
-                   atLine(sourceName, headerLine), "name a column that exists");
+  throw inputError(
+      std::string(role) + " column '" + wanted + "' is not in the header (" + list + ")",
+      atLine(sourceName, headerLine), "name a column that exists");
 }
 
 const char* delimiterName(TextDelimiter d) {
   switch (d) {
-    case TextDelimiter::Comma: return "comma";
-    case TextDelimiter::Semicolon: return "semicolon";
-    case TextDelimiter::Tab: return "tab";
-    case TextDelimiter::Whitespace: return "whitespace";
-    case TextDelimiter::Auto: return "auto";
+    case TextDelimiter::Comma:
+      return "comma";
+    case TextDelimiter::Semicolon:
+      return "semicolon";
+    case TextDelimiter::Tab:
+      return "tab";
+    case TextDelimiter::Whitespace:
+      return "whitespace";
+    case TextDelimiter::Auto:
+      return "auto";
   }
   return "?";
 }
@@ -178,8 +191,8 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
         const int gy = findColumn(n, {"lat", "latitude"});
         const int px = findColumn(n, {"x", "easting", "east", "e"});
         const int py = findColumn(n, {"y", "northing", "north", "n"});
-        const int pz = findColumn(n, {"z", "elevation", "elev", "height", "h", "alt", "altitude", "ele",
-                                      "ellipsoidal_height", "ortho_height"});
+        const int pz = findColumn(n, {"z", "elevation", "elev", "height", "h", "alt", "altitude",
+                                      "ele", "ellipsoidal_height", "ortho_height"});
         if (px >= 0 && py >= 0) {
           xi = px;
           yi = py;
@@ -194,7 +207,8 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
         if (!options.zColumn.empty()) zi = namedColumn(n, options.zColumn, "z", sourceName, lineNo);
       } else if (!options.xColumn.empty() || !options.yColumn.empty() || !options.zColumn.empty()) {
         throw inputError("columns are chosen by name but the file has no header line",
-                         atLine(sourceName, lineNo), "add a header line or choose columns by index");
+                         atLine(sourceName, lineNo),
+                         "add a header line or choose columns by index");
       }
       if (options.xIndex) xi = *options.xIndex;
       if (options.yIndex) yi = *options.yIndex;
@@ -216,8 +230,9 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
 
     splitFields(line, table.delimiter, fields);
     if (static_cast<int>(fields.size()) < needed) {
-      throw inputError("expected at least " + std::to_string(needed) + " " + delimiterName(table.delimiter) +
-                           "-separated fields, found " + std::to_string(fields.size()),
+      throw inputError("expected at least " + std::to_string(needed) + " " +
+                           delimiterName(table.delimiter) + "-separated fields, found " +
+                           std::to_string(fields.size()),
                        atLine(sourceName, lineNo), "fix or remove the line");
     }
     Point3 p;
@@ -228,11 +243,13 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
       const auto field = fields[static_cast<std::size_t>(wanted[k].first)];
       const auto status = parseNumber(field, *wanted[k].second);
       if (status == NumberStatus::NotANumber) {
-        throw inputError(std::string(role[k]) + " value '" + std::string(field) + "' is not a number",
-                         atLine(sourceName, lineNo), "use plain decimal numbers with '.' as the decimal point");
+        throw inputError(
+            std::string(role[k]) + " value '" + std::string(field) + "' is not a number",
+            atLine(sourceName, lineNo), "use plain decimal numbers with '.' as the decimal point");
       }
       if (status == NumberStatus::NonFinite) {
-        throw inputError(std::string(role[k]) + " value '" + std::string(field) + "' is not finite (NaN or infinity)",
+        throw inputError(std::string(role[k]) + " value '" + std::string(field) +
+                             "' is not finite (NaN or infinity)",
                          atLine(sourceName, lineNo), "remove the point or give it a real value");
       }
     }
@@ -241,21 +258,26 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
     table.lines.push_back(lineNo);
   }
   if (table.points.empty()) {
-    throw inputError("the file holds no points", atLine(sourceName), "check the file and its delimiter");
+    throw inputError("the file holds no points", atLine(sourceName),
+                     "check the file and its delimiter");
   }
   return table;
 }
 
-TextPointTable readTextPointTable(const std::filesystem::path& path, const TextPointOptions& options) {
+TextPointTable readTextPointTable(const std::filesystem::path& path,
+                                  const TextPointOptions& options) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
-    throw inputError("file not found", atLine(path.string()), "check the path (relative paths are taken from the config file's folder)");
+    throw inputError("file not found", atLine(path.string()),
+                     "check the path (relative paths are taken from the config file's folder)");
   }
   if (std::filesystem::is_directory(path, ec)) {
     throw inputError("is a directory, not a point file", atLine(path.string()));
   }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw inputError("cannot open the file for reading", atLine(path.string()), "check its permissions");
+  if (!in)
+    throw inputError("cannot open the file for reading", atLine(path.string()),
+                     "check its permissions");
   std::string text;
   in.seekg(0, std::ios::end);
   const auto size = in.tellg();
@@ -264,7 +286,8 @@ TextPointTable readTextPointTable(const std::filesystem::path& path, const TextP
     text.resize(static_cast<std::size_t>(size));
     in.read(text.data(), size);
   }
-  if (!in && size > 0) throw inputError("cannot read the file", atLine(path.string()), "check its permissions");
+  if (!in && size > 0)
+    throw inputError("cannot read the file", atLine(path.string()), "check its permissions");
   if (text.find('\0') != std::string::npos) {
     throw inputError("is not a text file (it contains NUL bytes)", atLine(path.string()),
                      "give a CSV/XYZ text file, or a GIS file in an OGR format");
@@ -272,7 +295,8 @@ TextPointTable readTextPointTable(const std::filesystem::path& path, const TextP
   return parseTextPoints(text, path.string(), options);
 }
 
-std::vector<Point3> readTextPoints(const std::filesystem::path& path, const TextPointOptions& options) {
+std::vector<Point3> readTextPoints(const std::filesystem::path& path,
+                                   const TextPointOptions& options) {
   return readTextPointTable(path, options).points;
 }
 

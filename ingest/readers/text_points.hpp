@@ -46,12 +46,12 @@ struct TextPointOptions {
 /// A text point file with where each point came from.
 struct TextPointTable {
   std::vector<Point3> points;
-  std::vector<std::int64_t> lines;  ///< 1-based source line of each point
+  std::vector<std::int64_t> lines;                ///< 1-based source line of each point
   TextDelimiter delimiter = TextDelimiter::Auto;  ///< the one used
   bool hasHeader = false;
-  std::vector<std::string> columnNames;  ///< from the header, if any
+  std::vector<std::string> columnNames;    ///< from the header, if any
   int xIndex = 0, yIndex = 1, zIndex = 2;  ///< columns used (zIndex -1 with fixedZ)
-  bool geographicNames = false;  ///< the header said lon/lat: x, y are degrees
+  bool geographicNames = false;            ///< the header said lon/lat: x, y are degrees
 };
 
 /// Reads every point of `path`. See the file comment for format and errors.

@@ -385,3 +385,42 @@ TEST(CdtAdversarial, FromTinDataRoundTrip) {
 
 }  // namespace
 }  // namespace tinsmith
+
+namespace tinsmith {
+namespace {
+
+// Found by the fuzzer: points inserted (in a second finalize) into triangles
+// with constrained edges left stale constraint flags on the split triangle's
+// new inner edges, so the LOP skipped them.
+TEST(CdtRegression, PointInsertedIntoTriangleWithConstrainedEdges) {
+  Cdt cdt;
+  const FeatureId b = cdt.addFeature(FeatureKind::Boundary, "b");
+  const FeatureId f = cdt.addFeature(FeatureKind::Other, "o");
+  cdt.addBoundary(std::vector<Point3>{{-15000.000000000002, -20000, 17},
+                                      {16000.000000000002, 16000, 53},
+                                      {-11000.000000000002, -11000, 53}},
+                  b);
+  cdt.finalize();
+  EXPECT_TRUE(testing::isValid(cdt));
+  cdt.insertConstraint(std::vector<Point3>{{-11000, -11000, 0},
+                                           {-11999.999999999998, -14000, 26},
+                                           {17000, -20000, 0},
+                                           {-20000, -20000, 0}},
+                       f);
+  cdt.finalize();
+  EXPECT_TRUE(testing::isValid(cdt));
+}
+
+// Found by the fuzzer: the validator took a 1-ulp sliver's boundary loop for
+// clockwise (float area) — loop orientation is now decided exactly.
+TEST(CdtRegression, SliverTriangleAtUtmCoordinatesIsValid) {
+  TinData tin;
+  const double y = std::nextafter(7000500.0, INFINITY);
+  tin.vertices = {{7000000, 7000000, 0}, {7001000, 7001000, 0}, {7000500, y, 0}};
+  tin.triangles = {{0, 1, 2}};
+  const ValidationReport r = validate(tin);
+  EXPECT_TRUE(r.ok) << r.summary();
+}
+
+}  // namespace
+}  // namespace tinsmith

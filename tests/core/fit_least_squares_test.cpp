@@ -299,3 +299,26 @@ TEST(FitLeastSquares, BadInputIsReported) {
 
 }  // namespace
 }  // namespace tinsmith::fit
+
+namespace tinsmith::fit {
+namespace {
+
+TEST(FitLeastSquares, PenalizedAssemblyInTheEnergyPatternMatchesTheSum) {
+  const SmallMesh m = jitteredMesh(5, 21);
+  const auto samples = samplesOf(m, 90, 22, wavyFunction, 0.7, 0.9);
+  std::vector<TriangleMoments> moments(m.triangles.size());
+  for (const auto& s : samples) moments[s.triangle].add(s.barycentric, s.z, s.weight);
+  const NormalEquations eq = assembleNormalEquations(m.vertices.size(), m.triangles, samples);
+  for (Smoothing kind : kAllSmoothing) {
+    const SparseMatrix e = smoothingMatrix(kind, m.vertices, m.triangles);
+    const PenalizedSystem sys = assemblePenalized(m.triangles, moments, e, 2.5, std::nullopt);
+    EXPECT_NEAR(sys.lambdaDefault, defaultLambda(eq.btb, e), 1e-12 * sys.lambdaDefault);
+    EXPECT_NEAR(sys.lambda, 2.5 * sys.lambdaDefault, 1e-12 * sys.lambda);
+    const Eigen::MatrixXd expected = dense(eq.btb) + sys.lambda * dense(e);
+    EXPECT_LE((dense(sys.a) - expected).norm(), 1e-12 * expected.norm()) << static_cast<int>(kind);
+    EXPECT_LE((sys.b - eq.btz).norm(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace tinsmith::fit

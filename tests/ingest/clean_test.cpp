@@ -1,19 +1,20 @@
 // filters.clean: every rule on small fixtures, strict mode, and whole real
 // configs through loadLayers.
+#include "ingest/filters/clean.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "core/base/error.hpp"
-#include "ingest/filters/clean.hpp"
 #include "ingest/filters/load_layers.hpp"
 
 namespace tinsmith::ingest {
 namespace {
 
-IngestedLayer lineLayer(const std::string& name, FeatureKind kind, std::vector<std::vector<Point3>> lines,
-                        bool closed = false) {
+IngestedLayer lineLayer(const std::string& name, FeatureKind kind,
+                        std::vector<std::vector<Point3>> lines, bool closed = false) {
   IngestedLayer layer;
   layer.config.name = name;
   layer.config.path = name + ".gpkg";
@@ -35,7 +36,8 @@ IngestedLayer pointLayer(const std::string& name, FeatureKind kind, std::vector<
   layer.config.name = name;
   layer.kind = kind;
   layer.points = std::move(points);
-  for (std::size_t i = 0; i < layer.points.size(); ++i) layer.pointIds.push_back(static_cast<std::int64_t>(i + 10));
+  for (std::size_t i = 0; i < layer.points.size(); ++i)
+    layer.pointIds.push_back(static_cast<std::int64_t>(i + 10));
   return layer;
 }
 
@@ -59,10 +61,11 @@ TEST(Clean, SnapsVerticesOntoHigherPriorityFeatures) {
 
 TEST(Clean, DropsRepeatedVerticesAndZeroLengthSegments) {
   std::vector<IngestedLayer> layers;
-  layers.push_back(lineLayer("road", FeatureKind::Road,
-                             {{{0, 0, 1}, {0, 0, 1}, {1, 0, 1}, {1, 0.0001, 1}, {2, 0, 1}, {2, 0, 1}}}));
   layers.push_back(
-      lineLayer("lake", FeatureKind::Lake, {{{0, 5, 3}, {4, 5, 3}, {4, 9, 3}, {0, 9, 3}, {0.0002, 5, 3}}}, true));
+      lineLayer("road", FeatureKind::Road,
+                {{{0, 0, 1}, {0, 0, 1}, {1, 0, 1}, {1, 0.0001, 1}, {2, 0, 1}, {2, 0, 1}}}));
+  layers.push_back(lineLayer("lake", FeatureKind::Lake,
+                             {{{0, 5, 3}, {4, 5, 3}, {4, 9, 3}, {0, 9, 3}, {0.0002, 5, 3}}}, true));
   const auto report = cleanLayers(layers, tolerance(0.001));
   EXPECT_EQ(report.repeatedVerticesDropped, 4u);  // three on the road, the lake's closing one
   const auto& road = layers[0].features[0].vertices;
@@ -75,7 +78,8 @@ TEST(Clean, DropsDegenerateFeatures) {
   std::vector<IngestedLayer> layers;
   layers.push_back(lineLayer("river", FeatureKind::River,
                              {{{0, 0, 1}, {0, 0.0001, 1}}, {{5, 5, 1}, {6, 6, 1}}, {{9, 9, 1}}}));
-  layers.push_back(lineLayer("hole", FeatureKind::Hole, {{{20, 20, 0}, {21, 20, 0}, {21, 20.0001, 0}}}, true));
+  layers.push_back(
+      lineLayer("hole", FeatureKind::Hole, {{{20, 20, 0}, {21, 20, 0}, {21, 20.0001, 0}}}, true));
   const auto report = cleanLayers(layers, tolerance(0.001));
   EXPECT_EQ(report.degenerateFeaturesDropped, 3u);
   ASSERT_EQ(layers[0].features.size(), 1u);
@@ -87,12 +91,13 @@ TEST(Clean, MergesDuplicateAndNearDuplicatePoints) {
   std::vector<IngestedLayer> layers;
   // The DEM comes first in the config, but spot heights win a merge.
   layers.push_back(pointLayer("dem", FeatureKind::Raster, {{0, 0, 50}, {5, 5, 60}, {7, 7, 70}}));
-  layers.push_back(pointLayer("spots", FeatureKind::SpotHeight,
-                              {{0.0004, 0, 51}, {1, 1, 10}, {1, 1, 10}, {1.0003, 1, 10.5}, {3, 3, 30}}));
+  layers.push_back(
+      pointLayer("spots", FeatureKind::SpotHeight,
+                 {{0.0004, 0, 51}, {1, 1, 10}, {1, 1, 10}, {1.0003, 1, 10.5}, {3, 3, 30}}));
   layers.push_back(lineLayer("road", FeatureKind::Road, {{{3.0001, 3, 31}, {4, 4, 31}}}));
   const auto report = cleanLayers(layers, tolerance(0.001));
   EXPECT_EQ(report.duplicatePointsMerged, 3u);      // (0,0) dem cell, (1,1) twice
-  EXPECT_EQ(report.duplicatePointZConflicts, 2u);  // 50 vs 51, 10 vs 10.5
+  EXPECT_EQ(report.duplicatePointZConflicts, 2u);   // 50 vs 51, 10 vs 10.5
   EXPECT_EQ(report.pointsOnBreakLineVertices, 1u);  // (3,3) on the road's vertex
   ASSERT_EQ(layers[1].points.size(), 2u);
   EXPECT_EQ(layers[1].points[0], (Point3{0.0004, 0, 51}));
@@ -104,7 +109,8 @@ TEST(Clean, MergesDuplicateAndNearDuplicatePoints) {
 
 TEST(Clean, ZeroToleranceMergesExactDuplicatesOnly) {
   std::vector<IngestedLayer> layers;
-  layers.push_back(pointLayer("spots", FeatureKind::SpotHeight, {{1, 1, 1}, {1, 1, 1}, {1, 1.0000001, 1}}));
+  layers.push_back(
+      pointLayer("spots", FeatureKind::SpotHeight, {{1, 1, 1}, {1, 1, 1}, {1, 1.0000001, 1}}));
   const auto report = cleanLayers(layers, tolerance(0.0));
   EXPECT_EQ(report.duplicatePointsMerged, 1u);
   EXPECT_EQ(layers[0].points.size(), 2u);
@@ -159,7 +165,8 @@ TEST(Clean, SelfCrossingContour) {
   // only neighbouring segments meeting, across its seam too.
   layers.push_back(lineLayer("contours", FeatureKind::Contour,
                              {{{0, 0, 5}, {10, 10, 5}, {10, 0, 5}, {0, 10, 5}}}));
-  auto square = lineLayer("ring", FeatureKind::Contour, {{{20, 0, 5}, {30, 0, 5}, {30, 10, 5}, {20, 10, 5}}}, true);
+  auto square = lineLayer("ring", FeatureKind::Contour,
+                          {{{20, 0, 5}, {30, 0, 5}, {30, 10, 5}, {20, 10, 5}}}, true);
   layers.push_back(square);
   const auto report = cleanLayers(layers, tolerance(0.001));
   EXPECT_EQ(report.contourSelfCrossings, 1u);
@@ -177,7 +184,8 @@ TEST(Clean, SelfCrossingContour) {
 
 TEST(Clean, CrossingRingIsOpenedAtTheCut) {
   std::vector<IngestedLayer> layers;
-  layers.push_back(lineLayer("ring", FeatureKind::Contour, {{{0, 0, 5}, {10, 0, 5}, {10, 10, 5}, {0, 10, 5}}}, true));
+  layers.push_back(lineLayer("ring", FeatureKind::Contour,
+                             {{{0, 0, 5}, {10, 0, 5}, {10, 10, 5}, {0, 10, 5}}}, true));
   layers.push_back(lineLayer("line", FeatureKind::Contour, {{{5, -5, 7}, {5, 5, 7}}}));
   const auto report = cleanLayers(layers, tolerance(0.001));
   EXPECT_EQ(report.contourCrossings, 1u);
@@ -228,7 +236,8 @@ TEST(Clean, ManyParallelContoursHaveNoFalseCrossings) {
 }
 
 TEST(Clean, RedButteConfigEndToEnd) {
-  const auto config = loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config/red-butte.toml");
+  const auto config =
+      loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config/red-butte.toml");
   std::vector<std::string> stages;
   Progress progress;
   progress.callback = [&](std::string_view stage, std::string_view, std::uint64_t, std::uint64_t) {
@@ -250,14 +259,16 @@ TEST(Clean, RedButteConfigEndToEnd) {
     EXPECT_EQ(layer.crs, "EPSG:26912");
     for (const auto& f : layer.features) {
       for (std::size_t i = 1; i < f.vertices.size(); ++i) {
-        EXPECT_FALSE(f.vertices[i].x == f.vertices[i - 1].x && f.vertices[i].y == f.vertices[i - 1].y);
+        EXPECT_FALSE(f.vertices[i].x == f.vertices[i - 1].x &&
+                     f.vertices[i].y == f.vertices[i - 1].y);
       }
     }
   }
 }
 
 TEST(Clean, ChathamConfigEndToEnd) {
-  const auto config = loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config/chatham.toml");
+  const auto config =
+      loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config/chatham.toml");
   const auto result = loadLayers(config);
   ASSERT_EQ(result.layers.size(), 3u);
   EXPECT_EQ(result.cleaning.contourSelfCrossings, 0u);

@@ -119,11 +119,13 @@ TEST(Config, UnknownKeyNamesKeyAndLine) {
   EXPECT_NE(std::string(e.what()).find("unknown key 'colour'"), std::string::npos) << e.what();
 
   e = configError("config_unknown_layer",
-                  "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\nzz = \"h\"\n");
+                  "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = "
+                  "\"points\"\nzz = \"h\"\n");
   EXPECT_EQ(e.where().line, 6);
   EXPECT_NE(std::string(e.what()).find("'zz'"), std::string::npos) << e.what();
 
-  e = configError("config_unknown_table", "[project]\ncrs = \"EPSG:26912\"\n[tinn]\nstrict = true\n");
+  e = configError("config_unknown_table",
+                  "[project]\ncrs = \"EPSG:26912\"\n[tinn]\nstrict = true\n");
   EXPECT_NE(std::string(e.what()).find("'tinn'"), std::string::npos) << e.what();
 
   e = configError("config_unknown_tin", "[project]\ncrs = \"EPSG:26912\"\n[tin]\nsnap = 1.0\n");
@@ -131,20 +133,25 @@ TEST(Config, UnknownKeyNamesKeyAndLine) {
 }
 
 TEST(Config, WrongTypes) {
-  auto e = configError("config_type_weight",
-                       "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n"
-                       "weight = \"heavy\"\n");
+  auto e = configError(
+      "config_type_weight",
+      "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n"
+      "weight = \"heavy\"\n");
   EXPECT_EQ(e.where().line, 6);
-  EXPECT_NE(std::string(e.what()).find("weight must be a number, not a string"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("weight must be a number, not a string"), std::string::npos)
+      << e.what();
 
   e = configError("config_type_strict", "[project]\ncrs = \"EPSG:26912\"\n[tin]\nstrict = 1\n");
-  EXPECT_NE(std::string(e.what()).find("tin.strict must be true or false"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("tin.strict must be true or false"), std::string::npos)
+      << e.what();
 
   e = configError("config_type_crs", "[project]\ncrs = 26912\n");
-  EXPECT_NE(std::string(e.what()).find("project.crs must be a string"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("project.crs must be a string"), std::string::npos)
+      << e.what();
 
   e = configError("config_type_layer", "[project]\ncrs = \"EPSG:26912\"\nlayer = 3\n");
-  EXPECT_NE(std::string(e.what()).find("unknown key 'layer' in [project]"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("unknown key 'layer' in [project]"), std::string::npos)
+      << e.what();
 
   e = configError("config_type_root_layer", "layer = 3\n[project]\ncrs = \"EPSG:26912\"\n");
   EXPECT_EQ(e.where().line, 1);
@@ -152,33 +159,40 @@ TEST(Config, WrongTypes) {
 }
 
 TEST(Config, BadValues) {
-  auto e = configError("config_kind", "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n"
-                                      "kind = \"mountain\"\n");
+  auto e = configError("config_kind",
+                       "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n"
+                       "kind = \"mountain\"\n");
   EXPECT_EQ(e.where().line, 5);
   EXPECT_NE(std::string(e.what()).find("unknown kind 'mountain'"), std::string::npos) << e.what();
 
-  e = configError("config_nokind", "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n");
+  e = configError("config_nokind",
+                  "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n");
   EXPECT_NE(std::string(e.what()).find("no 'kind'"), std::string::npos) << e.what();
 
-  e = configError("config_missing_file", "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"gone.gpkg\"\n"
-                                         "kind = \"contours\"\n");
+  e = configError("config_missing_file",
+                  "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"gone.gpkg\"\n"
+                  "kind = \"contours\"\n");
   EXPECT_EQ(e.where().line, 4);
   EXPECT_NE(std::string(e.what()).find("gone.gpkg"), std::string::npos) << e.what();
 
-  e = configError("config_both_z", "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n"
-                                   "kind = \"points\"\nz = \"h\"\nz_value = 1\n");
+  e = configError("config_both_z",
+                  "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n"
+                  "kind = \"points\"\nz = \"h\"\nz_value = 1\n");
   EXPECT_NE(std::string(e.what()).find("not both"), std::string::npos) << e.what();
 
-  e = configError("config_band", "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n"
-                                 "kind = \"points\"\nband = 2\n");
+  e = configError("config_band",
+                  "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\n"
+                  "kind = \"points\"\nband = 2\n");
   EXPECT_NE(std::string(e.what()).find("dem"), std::string::npos) << e.what();
 
   e = configError("config_toml", "[project\ncrs = \"EPSG:26912\"\n");
   EXPECT_EQ(e.where().line, 1);
   EXPECT_NE(std::string(e.what()).find("not valid TOML"), std::string::npos) << e.what();
 
-  e = configError("config_dup", "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n"
-                                "[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n");
+  e = configError(
+      "config_dup",
+      "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n"
+      "[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n");
   EXPECT_NE(std::string(e.what()).find("two layers"), std::string::npos) << e.what();
 }
 
@@ -208,7 +222,8 @@ TEST(Config, MissingConfigFile) {
 
 TEST(Config, ExampleConfigsLoad) {
   for (const char* name : {"red-butte.toml", "chatham.toml"}) {
-    const auto config = loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config" / name);
+    const auto config =
+        loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config" / name);
     EXPECT_FALSE(config.layers.empty()) << name;
   }
 }

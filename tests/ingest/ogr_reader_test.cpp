@@ -1,8 +1,7 @@
 // readers.ogr (and the layer dispatch): GeoJSON, GeoPackage and Shapefile made
 // here with OGR, the real Red Butte and Chatham layers, and every bad input.
-#include <gtest/gtest.h>
-
 #include <gdal_priv.h>
+#include <gtest/gtest.h>
 #include <ogrsf_frmts.h>
 
 #include <cmath>
@@ -19,8 +18,8 @@ namespace {
 
 const std::filesystem::path kData = TINSMITH_SHARED_DATA;
 
-LayerConfig layerConfig(const std::filesystem::path& path, LayerKind kind, const std::string& z = {},
-                        const std::string& layer = {}) {
+LayerConfig layerConfig(const std::filesystem::path& path, LayerKind kind,
+                        const std::string& z = {}, const std::string& layer = {}) {
   LayerConfig c;
   c.path = path;
   c.kind = kind;
@@ -30,7 +29,8 @@ LayerConfig layerConfig(const std::filesystem::path& path, LayerKind kind, const
   return c;
 }
 
-std::filesystem::path writeText(const std::filesystem::path& dir, const std::string& name, const std::string& text) {
+std::filesystem::path writeText(const std::filesystem::path& dir, const std::string& name,
+                                const std::string& text) {
   std::ofstream(dir / name, std::ios::binary) << text;
   return dir / name;
 }
@@ -47,7 +47,9 @@ std::string errorOf(F&& f) {
   return {};
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
 
 // A vector file made with OGR: `driver` "GPKG" or "ESRI Shapefile"; features
 // given as WKT with an 'elev' Real and a 'label' String attribute.
@@ -57,13 +59,15 @@ struct FixtureFeature {
   std::string label = "x";
 };
 
-std::filesystem::path makeVectorFile(const std::filesystem::path& path, const char* driverName, const char* layerName,
-                                     OGRwkbGeometryType type, const std::vector<FixtureFeature>& features,
+std::filesystem::path makeVectorFile(const std::filesystem::path& path, const char* driverName,
+                                     const char* layerName, OGRwkbGeometryType type,
+                                     const std::vector<FixtureFeature>& features,
                                      int epsg = 26912) {
   ensureGdalReady();
   auto* driver = GetGDALDriverManager()->GetDriverByName(driverName);
   EXPECT_NE(driver, nullptr);
-  std::unique_ptr<GDALDataset> ds(driver->Create(path.string().c_str(), 0, 0, 0, GDT_Unknown, nullptr));
+  std::unique_ptr<GDALDataset> ds(
+      driver->Create(path.string().c_str(), 0, 0, 0, GDT_Unknown, nullptr));
   EXPECT_NE(ds, nullptr);
   OGRSpatialReference srs;
   if (epsg) srs.importFromEPSG(epsg);
@@ -151,8 +155,9 @@ TEST(OgrReader, PolygonsWithHolesForAreaKinds) {
 
 TEST(OgrReader, GeoPackageMadeWithOgr) {
   const auto dir = test::scratchDir("ogr_gpkg");
-  const auto path = makeVectorFile(dir / "c.gpkg", "GPKG", "contours", wkbLineString,
-                                   {{"LINESTRING (0 0, 10 0, 20 5)", 100.0}, {"LINESTRING (0 10, 20 10)", 120.0}});
+  const auto path = makeVectorFile(
+      dir / "c.gpkg", "GPKG", "contours", wkbLineString,
+      {{"LINESTRING (0 0, 10 0, 20 5)", 100.0}, {"LINESTRING (0 10, 20 10)", 120.0}});
   auto config = layerConfig(path, LayerKind::Contours, "elev", "contours");
   const auto layer = readLayer(config);
   ASSERT_EQ(layer.features.size(), 2u);
@@ -188,8 +193,9 @@ TEST(OgrReader, BadInput) {
   EXPECT_TRUE(contains(m, "garbage.geojson") && contains(m, "cannot open")) << m;
 
   // A layer without the z attribute names the numeric attributes there are.
-  const auto gpkg = makeVectorFile(dir / "c.gpkg", "GPKG", "contours", wkbLineString,
-                                   {{"LINESTRING (0 0, 10 0)", 100.0}, {"LINESTRING (0 5, 10 5)", std::nullopt}});
+  const auto gpkg =
+      makeVectorFile(dir / "c.gpkg", "GPKG", "contours", wkbLineString,
+                     {{"LINESTRING (0 0, 10 0)", 100.0}, {"LINESTRING (0 5, 10 5)", std::nullopt}});
   m = errorOf([&] { readLayer(layerConfig(gpkg, LayerKind::Contours, "height")); });
   EXPECT_TRUE(contains(m, "has no attribute 'height'") && contains(m, "elev")) << m;
 
@@ -198,11 +204,13 @@ TEST(OgrReader, BadInput) {
   EXPECT_TRUE(contains(m, "feature 2") && contains(m, "'elev' is empty")) << m;
 
   // A non-numeric z, and NaN given as text.
-  const auto text = makeVectorFile(dir / "t.gpkg", "GPKG", "t", wkbLineString,
-                                   {{"LINESTRING (0 0, 10 0)", 1.0, "12.5"}, {"LINESTRING (0 5, 10 5)", 1.0, "n/a"}});
+  const auto text = makeVectorFile(
+      dir / "t.gpkg", "GPKG", "t", wkbLineString,
+      {{"LINESTRING (0 0, 10 0)", 1.0, "12.5"}, {"LINESTRING (0 5, 10 5)", 1.0, "n/a"}});
   m = errorOf([&] { readLayer(layerConfig(text, LayerKind::Contours, "label")); });
   EXPECT_TRUE(contains(m, "feature 2") && contains(m, "not numeric ('n/a')")) << m;
-  const auto nan = makeVectorFile(dir / "n.gpkg", "GPKG", "n", wkbLineString, {{"LINESTRING (0 0, 10 0)", 1.0, "NaN"}});
+  const auto nan = makeVectorFile(dir / "n.gpkg", "GPKG", "n", wkbLineString,
+                                  {{"LINESTRING (0 0, 10 0)", 1.0, "NaN"}});
   m = errorOf([&] { readLayer(layerConfig(nan, LayerKind::Contours, "label")); });
   EXPECT_TRUE(contains(m, "feature 1") && contains(m, "not finite")) << m;
 
@@ -216,7 +224,9 @@ TEST(OgrReader, BadInput) {
   const auto points = writeText(dir, "p.geojson", R"({"type":"FeatureCollection","features":[
     {"type":"Feature","id":0,"properties":{"h":1},"geometry":{"type":"Point","coordinates":[0,0]}}]})");
   m = errorOf([&] { readLayer(layerConfig(points, LayerKind::Lake, "h")); });
-  EXPECT_TRUE(contains(m, "feature 0") && contains(m, "is a POINT") && contains(m, "kind = \"lake\"")) << m;
+  EXPECT_TRUE(contains(m, "feature 0") && contains(m, "is a POINT") &&
+              contains(m, "kind = \"lake\""))
+      << m;
   const auto csv = writeText(dir, "p.csv", "x,y,z\n1,2,3\n");
   m = errorOf([&] { readLayer(layerConfig(csv, LayerKind::Boundary)); });
   EXPECT_TRUE(contains(m, "p.csv") && contains(m, "kind = \"boundary\"")) << m;
@@ -227,7 +237,8 @@ TEST(OgrReader, BadInput) {
   EXPECT_TRUE(contains(m, "open line")) << m;
 
   // An empty layer.
-  const auto empty = writeText(dir, "empty.geojson", R"({"type":"FeatureCollection","features":[]})");
+  const auto empty =
+      writeText(dir, "empty.geojson", R"({"type":"FeatureCollection","features":[]})");
   m = errorOf([&] { readLayer(layerConfig(empty, LayerKind::Road)); });
   EXPECT_TRUE(contains(m, "empty.geojson") && contains(m, "holds no features")) << m;
 
@@ -237,7 +248,8 @@ TEST(OgrReader, BadInput) {
 }
 
 TEST(OgrReader, RedButteLayers) {
-  const auto contours = readLayer(layerConfig(kData / "red-butte/contours.gpkg", LayerKind::Contours, "elev", "contours"));
+  const auto contours = readLayer(
+      layerConfig(kData / "red-butte/contours.gpkg", LayerKind::Contours, "elev", "contours"));
   EXPECT_EQ(contours.sourceCrs, "EPSG:26912");
   std::set<std::int64_t> fids;
   for (const auto& f : contours.features) {
@@ -253,14 +265,17 @@ TEST(OgrReader, RedButteLayers) {
   EXPECT_FALSE(road.hasZ);
   EXPECT_GT(road.features[0].vertices.size(), 10u);
 
-  const auto streams = readLayer(layerConfig(kData / "red-butte/streams.geojson", LayerKind::River));
+  const auto streams =
+      readLayer(layerConfig(kData / "red-butte/streams.geojson", LayerKind::River));
   EXPECT_EQ(streams.features.size(), 23u);
 
-  const auto reservoir = readLayer(layerConfig(kData / "red-butte/reservoir.geojson", LayerKind::Lake));
+  const auto reservoir =
+      readLayer(layerConfig(kData / "red-butte/reservoir.geojson", LayerKind::Lake));
   ASSERT_GE(reservoir.features.size(), 1u);
   EXPECT_TRUE(reservoir.features[0].closed);
 
-  const auto boundary = readLayer(layerConfig(kData / "red-butte/boundary.geojson", LayerKind::Boundary));
+  const auto boundary =
+      readLayer(layerConfig(kData / "red-butte/boundary.geojson", LayerKind::Boundary));
   ASSERT_GE(boundary.features.size(), 1u);
   EXPECT_TRUE(boundary.features[0].closed);
   EXPECT_EQ(boundary.sourceCrs, "EPSG:26912");
@@ -273,19 +288,20 @@ TEST(OgrReader, RedButteLayers) {
 }
 
 TEST(OgrReader, ChathamLayers) {
-  const auto contours = readLayer(
-      layerConfig(kData / "chatham/se-island-contours.gpkg", LayerKind::Contours, "elevation", "contours"));
+  const auto contours = readLayer(layerConfig(kData / "chatham/se-island-contours.gpkg",
+                                              LayerKind::Contours, "elevation", "contours"));
   EXPECT_EQ(contours.sourceCrs, "EPSG:3793");
   EXPECT_GE(contours.features.size(), 18u);
   for (const auto& f : contours.features) {
     EXPECT_GE(f.vertices[0].z, 20);
     EXPECT_LE(f.vertices[0].z, 220);
   }
-  const auto points =
-      readLayer(layerConfig(kData / "chatham/se-island-height-pts.gpkg", LayerKind::Points, "elevation"));
+  const auto points = readLayer(
+      layerConfig(kData / "chatham/se-island-height-pts.gpkg", LayerKind::Points, "elevation"));
   EXPECT_EQ(points.points.size(), 5u);
 
-  auto coast = layerConfig(kData / "chatham/se-island-exterior.gpkg", LayerKind::Contours, "", "se_island");
+  auto coast =
+      layerConfig(kData / "chatham/se-island-exterior.gpkg", LayerKind::Contours, "", "se_island");
   coast.zValue = 0.0;
   const auto rings = readLayer(coast);
   EXPECT_GE(rings.features.size(), 14u);

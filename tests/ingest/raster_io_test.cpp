@@ -1,5 +1,7 @@
 // readers.raster / writers.raster: GeoTIFF and EXR round trips with
 // georeferencing and nodata, DEM layers as points, the real dem.tif and SRTM.
+#include "ingest/readers/raster_io.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 
 #include "core/base/error.hpp"
 #include "ingest/readers/layer_reader.hpp"
-#include "ingest/readers/raster_io.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::ingest {
@@ -23,7 +24,8 @@ HeightGrid sampleGrid() {
   g.height = 3;
   g.geotransform = {431000.5, 2.0, 0.0, 4514000.25, 0.0, -2.0};
   g.crs = "EPSG:26912";
-  for (int i = 0; i < g.width * g.height; ++i) g.z.push_back(1600.0f + 0.25f * static_cast<float>(i));
+  for (int i = 0; i < g.width * g.height; ++i)
+    g.z.push_back(1600.0f + 0.25f * static_cast<float>(i));
   g.z[7] = kNaN;
   return g;
 }
@@ -123,7 +125,8 @@ TEST(RasterIo, Errors) {
   HeightGrid bad = sampleGrid();
   bad.z.pop_back();
   expectMessage([&] { writeExr(bad, dir / "bad.exr"); }, "malformed");
-  expectMessage([&] { writeGeoTiff(sampleGrid(), dir / "no-such-dir" / "h.tif"); }, "cannot create");
+  expectMessage([&] { writeGeoTiff(sampleGrid(), dir / "no-such-dir" / "h.tif"); },
+                "cannot create");
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
 }
 

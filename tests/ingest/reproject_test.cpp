@@ -1,17 +1,17 @@
 // filters.reproject: known coordinates computed independently with
 // GeographicLib, axis order, round trips, and layers without a CRS.
+#include "ingest/filters/reproject.hpp"
+
 #include <gtest/gtest.h>
 
 #include <GeographicLib/Constants.hpp>
 #include <GeographicLib/TransverseMercator.hpp>
 #include <GeographicLib/UTMUPS.hpp>
-
 #include <fstream>
 
 #include "core/base/error.hpp"
 #include "ingest/config/project_config.hpp"
 #include "ingest/filters/load_layers.hpp"
-#include "ingest/filters/reproject.hpp"
 #include "ingest/readers/layer_reader.hpp"
 #include "tests/support/run_command.hpp"
 
@@ -26,7 +26,8 @@ IngestedLayer pointLayer(const std::string& crs, std::vector<Point3> points) {
   layer.crs = crs;
   layer.sourceCrs = crs;
   layer.points = std::move(points);
-  for (std::size_t i = 0; i < layer.points.size(); ++i) layer.pointIds.push_back(static_cast<std::int64_t>(i + 1));
+  for (std::size_t i = 0; i < layer.points.size(); ++i)
+    layer.pointIds.push_back(static_cast<std::int64_t>(i + 1));
   return layer;
 }
 
@@ -49,7 +50,8 @@ TEST(Reproject, Wgs84ToUtm12MatchesGeographicLib) {
 }
 
 TEST(Reproject, RoundTripUtmToGeographicAndBack) {
-  const std::vector<Point3> utm{{431556.91048414, 4514331.82461309, 1650}, {440000.125, 4520000.5, 2000}};
+  const std::vector<Point3> utm{{431556.91048414, 4514331.82461309, 1650},
+                                {440000.125, 4520000.5, 2000}};
   auto layer = pointLayer("EPSG:32612", utm);
   reprojectLayer(layer, "EPSG:4326");
   EXPECT_NEAR(layer.points[0].x, -111.8, 0.1);  // lon first: traditional GIS order
@@ -117,7 +119,8 @@ TEST(Reproject, PointOutsideTheDomainNamesTheFeature) {
 TEST(Reproject, ConfigWithCsvWithoutCrsFailsAtLoad) {
   const auto dir = test::scratchDir("reproject_no_crs");
   std::ofstream(dir / "pts.csv") << "x,y,z\n431000,4514000,1600\n";
-  std::ofstream(dir / "p.toml") << "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n";
+  std::ofstream(dir / "p.toml")
+      << "[project]\ncrs = \"EPSG:26912\"\n[[layer]]\npath = \"pts.csv\"\nkind = \"points\"\n";
   const auto config = loadProjectConfig(dir / "p.toml");
   try {
     loadLayers(config);

@@ -1,16 +1,18 @@
 // readers.text: delimiter and header detection, column choice, errors with lines.
+#include "ingest/readers/text_points.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 
 #include "core/base/error.hpp"
-#include "ingest/readers/text_points.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::ingest {
 namespace {
 
-std::filesystem::path writeText(const std::string& dirName, const std::string& name, const std::string& text) {
+std::filesystem::path writeText(const std::string& dirName, const std::string& name,
+                                const std::string& text) {
   const auto dir = test::scratchDir(dirName);
   const auto path = dir / name;
   std::ofstream(path, std::ios::binary) << text;
@@ -133,7 +135,8 @@ TEST(TextPoints, ReadsFromFile) {
 }
 
 TEST(TextPoints, RedButteSpotHeights) {
-  const auto t = readTextPointTable(std::filesystem::path(TINSMITH_SHARED_DATA) / "red-butte/spot-heights.csv");
+  const auto t = readTextPointTable(std::filesystem::path(TINSMITH_SHARED_DATA) /
+                                    "red-butte/spot-heights.csv");
   EXPECT_EQ(t.points.size(), 400u);
   EXPECT_TRUE(t.hasHeader);
   for (const auto& p : t.points) {

@@ -1,19 +1,194 @@
-// `tinsmith fit`: fit a multilevel least-squares surface over binary triangulations.
+// `tinsmith fit`: fit a multilevel least-squares surface over binary
+// triangulations (Algorithm 8.1) to an XYZ/CSV point file and write it as .tin.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+
 #include "core/base/error.hpp"
+#include "core/fit/multilevel_fit.hpp"
+#include "ingest/readers/text_points.hpp"
+#include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 
 namespace tinsmith::cli {
 
+namespace {
+
+struct FitCliOptions {
+  std::string points;
+  std::string output;
+  std::optional<std::string> tolerance;
+  double lambda = 1.0;
+  std::optional<double> lambdaAbs;
+  std::string smoothing = "thin-plate";
+  std::optional<std::string> criterion;
+  std::optional<std::string> stats;
+  std::string solver = "gs";
+  int maxLevel = 20;
+  int directLevels = 3;
+  int threads = 0;
+  std::string crs;
+  bool quiet = false;
+};
+
+double parseNumber(const std::string& text, const std::string& option) {
+  std::size_t used = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v)) {
+    throw usageError(option + ": '" + text + "' is not a number", "e.g. " + option + " 0.5");
+  }
+  return v;
+}
+
+fit::Smoothing parseSmoothing(const std::string& s) {
+  if (s == "thin-plate") return fit::Smoothing::ThinPlate;
+  if (s == "membrane") return fit::Smoothing::Membrane;
+  if (s == "umbrella") return fit::Smoothing::Umbrella;
+  if (s == "umbrella-weighted") return fit::Smoothing::UmbrellaWeighted;
+  if (s == "none") return fit::Smoothing::None;
+  throw usageError("unknown --smoothing '" + s + "'", "use thin-plate, membrane, umbrella, umbrella-weighted or none");
+}
+
+fit::SolverKind parseSolver(const std::string& s) {
+  if (s == "gs") return fit::SolverKind::GaussSeidel;
+  if (s == "cg") return fit::SolverKind::ConjugateGradient;
+  if (s == "direct") return fit::SolverKind::Direct;
+  throw usageError("unknown --solver '" + s + "'", "use gs (Gauss-Seidel), cg or direct");
+}
+
+/// --tolerance "0.25%" (of the z range) or "2.5" (z units) and --criterion
+/// "error,count:2,curvature:0.1" → the criteria. Without --criterion the
+/// tolerance alone is the criterion.
+fit::RefinementCriteria parseCriteria(const FitCliOptions& o) {
+  fit::RefinementCriteria c;
+  bool wantError = !o.criterion.has_value();
+  if (o.criterion) {
+    std::stringstream parts(*o.criterion);
+    std::string part;
+    while (std::getline(parts, part, ',')) {
+      const auto colon = part.find(':');
+      const std::string name = part.substr(0, colon);
+      const std::string value = colon == std::string::npos ? "" : part.substr(colon + 1);
+      if (name == "error") {
+        wantError = true;
+      } else if (name == "count") {
+        const double n = value.empty() ? -1 : parseNumber(value, "--criterion count");
+        if (n < 0 || n != std::floor(n)) throw usageError("--criterion count:N needs a whole number N >= 0", "e.g. count:2");
+        c.countAbove = static_cast<std::size_t>(n);
+      } else if (name == "curvature") {
+        if (value.empty()) throw usageError("--criterion curvature:T needs a threshold T", "e.g. curvature:0.05");
+        c.curvatureAbove = parseNumber(value, "--criterion curvature");
+      } else {
+        throw usageError("unknown criterion '" + part + "'", "use error, count:N, curvature:T or a comma-separated combination");
+      }
+    }
+  }
+  if (wantError) {
+    if (!o.tolerance) throw usageError("the error criterion needs --tolerance", "e.g. --tolerance 0.25% or --tolerance 2.5");
+    std::string t = *o.tolerance;
+    const bool percent = !t.empty() && t.back() == '%';
+    if (percent) t.pop_back();
+    const double v = parseNumber(t, "--tolerance");
+    if (!(v > 0)) throw usageError("--tolerance must be positive");
+    if (percent) c.errorPercent = v;
+    else c.errorAbsolute = v;
+  } else if (o.tolerance) {
+    throw usageError("--tolerance is given but --criterion has no 'error'", "add error to --criterion, e.g. error,count:2");
+  }
+  return c;
+}
+
+const char* solverName(fit::SolverKind s) {
+  switch (s) {
+    case fit::SolverKind::Direct: return "direct";
+    case fit::SolverKind::GaussSeidel: return "gauss-seidel";
+    case fit::SolverKind::ConjugateGradient: return "cg";
+  }
+  return "";
+}
+
+std::string statsJson(const fit::MultilevelFit& result, std::size_t points, double seconds) {
+  std::ostringstream j;
+  j.precision(17);
+  const auto levels = result.levels();
+  j << "{\n  \"points\": " << points << ",\n  \"seconds\": " << seconds << ",\n  \"final\": {\"level\": "
+    << levels.back().level << ", \"vertices\": " << levels.back().vertices << ", \"triangles\": "
+    << levels.back().triangles << ", \"max_error\": " << levels.back().maxError << ", \"rms_error\": "
+    << levels.back().rmsError << "},\n  \"levels\": [\n";
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    const auto& s = levels[i];
+    j << "    {\"level\": " << s.level << ", \"vertices\": " << s.vertices << ", \"triangles\": " << s.triangles
+      << ", \"solver\": \"" << solverName(s.solver) << "\", \"iterations\": " << s.iterations
+      << ", \"relative_residual\": " << s.relativeResidual << ", \"lambda\": " << s.lambda
+      << ", \"max_error\": " << s.maxError << ", \"rms_error\": " << s.rmsError
+      << ", \"cells_refined\": " << s.cellsRefined << ", \"seconds\": " << s.seconds << "}"
+      << (i + 1 < levels.size() ? ",\n" : "\n");
+  }
+  j << "  ]\n}\n";
+  return j.str();
+}
+
+}  // namespace
+
 void addFitCommand(CLI::App& app) {
+  auto o = std::make_shared<FitCliOptions>();
   auto* cmd = app.add_subcommand("fit", "Fit a multilevel least-squares surface over binary triangulations");
-  cmd->add_option("points", "XYZ/CSV point file")->required();
-  cmd->add_option("--tolerance", "Error criterion: metres, or a percentage of the z range (0.25%)");
-  cmd->add_option("--lambda", "Smoothing weight as a multiple of the default lambda_d");
-  cmd->add_option("--smoothing", "membrane | umbrella | thin-plate");
-  cmd->add_option("--criterion", "error, count:N, curvature:T, or a comma-separated combination");
-  cmd->add_option("-o,--output", "The .tin file to write")->required();
-  cmd->add_option("--stats", "Per-level statistics as JSON");
-  cmd->callback([] { throw notImplemented("tinsmith fit (multilevel least squares)"); });
+  cmd->add_option("points", o->points, "XYZ/CSV point file (x, y, z; projected metres)")->required();
+  cmd->add_option("--tolerance", o->tolerance, "Error criterion: z units (2.5), or a percentage of the z range (0.25%)");
+  cmd->add_option("--lambda", o->lambda, "Smoothing weight as a multiple of the default lambda_d (default 1)");
+  cmd->add_option("--lambda-abs", o->lambdaAbs, "Absolute smoothing weight (overrides --lambda)");
+  cmd->add_option("--smoothing", o->smoothing, "thin-plate (default) | membrane | umbrella | umbrella-weighted | none");
+  cmd->add_option("--criterion", o->criterion, "error, count:N, curvature:T, or a comma-separated combination (all must hold)");
+  cmd->add_option("-o,--output", o->output, "The .tin file to write")->required();
+  cmd->add_option("--stats", o->stats, "Per-level statistics as JSON");
+  cmd->add_option("--solver", o->solver, "gs (Gauss-Seidel, default) | cg | direct, on the levels after --direct-levels");
+  cmd->add_option("--max-level", o->maxLevel, "The finest grid level whose cells may be refined (1..29, default 20)");
+  cmd->add_option("--direct-levels", o->directLevels, "Levels solved by the direct solver first (default 3)");
+  cmd->add_option("--threads", o->threads, "Worker threads (default: all cores)");
+  cmd->add_option("--crs", o->crs, "CRS to record in the .tin (e.g. EPSG:32619)");
+  cmd->add_flag("-q,--quiet", o->quiet, "No per-level progress");
+  cmd->callback([o] {
+    fit::MultilevelOptions opt;
+    opt.smoothing = parseSmoothing(o->smoothing);
+    opt.solver = parseSolver(o->solver);
+    opt.criteria = parseCriteria(*o);
+    if (!(o->lambda >= 0)) throw usageError("--lambda must be >= 0");
+    opt.lambdaFactor = o->lambda;
+    if (o->lambdaAbs) {
+      if (!(*o->lambdaAbs >= 0)) throw usageError("--lambda-abs must be >= 0");
+      opt.lambdaAbsolute = *o->lambdaAbs;
+    }
+    opt.maxLevel = o->maxLevel;
+    opt.directLevels = o->directLevels;
+    opt.threads = o->threads;
+    if (!o->quiet) opt.progress = [](const std::string& line) { std::cerr << line << "\n"; };
+
+    const std::vector<Point3> points = ingest::readTextPoints(o->points);
+    const auto start = std::chrono::steady_clock::now();
+    const fit::MultilevelFit result = fit::fitMultilevel(points, opt);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ingest::writeTinFile(o->output, result.toTinData(o->crs));
+    if (o->stats) {
+      std::ofstream out(*o->stats, std::ios::binary | std::ios::trunc);
+      out << statsJson(result, points.size(), seconds);
+      if (!out) throw ioError("cannot write the statistics file", {*o->stats}, "check the directory exists and is writable");
+    }
+    const auto& last = result.levels().back();
+    std::cerr << "wrote " << o->output << ": " << last.vertices << " vertices, " << last.triangles
+              << " triangles, level " << last.level << ", max error " << last.maxError << ", rms " << last.rmsError
+              << "\n";
+  });
 }
 
 }  // namespace tinsmith::cli

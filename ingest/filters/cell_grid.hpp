@@ -1,0 +1,93 @@
+// A uniform grid over x, y stored as compressed rows (CSR): for each cell the
+// indices of the items in it, in one array. Built in two passes over the items
+// (count, then fill), so building and querying touch memory in order — much
+// faster than a hash for millions of items. Memory: 4 bytes per (item, cell)
+// entry plus 4 bytes per cell.
+//
+// Items may cover several cells (segments); queries visit the cells a box
+// overlaps. Coordinates outside the extent are clamped onto its border cells.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace tinsmith::ingest {
+
+class CellGrid {
+ public:
+  /// The grid covering [minX, maxX] x [minY, maxY] with square cells of `cell` metres.
+  CellGrid(double minX, double minY, double maxX, double maxY, double cell)
+      : minX_(minX), minY_(minY), cell_(cell), inverseCell_(1.0 / cell) {
+    nx_ = static_cast<std::int64_t>(std::floor((maxX - minX) * inverseCell_)) + 1;
+    ny_ = static_cast<std::int64_t>(std::floor((maxY - minY) * inverseCell_)) + 1;
+  }
+
+  /// A cell size giving about one cell per item, never below `minimum`.
+  static double cellFor(double width, double height, std::size_t items, double minimum) {
+    const double n = static_cast<double>(std::max<std::size_t>(items, 1));
+    return std::max(
+        {minimum, std::sqrt(width * height / n), std::max(width, height) / (2.0 * n), 1e-9});
+  }
+
+  [[nodiscard]] double cell() const { return cell_; }
+  [[nodiscard]] double originY() const { return minY_; }
+  [[nodiscard]] std::int64_t cellX(double x) const {
+    return std::clamp<std::int64_t>(
+        static_cast<std::int64_t>(std::floor((x - minX_) * inverseCell_)), 0, nx_ - 1);
+  }
+  [[nodiscard]] std::int64_t cellY(double y) const {
+    return std::clamp<std::int64_t>(
+        static_cast<std::int64_t>(std::floor((y - minY_) * inverseCell_)), 0, ny_ - 1);
+  }
+  [[nodiscard]] std::size_t index(std::int64_t cx, std::int64_t cy) const {
+    return static_cast<std::size_t>(cy * nx_ + cx);
+  }
+  [[nodiscard]] std::size_t cellCount() const { return static_cast<std::size_t>(nx_ * ny_); }
+
+  /// Fills the grid: visit(i, emit) must call emit(cellIndex) for every cell
+  /// item i covers (the same cells on both calls).
+  template <typename Visit>
+  void build(std::size_t items, Visit&& visit) {
+    start_.assign(cellCount() + 1, 0);
+    for (std::size_t i = 0; i < items; ++i) visit(i, [&](std::size_t c) { ++start_[c]; });
+    std::uint32_t sum = 0;
+    for (auto& s : start_) {
+      sum += s;
+      s = sum;  // end of each cell
+    }
+    items_.resize(sum);
+    for (std::size_t i = 0; i < items; ++i) {
+      visit(i, [&](std::size_t c) { items_[--start_[c]] = static_cast<std::uint32_t>(i); });
+    }
+    // start_[c] is now the first entry of cell c; start_[cells] the total.
+  }
+
+  /// Calls f(item) for each item in cell c.
+  template <typename F>
+  void forEachInCell(std::size_t c, F&& f) const {
+    for (auto k = start_[c]; k < start_[c + 1]; ++k) f(items_[k]);
+  }
+  [[nodiscard]] std::uint32_t cellSize(std::size_t c) const { return start_[c + 1] - start_[c]; }
+  [[nodiscard]] const std::uint32_t* cellItems(std::size_t c) const {
+    return items_.data() + start_[c];
+  }
+
+  /// Calls f(item) for each item in the cells the box [x-r, x+r] x [y-r, y+r] overlaps.
+  template <typename F>
+  void forEachNear(double x, double y, double r, F&& f) const {
+    const auto x0 = cellX(x - r), x1 = cellX(x + r), y0 = cellY(y - r), y1 = cellY(y + r);
+    for (auto cy = y0; cy <= y1; ++cy) {
+      for (auto cx = x0; cx <= x1; ++cx) forEachInCell(index(cx, cy), f);
+    }
+  }
+
+ private:
+  double minX_, minY_, cell_, inverseCell_;
+  std::int64_t nx_ = 1, ny_ = 1;
+  std::vector<std::uint32_t> start_;
+  std::vector<std::uint32_t> items_;
+};
+
+}  // namespace tinsmith::ingest

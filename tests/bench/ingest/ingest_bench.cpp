@@ -1,0 +1,303 @@
+// Ingest benchmark: a synthetic GeoPackage of contours, spot heights and break
+// lines (made with OGR in a temporary folder, stored in EPSG:4326 so the
+// reprojection stage does real work) → read → reproject → clean, with wall
+// time and peak memory per stage.
+//
+//   ingest_bench [--contour-vertices N] [--spot-heights N] [--breakline-vertices N]
+//                [--dir DIR] [--keep]
+//
+// Stages are entries of a list (see main): each gets the shared BenchContext,
+// runs, and is measured apart — peak RSS is reset before each stage through
+// /proc/self/clear_refs, so "peak MB" is that stage's own high-water mark. A
+// later stage (the TIN build) is added by appending to the list and reading
+// ctx.layers.
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+#include <ogrsf_frmts.h>
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/base/error.hpp"
+#include "ingest/base/gdal_runtime.hpp"
+#include "ingest/filters/clean.hpp"
+#include "ingest/filters/load_layers.hpp"
+
+namespace {
+
+using namespace tinsmith;
+using namespace tinsmith::ingest;
+
+struct Sizes {
+  long contourVertices = 1000000;
+  long spotHeights = 100000;
+  long breaklineVertices = 10000;
+};
+
+/// What the stages share.
+struct BenchContext {
+  Sizes sizes;
+  std::filesystem::path dir;
+  std::filesystem::path gpkg;
+  ProjectConfig config;
+  std::vector<IngestedLayer> layers;
+  CleaningReport cleaning;
+};
+
+struct Stage {
+  std::string name;
+  std::function<void(BenchContext&)> run;
+  bool counted = true;  ///< part of the ingest total (generation is not)
+};
+
+long readStatusKb(const char* key) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind(key, 0) == 0) return std::stol(line.substr(std::strlen(key)));
+  }
+  return -1;
+}
+
+double cpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+}
+
+void resetPeak() {
+  std::ofstream("/proc/self/clear_refs") << "5";
+}
+
+// Terrain of the synthetic site: smooth, in metres.
+double terrain(double x, double y) {
+  return 1600.0 + 0.02 * y + 15.0 * std::sin(x / 700.0) * std::cos(y / 900.0);
+}
+
+void generate(BenchContext& ctx) {
+  ensureGdalReady();
+  auto* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
+  std::filesystem::remove(ctx.gpkg);
+  std::unique_ptr<GDALDataset> ds(
+      driver->Create(ctx.gpkg.string().c_str(), 0, 0, 0, GDT_Unknown, nullptr));
+  if (!ds) throw ioError("cannot create the benchmark GeoPackage", {ctx.gpkg.string()});
+  OGRSpatialReference utm, geographic;
+  utm.importFromEPSG(32612);
+  geographic.importFromEPSG(4326);
+  utm.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  geographic.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::unique_ptr<OGRCoordinateTransformation> toGeographic(
+      OGRCreateCoordinateTransformation(&utm, &geographic));
+  const double x0 = 420000.0, y0 = 4500000.0;
+
+  // Contours: rows of wavy lines 10 m apart (amplitude 3 m: they never meet),
+  // 1000 vertices each, 20 m along.
+  const long perLine = 1000;
+  const long lines = std::max(1L, ctx.sizes.contourVertices / perLine);
+  {
+    auto* layer = ds->CreateLayer("contours", &geographic, wkbLineString, nullptr);
+    OGRFieldDefn elev("elev", OFTReal);
+    layer->CreateField(&elev);
+    ds->StartTransaction();
+    for (long c = 0; c < lines; ++c) {
+      OGRLineString line;
+      line.setNumPoints(static_cast<int>(perLine));
+      for (long i = 0; i < perLine; ++i) {
+        const double x = x0 + static_cast<double>(i) * 20.0;
+        const double y =
+            y0 + static_cast<double>(c) * 10.0 + 3.0 * std::sin(static_cast<double>(i) / 8.0);
+        line.setPoint(static_cast<int>(i), x, y);
+      }
+      line.transform(toGeographic.get());
+      OGRFeature feature(layer->GetLayerDefn());
+      feature.SetField("elev", 1600.0 + static_cast<double>(c));
+      feature.SetGeometry(&line);
+      if (layer->CreateFeature(&feature) != OGRERR_NONE)
+        throw ioError("cannot write a benchmark feature");
+    }
+    ds->CommitTransaction();
+  }
+  // Spot heights: uniform random, 1% of them repeated exactly.
+  const double width = static_cast<double>(perLine) * 20.0;
+  const double height = static_cast<double>(lines) * 10.0;
+  {
+    auto* layer = ds->CreateLayer("spots", &geographic, wkbPoint, nullptr);
+    OGRFieldDefn elev("elev", OFTReal);
+    layer->CreateField(&elev);
+    std::mt19937_64 random(2026);
+    std::uniform_real_distribution<double> ux(0.0, width), uy(0.0, height);
+    ds->StartTransaction();
+    double lastX = x0, lastY = y0;  // the previous point, repeated every 100th
+    for (long i = 0; i < ctx.sizes.spotHeights; ++i) {
+      double x = x0 + ux(random), y = y0 + uy(random);
+      if (i % 100 == 99) x = lastX, y = lastY;
+      lastX = x;
+      lastY = y;
+      OGRPoint p(x, y);
+      p.transform(toGeographic.get());
+      OGRFeature feature(layer->GetLayerDefn());
+      feature.SetField("elev", terrain(x, y));
+      feature.SetGeometry(&p);
+      if (layer->CreateFeature(&feature) != OGRERR_NONE)
+        throw ioError("cannot write a benchmark feature");
+    }
+    ds->CommitTransaction();
+  }
+  // Break lines: 3D roads running up the slope, 1000 vertices each.
+  {
+    auto* layer = ds->CreateLayer("roads", &geographic, wkbLineString25D, nullptr);
+    ds->StartTransaction();
+    const long roads = std::max(1L, ctx.sizes.breaklineVertices / perLine);
+    for (long r = 0; r < roads; ++r) {
+      OGRLineString line;
+      for (long i = 0; i < perLine; ++i) {
+        const double x = x0 + (static_cast<double>(r) + 0.5) * width / static_cast<double>(roads) +
+                         40.0 * std::sin(static_cast<double>(i) / 30.0);
+        const double y = y0 + static_cast<double>(i) * height / static_cast<double>(perLine);
+        line.addPoint(x, y, terrain(x, y));
+      }
+      line.transform(toGeographic.get());
+      OGRFeature feature(layer->GetLayerDefn());
+      feature.SetGeometry(&line);
+      if (layer->CreateFeature(&feature) != OGRERR_NONE)
+        throw ioError("cannot write a benchmark feature");
+    }
+    ds->CommitTransaction();
+  }
+  ds.reset();
+
+  const auto toml = ctx.dir / "bench.toml";
+  std::ofstream(toml)
+      << "[project]\ncrs = \"EPSG:32612\"\n"
+      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"contours\"\nkind = \"contours\"\nz = "
+         "\"elev\"\n"
+      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"spots\"\nkind = \"points\"\nz = \"elev\"\n"
+      << "[[layer]]\npath = \"bench.gpkg\"\nlayer = \"roads\"\nkind = \"road\"\n"
+      << "[tin]\nsnap_tolerance = 0.001\n";
+  ctx.config = loadProjectConfig(toml);
+}
+
+std::size_t countVertices(const std::vector<IngestedLayer>& layers) {
+  std::size_t n = 0;
+  for (const auto& l : layers) n += l.vertexCount();
+  return n;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  BenchContext ctx;
+  bool keep = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", arg.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (arg == "--contour-vertices")
+      ctx.sizes.contourVertices = std::stol(next());
+    else if (arg == "--spot-heights")
+      ctx.sizes.spotHeights = std::stol(next());
+    else if (arg == "--breakline-vertices")
+      ctx.sizes.breaklineVertices = std::stol(next());
+    else if (arg == "--dir")
+      ctx.dir = next();
+    else if (arg == "--keep")
+      keep = true;
+    else {
+      std::fprintf(stderr,
+                   "usage: ingest_bench [--contour-vertices N] [--spot-heights N] "
+                   "[--breakline-vertices N] [--dir DIR] [--keep]\n");
+      return 2;
+    }
+  }
+  if (ctx.dir.empty())
+    ctx.dir = std::filesystem::temp_directory_path() /
+              ("tinsmith-ingest-bench-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(ctx.dir);
+  ctx.gpkg = ctx.dir / "bench.gpkg";
+
+  std::vector<Stage> stages{
+      {"generate (not counted)", generate, false},
+      {"read", [](BenchContext& c) { c.layers = readLayers(c.config); }},
+      {"reproject", [](BenchContext& c) { reprojectLayers(c.layers, c.config.crs); }},
+      {"clean",
+       [](BenchContext& c) {
+         CleanOptions options;
+         options.tolerance = c.config.tin.snapTolerance;
+         c.cleaning = cleanLayers(c.layers, options);
+       }},
+      // The TIN build appends its stage here, reading c.layers.
+  };
+
+  try {
+    std::printf(
+        "| stage | wall s | CPU s | peak RSS MB | RSS after MB |\n|---|---:|---:|---:|---:|\n");
+    double total = 0.0;
+    double totalCpu = 0.0;
+    long peakKb = 0;
+    std::size_t inputVertices = 0;
+    long baselineKb = -1;  // RSS before the first counted stage: libraries, not data
+    for (const auto& stage : stages) {
+      if (stage.counted && baselineKb < 0) baselineKb = readStatusKb("VmRSS:");
+      resetPeak();
+      const auto start = std::chrono::steady_clock::now();
+      const double cpuStart = cpuSeconds();
+      stage.run(ctx);
+      const double cpu = cpuSeconds() - cpuStart;
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const long hwm = readStatusKb("VmHWM:");
+      const long rss = readStatusKb("VmRSS:");
+      if (stage.name == "read") inputVertices = countVertices(ctx.layers);
+      if (stage.counted) {
+        total += seconds;
+        totalCpu += cpu;
+        peakKb = std::max(peakKb, hwm);
+      }
+      std::printf("| %s | %.3f | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, cpu,
+                  hwm / 1024.0, rss / 1024.0);
+    }
+    std::printf("| **ingest total** | **%.3f** | **%.3f** | **%.1f** | |\n\n", total, totalCpu,
+                peakKb / 1024.0);
+    std::printf("input vertices: %zu (contours %ld, spot heights %ld, break lines %ld)\n",
+                inputVertices, ctx.sizes.contourVertices, ctx.sizes.spotHeights,
+                ctx.sizes.breaklineVertices);
+    std::printf(
+        "baseline RSS %.1f MB; peak above baseline %.1f MB = %.0f bytes per input vertex\n",
+        baselineKb / 1024.0, (peakKb - baselineKb) / 1024.0,
+        inputVertices ? (peakKb - baselineKb) * 1024.0 / static_cast<double>(inputVertices) : 0.0);
+    const auto& r = ctx.cleaning;
+    std::printf(
+        "cleaning: %llu snapped, %llu repeated vertices, %llu degenerate, %llu points merged (%llu "
+        "z conflicts), "
+        "%llu points on break-line vertices, %llu contour crossings, %llu self-crossings\n",
+        static_cast<unsigned long long>(r.verticesSnapped),
+        static_cast<unsigned long long>(r.repeatedVerticesDropped),
+        static_cast<unsigned long long>(r.degenerateFeaturesDropped),
+        static_cast<unsigned long long>(r.duplicatePointsMerged),
+        static_cast<unsigned long long>(r.duplicatePointZConflicts),
+        static_cast<unsigned long long>(r.pointsOnBreakLineVertices),
+        static_cast<unsigned long long>(r.contourCrossings),
+        static_cast<unsigned long long>(r.contourSelfCrossings));
+    std::printf("vertices after cleaning: %zu\n", countVertices(ctx.layers));
+  } catch (const Error& e) {
+    std::fprintf(stderr, "ERROR: %s\n", e.what());
+    return 1;
+  }
+  if (!keep) std::filesystem::remove_all(ctx.dir);
+  return 0;
+}

@@ -1,0 +1,143 @@
+// The half-edge mesh and the validator: the validator must accept good meshes
+// and name what is wrong with broken ones.
+#include "core/mesh/mesh.hpp"
+
+#include <gtest/gtest.h>
+
+#include "core/mesh/validate.hpp"
+
+namespace tinsmith {
+namespace {
+
+// A unit square split along the diagonal 0-2, plus a constrained diagonal.
+TinData square() {
+  TinData tin;
+  tin.vertices = {{0, 0, 0}, {1, 0, 1}, {1, 1, 2}, {0, 1, 3}};
+  tin.triangles = {{0, 1, 2}, {0, 2, 3}};
+  tin.features = {{FeatureKind::Road, "road"}};
+  tin.constrainedEdges = {{0, 2, 0}};
+  return tin;
+}
+
+bool mentions(const ValidationReport& r, const std::string& word) {
+  for (const auto& p : r.problems) {
+    if (p.find(word) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(Mesh, StrongIdsHaveAnInvalidDefault) {
+  VertexId v;
+  EXPECT_FALSE(v.valid());
+  EXPECT_TRUE(VertexId(0).valid());
+  EXPECT_EQ(HalfedgeId::invalid().value, HalfedgeId::kInvalid);
+  static_assert(!std::is_convertible_v<VertexId, TriangleId>);
+}
+
+TEST(Mesh, TopologyOfASquare) {
+  const Mesh m = Mesh::fromTinData(square());
+  EXPECT_EQ(m.vertexCount(), 4u);
+  EXPECT_EQ(m.triangleCount(), 2u);
+  EXPECT_EQ(m.boundaryHalfedges().size(), 4u);
+  const HalfedgeId diag = Mesh::halfedge(TriangleId(0), 2);  // 2→0
+  EXPECT_EQ(m.origin(diag), VertexId(2));
+  EXPECT_EQ(m.target(diag), VertexId(0));
+  ASSERT_TRUE(m.twin(diag).valid());
+  EXPECT_EQ(m.twin(m.twin(diag)), diag);
+  EXPECT_TRUE(m.isConstrained(diag));
+  EXPECT_TRUE(m.isConstrained(m.twin(diag)));
+  ASSERT_EQ(m.edgeFeatures(diag).size(), 1u);
+  std::size_t star = 0;
+  m.forEachOutgoing(VertexId(0), [&](HalfedgeId h) {
+    EXPECT_EQ(m.origin(h), VertexId(0));
+    ++star;
+  });
+  EXPECT_EQ(star, 2u);
+  const ValidationReport r = validate(m);
+  EXPECT_TRUE(r.ok) << r.summary();
+  EXPECT_EQ(r.edges, 5u);
+  EXPECT_EQ(r.boundaryLoops, 1u);
+  EXPECT_EQ(r.constrainedEdges, 1u);
+}
+
+TEST(Mesh, TinDataRoundTrip) {
+  const TinData tin = square();
+  const TinData back = Mesh::fromTinData(tin).toTinData();
+  EXPECT_EQ(back.vertices, tin.vertices);
+  EXPECT_EQ(back.triangles, tin.triangles);
+  EXPECT_EQ(back.constrainedEdges, tin.constrainedEdges);
+}
+
+TEST(Validator, FindsClockwiseTriangle) {
+  TinData tin = square();
+  tin.triangles[1] = {0, 3, 2};
+  const ValidationReport r = validate(tin);
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(mentions(r, "counter-clockwise")) << r.summary();
+}
+
+TEST(Validator, FindsNonDelaunayEdge) {
+  TinData tin;
+  // A thin quad whose diagonal 0-2 is the long one: not Delaunay.
+  tin.vertices = {{0, 0, 0}, {5, -1, 0}, {10, 0, 0}, {5, 1, 0}};
+  tin.triangles = {{0, 1, 2}, {0, 2, 3}};
+  ValidationReport r = validate(tin);
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(mentions(r, "Delaunay")) << r.summary();
+  // Constrained, the same edge is fine.
+  tin.features = {{FeatureKind::Other, "x"}};
+  tin.constrainedEdges = {{0, 2, 0}};
+  r = validate(tin);
+  EXPECT_TRUE(r.ok) << r.summary();
+}
+
+TEST(Validator, FindsBadIndicesAndNonManifoldEdges) {
+  TinData tin = square();
+  tin.triangles.push_back({0, 1, 9});
+  tin.triangles.push_back({0, 1, 3});
+  const ValidationReport r = validate(tin);
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(mentions(r, "out of range")) << r.summary();
+}
+
+TEST(Validator, FindsConstraintThatIsNotAnEdge) {
+  TinData tin = square();
+  tin.constrainedEdges.push_back({1, 3, 0});
+  tin.constrainedEdges.push_back({0, 1, 7});
+  const ValidationReport r = validate(tin);
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(mentions(r, "not an edge")) << r.summary();
+  EXPECT_TRUE(mentions(r, "unknown feature")) << r.summary();
+}
+
+TEST(Validator, FindsFoldedStar) {
+  // A centre vertex whose fan wraps twice would need crossing triangles; a
+  // simpler fold: two triangles on the same side of their shared edge.
+  TinData tin;
+  tin.vertices = {{0, 0, 0}, {4, 0, 0}, {2, 3, 0}, {2, 1, 0}};
+  tin.triangles = {{0, 1, 2}, {1, 0, 3}};  // (1,0,3) is clockwise
+  const ValidationReport r = validate(tin);
+  EXPECT_FALSE(r.ok);
+}
+
+TEST(Validator, AcceptsPolygonWithHoleAndCountsLoops) {
+  // A 3x3 grid of squares without the middle one.
+  TinData tin;
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 4; ++i) tin.vertices.push_back({double(i), double(j), 0});
+  }
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      if (i == 1 && j == 1) continue;
+      const std::uint32_t a = j * 4 + i, b = a + 1, c = a + 5, d = a + 4;
+      tin.triangles.push_back({a, b, c});
+      tin.triangles.push_back({a, c, d});
+    }
+  }
+  const ValidationReport r = validate(tin);
+  EXPECT_TRUE(r.ok) << r.summary();
+  EXPECT_EQ(r.boundaryLoops, 2u);
+}
+
+}  // namespace
+}  // namespace tinsmith
