@@ -157,16 +157,21 @@ BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& 
     if (!layer.points.empty()) {
       const FeatureKind pk = takesLines(layer.kind) ? FeatureKind::Other : layer.kind;
       const FeatureId f = cdt.addFeature(pk, layer.source);
-      std::vector<Point3> kept;
-      kept.reserve(layer.points.size());
-      for (const auto& p : layer.points) {
-        if (!lakeRings.empty() && insideAny(lakeRings, p))
-          ++droppedInLakes;
-        else
-          kept.push_back(p);
+      if (lakeRings.empty()) {
+        cdt.insertPoints(layer.points, f);
+        report.inputPoints += layer.points.size();
+      } else {
+        std::vector<Point3> kept;
+        kept.reserve(layer.points.size());
+        for (const auto& p : layer.points) {
+          if (insideAny(lakeRings, p))
+            ++droppedInLakes;
+          else
+            kept.push_back(p);
+        }
+        cdt.insertPoints(kept, f);
+        report.inputPoints += kept.size();
       }
-      cdt.insertPoints(kept, f);
-      report.inputPoints += kept.size();
     }
     if (!takesLines(layer.kind) && !layer.lines.empty()) {
       // Lines of no particular role (plain break lines): 3D constraints as given.
@@ -362,13 +367,8 @@ BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& 
         report.flatClosedRegions = a.closedRegions;
       }
       if (a.proposals.empty()) break;
-      // A fresh triangulation of the current TIN plus the new vertices, all
-      // in one finalize(): adding points to an already finalized Cdt that
-      // holds constraints can leave edges that are not locally Delaunay.
-      Cdt next = Cdt::fromTinData(tin, {.snapTolerance = options.snapTolerance, .crs = options.crs});
-      next.insertPoints(a.proposals);
-      next.finalize();
-      cdt = std::move(next);
+      cdt.insertPoints(a.proposals);
+      cdt.finalize();
       tin = cdt.toTinData();
       report.flatVerticesAdded += a.proposals.size();
       ++report.flatIterations;

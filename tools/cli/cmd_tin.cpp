@@ -197,8 +197,8 @@ void run(const TinOptions& o) {
     ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
     if (o.strict) config.tin.strict = true;
     if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
-    const ingest::IngestResult ingested = ingest::loadLayers(config, p);
-    auto layers = ingest::toBuildLayers(ingested.layers);
+    ingest::IngestResult ingested = ingest::loadLayers(config, p);
+    auto layers = ingest::toBuildLayers(std::move(ingested.layers));
     result = ingest::buildTin(layers, ingest::buildOptionsFrom(config), p);
     ingest::addIngestReport(result.report, ingested);
   }
