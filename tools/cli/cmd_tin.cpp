@@ -190,7 +190,7 @@ void run(const TinOptions& o) {
     auto layers = plainLayers(o);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result = ingest::buildTin(layers, options, p);
+    result = ingest::buildTin(std::move(layers), options, p);
     result.report.times.insert(result.report.times.begin(), {"read", readSeconds});
     result.report.totalSeconds += readSeconds;
   } else {
@@ -199,7 +199,7 @@ void run(const TinOptions& o) {
     if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
     ingest::IngestResult ingested = ingest::loadLayers(config, p);
     auto layers = ingest::toBuildLayers(std::move(ingested.layers));
-    result = ingest::buildTin(layers, ingest::buildOptionsFrom(config), p);
+    result = ingest::buildTin(std::move(layers), ingest::buildOptionsFrom(config), p);
     ingest::addIngestReport(result.report, ingested);
   }
   bar.reset();

@@ -249,8 +249,8 @@ int main(int argc, char** argv) {
       {"TIN build",
        [](BenchContext& c) {
          c.cleanedVertices = countVertices(c.layers);
-         const auto layers = toBuildLayers(std::move(c.layers));
-         c.tin = buildTin(layers, buildOptionsFrom(c.config));
+         auto layers = toBuildLayers(std::move(c.layers));
+         c.tin = buildTin(std::move(layers), buildOptionsFrom(c.config));
        }},
       {"write .tin", [](BenchContext& c) { writeTinFile(c.dir / "bench.tin", c.tin.tin); }},
   };
