@@ -402,3 +402,37 @@ TEST(TinCli, ValidateExitsOneAndListsProblemsForABrokenMesh) {
 
 }  // namespace
 }  // namespace tinsmith
+
+namespace tinsmith {
+namespace {
+
+TEST(TinCli, StrictMakesContourCrossingsFatalAndWritesNothing) {
+  const auto dir = test::scratchDir("cli-strict");
+  const std::string config = (kSource / "config/chatham.toml").string();
+  auto r = runTinsmith("tin " + config + " -o " + (dir / "c.tin").string() + " --strict");
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("cross"), std::string::npos) << r.err;
+  EXPECT_EQ(filesIn(dir), 0u);
+  // Without --strict the same crossings are reported and the TIN is built.
+  r = runTinsmith("tin " + config + " -o " + (dir / "c.tin").string() + " --report " + (dir / "r.json").string());
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("data errors:"), std::string::npos) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(readFile(dir / "r.json"))["data_errors"].empty());
+}
+
+TEST(TinCli, ProgressBarsOnlyOnATerminal) {
+  const auto in = makePlainInputs("cli-progress");
+  const std::string tin = "tin --points " + in.points.string() + " -o " + (in.dir / "p.tin").string();
+  auto r = runTinsmith(tin);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err.find('\r'), std::string::npos) << "progress drawn on a non-terminal";
+  if (runCommand("command -v script").exitCode != 0) GTEST_SKIP() << "no `script` to make a terminal";
+  // `script` runs the command on a pseudo-terminal; its output is the terminal's.
+  r = runCommand("script -qec \"" + std::string(TINSMITH_BINARY) + " " + tin + "\" /dev/null");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("\r\033[Kbuilders.tin"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("100%"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace tinsmith
