@@ -223,6 +223,11 @@ TEST(TinCli, RedButteEndToEnd) {
   r = runTinsmith("export " + tin.string() + " --format obj -o " + (dir / "red-butte.obj").string());
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_GT(fs::file_size(dir / "red-butte.obj"), 1000000u);
+
+  // Same input, same bytes.
+  r = runTinsmith("tin -q " + (kSource / "config/red-butte.toml").string() + " -o " + (dir / "again.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(readFile(tin) == readFile(dir / "again.tin"));
 }
 
 // The independent checker wants the TIN to tile the convex hull, so it runs on
