@@ -369,6 +369,7 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
         report.flatClosedRegions = a.closedRegions;
       }
       if (a.proposals.empty()) break;
+      tin = TinData{};  // release the old copy before the triangulation grows
       cdt.insertPoints(a.proposals);
       cdt.finalize();
       tin = cdt.toTinData();
