@@ -17,7 +17,19 @@ mkdir -p out
 missing=()
 echo
 echo "== 1. ingest + TIN: $data → out/red-butte.tin"
-missing+=("TIN from config (tinsmith tin config/red-butte.toml)")
+"$tinsmith" tin config/red-butte.toml -o out/red-butte.tin --report out/red-butte.report.json
+echo
+echo "-- validate"
+"$tinsmith" validate out/red-butte.tin
+echo
+echo "-- info"
+"$tinsmith" info out/red-butte.tin
+echo
+echo "-- export OBJ (full precision) and a 10 m GeoTIFF heightmap"
+"$tinsmith" export out/red-butte.tin --format obj -o out/red-butte.obj
+"$tinsmith" export out/red-butte.tin --format tif --cell 10 -o out/red-butte.tif
+echo "-- query the TIN at the middle of the area"
+"$tinsmith" query out/red-butte.tin 434000 4516000
 echo "== 2. tiles: out/red-butte.tin → out/red-butte.3dtiles"
 missing+=("tiles (tinsmith tile)")
 echo "== 3. server: http://127.0.0.1:8080/"

@@ -24,26 +24,29 @@ double segmentDistance(const Point3& p, const Point3& a, const Point3& b) {
   return std::hypot(p.x - (a.x + t * dx), p.y - (a.y + t * dy));
 }
 
-// Triangle adjacency: neighbour[3t+k] is the triangle across the edge from
-// corner k to corner k+1 of t, or kNone on the boundary.
-std::vector<std::uint32_t> neighbours(const TinData& tin) {
+// Triangle adjacency for a subset of triangles: across[3i+k] is the triangle
+// across the edge from corner k to corner k+1 of subset[i], or kNone when
+// that neighbour is not in the subset (or there is none). The subset must
+// hold both triangles of every edge wanted.
+std::vector<std::uint32_t> neighbours(const TinData& tin, const std::vector<std::uint32_t>& subset) {
   struct Half {
     std::uint64_t key;
-    std::uint32_t half;
+    std::uint32_t half;  // 3 × (index into subset) + corner
   };
   std::vector<Half> halves;
-  halves.reserve(tin.triangles.size() * 3);
-  for (std::uint32_t t = 0; t < tin.triangles.size(); ++t)
-    for (std::uint32_t k = 0; k < 3; ++k)
-      halves.push_back({edgeKey(tin.triangles[t][k], tin.triangles[t][(k + 1) % 3]), 3 * t + k});
+  halves.reserve(subset.size() * 3);
+  for (std::uint32_t i = 0; i < subset.size(); ++i) {
+    const auto& tri = tin.triangles[subset[i]];
+    for (std::uint32_t k = 0; k < 3; ++k) halves.push_back({edgeKey(tri[k], tri[(k + 1) % 3]), 3 * i + k});
+  }
   std::sort(halves.begin(), halves.end(), [](const Half& a, const Half& b) {
     return a.key != b.key ? a.key < b.key : a.half < b.half;
   });
-  std::vector<std::uint32_t> across(tin.triangles.size() * 3, kNone);
+  std::vector<std::uint32_t> across(subset.size() * 3, kNone);
   for (std::size_t i = 0; i + 1 < halves.size(); ++i) {
     if (halves[i].key == halves[i + 1].key) {
-      across[halves[i].half] = halves[i + 1].half / 3;
-      across[halves[i + 1].half] = halves[i].half / 3;
+      across[halves[i].half] = subset[halves[i + 1].half / 3];
+      across[halves[i + 1].half] = subset[halves[i].half / 3];
       ++i;
     }
   }
@@ -96,7 +99,23 @@ FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing)
     }
   if (out.flatTriangles.empty()) return out;
 
-  const auto across = neighbours(tin);
+  // Only flat triangles and the triangles next to them need adjacency: those
+  // share at least two vertices with a flat triangle. Keeps the analysis of a
+  // million-triangle TIN with few flat triangles to one linear scan.
+  std::vector<char> onFlat(tin.vertices.size(), 0);
+  for (const std::uint32_t t : out.flatTriangles)
+    for (auto v : tin.triangles[t]) onFlat[v] = 1;
+  std::vector<std::uint32_t> subset;
+  std::vector<std::uint32_t> local(nt, kNone);
+  for (std::uint32_t t = 0; t < nt; ++t) {
+    const auto& tri = tin.triangles[t];
+    if (onFlat[tri[0]] + onFlat[tri[1]] + onFlat[tri[2]] >= 2) {
+      local[t] = static_cast<std::uint32_t>(subset.size());
+      subset.push_back(t);
+    }
+  }
+  const auto acrossSubset = neighbours(tin, subset);
+  auto acrossOf = [&](std::uint32_t t, std::uint32_t k) { return acrossSubset[3 * local[t] + k]; };
   const auto contourKeys = contourEdgeKeys(tin);
   auto isContourEdge = [&](std::uint32_t a, std::uint32_t b) {
     return std::binary_search(contourKeys.begin(), contourKeys.end(), edgeKey(a, b));
@@ -123,7 +142,7 @@ FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing)
       members.push_back(t);
       for (std::uint32_t k = 0; k < 3; ++k) {
         const std::uint32_t a = tin.triangles[t][k], b = tin.triangles[t][(k + 1) % 3];
-        const std::uint32_t n = across[3 * t + k];
+        const std::uint32_t n = acrossOf(t, k);
         const bool contourEdge = isContourEdge(a, b);
         if (contourEdge) ownContour.push_back({V[a], V[b]});
         if (n == kNone) continue;

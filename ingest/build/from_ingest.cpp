@@ -4,20 +4,21 @@
 
 namespace tinsmith::ingest {
 
-std::vector<BuildLayer> toBuildLayers(const std::vector<IngestedLayer>& layers) {
+std::vector<BuildLayer> toBuildLayers(std::vector<IngestedLayer> layers) {
   std::vector<BuildLayer> out;
   out.reserve(layers.size() + 1);
   BuildLayer innerBoundaryRings;
-  for (const auto& layer : layers) {
+  for (auto& layer : layers) {
     BuildLayer b;
     b.name = layer.config.name;
     b.kindName = std::string(toString(layer.config.kind));
     b.kind = layer.kind;
     b.source = layerLocation(layer.config).str();
-    b.points = layer.points;
-    for (const auto& f : layer.features) {
+    b.points = std::move(layer.points);
+    layer.points.shrink_to_fit();
+    for (auto& f : layer.features) {
       BuildLine line;
-      line.vertices = f.vertices;
+      line.vertices = std::move(f.vertices);
       line.closed = f.closed;
       line.hasZ = f.hasZ;
       line.source = layerLocation(layer.config, f.fid).str();
@@ -29,6 +30,8 @@ std::vector<BuildLayer> toBuildLayers(const std::vector<IngestedLayer>& layers) 
       }
       b.lines.push_back(std::move(line));
     }
+    layer.features.clear();
+    layer.features.shrink_to_fit();
     out.push_back(std::move(b));
   }
   if (!innerBoundaryRings.lines.empty()) {

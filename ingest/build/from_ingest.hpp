@@ -13,8 +13,10 @@ namespace tinsmith::ingest {
 
 /// One BuildLayer per ingested layer, config order. Interior rings of a
 /// boundary polygon become holes; every line's source names the file, the
-/// layer and the feature id (and part, for multi-geometries).
-std::vector<BuildLayer> toBuildLayers(const std::vector<IngestedLayer>& layers);
+/// layer and the feature id (and part, for multi-geometries). Takes the
+/// layers by value: pass them with std::move to hand the coordinates over
+/// without a copy (they are the bulk of the memory of a big build).
+std::vector<BuildLayer> toBuildLayers(std::vector<IngestedLayer> layers);
 
 /// Adds the ingest result's layer counts, cleaning counts, contour-crossing
 /// data errors and stage timings to `report` (before the builder's own).

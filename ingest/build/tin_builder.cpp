@@ -117,7 +117,7 @@ bool takesLines(FeatureKind kind) {
   }
 }
 
-BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& options,
+BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
                      const Progress* progress) {
   const auto start = Clock::now();
   BuildResult result;
@@ -153,20 +153,25 @@ BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& 
   std::vector<PendingLine> later;  // 2D lines to drape, or everything after the base
   std::size_t droppedInLakes = 0;
 
-  for (const auto& layer : layers) {
+  for (auto& layer : layers) {
     if (!layer.points.empty()) {
       const FeatureKind pk = takesLines(layer.kind) ? FeatureKind::Other : layer.kind;
       const FeatureId f = cdt.addFeature(pk, layer.source);
-      std::vector<Point3> kept;
-      kept.reserve(layer.points.size());
-      for (const auto& p : layer.points) {
-        if (!lakeRings.empty() && insideAny(lakeRings, p))
-          ++droppedInLakes;
-        else
-          kept.push_back(p);
+      if (lakeRings.empty()) {
+        cdt.insertPoints(layer.points, f);
+        report.inputPoints += layer.points.size();
+      } else {
+        std::vector<Point3> kept;
+        kept.reserve(layer.points.size());
+        for (const auto& p : layer.points) {
+          if (insideAny(lakeRings, p))
+            ++droppedInLakes;
+          else
+            kept.push_back(p);
+        }
+        cdt.insertPoints(kept, f);
+        report.inputPoints += kept.size();
       }
-      cdt.insertPoints(kept, f);
-      report.inputPoints += kept.size();
     }
     if (!takesLines(layer.kind) && !layer.lines.empty()) {
       // Lines of no particular role (plain break lines): 3D constraints as given.
@@ -177,7 +182,7 @@ BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& 
       }
       continue;
     }
-    for (const auto& line : layer.lines) {
+    for (auto& line : layer.lines) {
       if (layer.kind == FeatureKind::Contour && !line.hasZ)
         throw inputError("a contour has no z", {line.source, {}, {}, {}},
                          "give the contour layer a 'z' attribute or 'z_value'");
@@ -201,11 +206,13 @@ BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& 
         for (auto& piece : pieces)
           later.push_back({f, layer.kind, std::move(piece), whole && line.closed, !line.hasZ});
       } else {
-        later.push_back({f, layer.kind, line.vertices, line.closed, !line.hasZ});
+        later.push_back({f, layer.kind, std::move(line.vertices), line.closed, !line.hasZ});
       }
     }
   }
   if (droppedInLakes) report.cleaning.push_back({"input vertices inside lakes dropped", droppedInLakes});
+  layers.clear();  // the Cdt and `later` hold everything from here on
+  layers.shrink_to_fit();
   endStage("prepare");
 
   // 1. The base surface, when anything must be draped on it.
@@ -362,13 +369,9 @@ BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& 
         report.flatClosedRegions = a.closedRegions;
       }
       if (a.proposals.empty()) break;
-      // A fresh triangulation of the current TIN plus the new vertices, all
-      // in one finalize(): adding points to an already finalized Cdt that
-      // holds constraints can leave edges that are not locally Delaunay.
-      Cdt next = Cdt::fromTinData(tin, {.snapTolerance = options.snapTolerance, .crs = options.crs});
-      next.insertPoints(a.proposals);
-      next.finalize();
-      cdt = std::move(next);
+      tin = TinData{};  // release the old copy before the triangulation grows
+      cdt.insertPoints(a.proposals);
+      cdt.finalize();
       tin = cdt.toTinData();
       report.flatVerticesAdded += a.proposals.size();
       ++report.flatIterations;

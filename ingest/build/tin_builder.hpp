@@ -74,7 +74,9 @@ struct BuildResult {
 /// points at all), geometryError when the input cannot be triangulated or a
 /// 2D line lies off the surface, inputError for contour crossings in strict
 /// mode, internalError if the result fails validation.
-BuildResult buildTin(const std::vector<BuildLayer>& layers, const BuildOptions& options,
+/// Takes the layers by value and frees their coordinates once the
+/// triangulation holds them: pass them with std::move for big inputs.
+BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
                      const Progress* progress = nullptr);
 
 /// Where each layer kind goes: true for kinds that take lines (contours,

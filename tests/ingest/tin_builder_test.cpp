@@ -247,8 +247,8 @@ TEST(TinBuilder, ReportRendersAsJsonAndSummary) {
 TEST(TinBuilder, ChathamFlatTrianglesDropToNearZero) {
   const auto config =
       loadProjectConfig(std::filesystem::path(TINSMITH_SOURCE_DIR) / "config/chatham.toml");
-  const auto ingested = loadLayers(config);
-  const auto layers = toBuildLayers(ingested.layers);
+  auto ingested = loadLayers(config);
+  const auto layers = toBuildLayers(std::move(ingested.layers));
   BuildOptions off = buildOptionsFrom(config);
   off.flatTriangleRepair = false;
   const auto raw = buildTin(layers, off);

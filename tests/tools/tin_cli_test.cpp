@@ -223,6 +223,11 @@ TEST(TinCli, RedButteEndToEnd) {
   r = runTinsmith("export " + tin.string() + " --format obj -o " + (dir / "red-butte.obj").string());
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_GT(fs::file_size(dir / "red-butte.obj"), 1000000u);
+
+  // Same input, same bytes.
+  r = runTinsmith("tin -q " + (kSource / "config/red-butte.toml").string() + " -o " + (dir / "again.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(readFile(tin) == readFile(dir / "again.tin"));
 }
 
 // The independent checker wants the TIN to tile the convex hull, so it runs on
@@ -398,6 +403,40 @@ TEST(TinCli, ValidateExitsOneAndListsProblemsForABrokenMesh) {
   r = runTinsmith("info " + (dir / "text.tin").string());
   EXPECT_EQ(r.exitCode, 3);
   EXPECT_NE(r.err.find("not a .tin file"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace tinsmith
+
+namespace tinsmith {
+namespace {
+
+TEST(TinCli, StrictMakesContourCrossingsFatalAndWritesNothing) {
+  const auto dir = test::scratchDir("cli-strict");
+  const std::string config = (kSource / "config/chatham.toml").string();
+  auto r = runTinsmith("tin " + config + " -o " + (dir / "c.tin").string() + " --strict");
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("cross"), std::string::npos) << r.err;
+  EXPECT_EQ(filesIn(dir), 0u);
+  // Without --strict the same crossings are reported and the TIN is built.
+  r = runTinsmith("tin " + config + " -o " + (dir / "c.tin").string() + " --report " + (dir / "r.json").string());
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("data errors:"), std::string::npos) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(readFile(dir / "r.json"))["data_errors"].empty());
+}
+
+TEST(TinCli, ProgressBarsOnlyOnATerminal) {
+  const auto in = makePlainInputs("cli-progress");
+  const std::string tin = "tin --points " + in.points.string() + " -o " + (in.dir / "p.tin").string();
+  auto r = runTinsmith(tin);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err.find('\r'), std::string::npos) << "progress drawn on a non-terminal";
+  if (runCommand("command -v script").exitCode != 0) GTEST_SKIP() << "no `script` to make a terminal";
+  // `script` runs the command on a pseudo-terminal; its output is the terminal's.
+  r = runCommand("script -qec \"" + std::string(TINSMITH_BINARY) + " " + tin + "\" /dev/null");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("\r\033[Kbuilders.tin"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("100%"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -190,16 +190,16 @@ void run(const TinOptions& o) {
     auto layers = plainLayers(o);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result = ingest::buildTin(layers, options, p);
+    result = ingest::buildTin(std::move(layers), options, p);
     result.report.times.insert(result.report.times.begin(), {"read", readSeconds});
     result.report.totalSeconds += readSeconds;
   } else {
     ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
     if (o.strict) config.tin.strict = true;
     if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
-    const ingest::IngestResult ingested = ingest::loadLayers(config, p);
-    auto layers = ingest::toBuildLayers(ingested.layers);
-    result = ingest::buildTin(layers, ingest::buildOptionsFrom(config), p);
+    ingest::IngestResult ingested = ingest::loadLayers(config, p);
+    auto layers = ingest::toBuildLayers(std::move(ingested.layers));
+    result = ingest::buildTin(std::move(layers), ingest::buildOptionsFrom(config), p);
     ingest::addIngestReport(result.report, ingested);
   }
   bar.reset();

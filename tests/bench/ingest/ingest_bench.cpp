@@ -1,7 +1,8 @@
 // Ingest benchmark: a synthetic GeoPackage of contours, spot heights and break
 // lines (made with OGR in a temporary folder, stored in EPSG:4326 so the
-// reprojection stage does real work) → read → reproject → clean, with wall
-// time and peak memory per stage.
+// reprojection stage does real work) → read → reproject → clean → TIN build
+// (builders.tin: triangulation, flat-triangle repair, validation) → .tin
+// file, with wall time and peak memory per stage.
 //
 //   ingest_bench [--contour-vertices N] [--spot-heights N] [--breakline-vertices N]
 //                [--dir DIR] [--keep]
@@ -29,8 +30,11 @@
 
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
+#include "ingest/build/from_ingest.hpp"
+#include "ingest/build/tin_builder.hpp"
 #include "ingest/filters/clean.hpp"
 #include "ingest/filters/load_layers.hpp"
+#include "ingest/tinfile/tin_file.hpp"
 
 namespace {
 
@@ -51,6 +55,8 @@ struct BenchContext {
   ProjectConfig config;
   std::vector<IngestedLayer> layers;
   CleaningReport cleaning;
+  std::size_t cleanedVertices = 0;
+  BuildResult tin;
 };
 
 struct Stage {
@@ -240,7 +246,13 @@ int main(int argc, char** argv) {
          options.tolerance = c.config.tin.snapTolerance;
          c.cleaning = cleanLayers(c.layers, options);
        }},
-      // The TIN build appends its stage here, reading c.layers.
+      {"TIN build",
+       [](BenchContext& c) {
+         c.cleanedVertices = countVertices(c.layers);
+         auto layers = toBuildLayers(std::move(c.layers));
+         c.tin = buildTin(std::move(layers), buildOptionsFrom(c.config));
+       }},
+      {"write .tin", [](BenchContext& c) { writeTinFile(c.dir / "bench.tin", c.tin.tin); }},
   };
 
   try {
@@ -248,6 +260,7 @@ int main(int argc, char** argv) {
         "| stage | wall s | CPU s | peak RSS MB | RSS after MB |\n|---|---:|---:|---:|---:|\n");
     double total = 0.0;
     double totalCpu = 0.0;
+    double readClean = 0.0, triangulation = 0.0;
     long peakKb = 0;
     std::size_t inputVertices = 0;
     long baselineKb = -1;  // RSS before the first counted stage: libraries, not data
@@ -263,6 +276,8 @@ int main(int argc, char** argv) {
       const long hwm = readStatusKb("VmHWM:");
       const long rss = readStatusKb("VmRSS:");
       if (stage.name == "read") inputVertices = countVertices(ctx.layers);
+      if (stage.name == "read" || stage.name == "reproject" || stage.name == "clean") readClean += seconds;
+      if (stage.name == "TIN build") triangulation = seconds;
       if (stage.counted) {
         total += seconds;
         totalCpu += cpu;
@@ -271,8 +286,18 @@ int main(int argc, char** argv) {
       std::printf("| %s | %.3f | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, cpu,
                   hwm / 1024.0, rss / 1024.0);
     }
-    std::printf("| **ingest total** | **%.3f** | **%.3f** | **%.1f** | |\n\n", total, totalCpu,
-                peakKb / 1024.0);
+    std::printf("| **total (GeoPackage → .tin)** | **%.3f** | **%.3f** | **%.1f** | |\n\n", total,
+                totalCpu, peakKb / 1024.0);
+    std::printf("share of the total: read + reproject + clean %.0f%%, TIN build %.0f%%, rest %.0f%%\n",
+                100 * readClean / total, 100 * triangulation / total,
+                100 * (total - readClean - triangulation) / total);
+    std::printf("reading and cleaning / TIN build = %.2f (goal: <= 1)\n", readClean / triangulation);
+    std::printf("TIN build stages:");
+    for (const auto& t : ctx.tin.report.times) std::printf(" %s %.3f s;", t.stage.c_str(), t.seconds);
+    std::printf("\nTIN: %zu vertices, %zu triangles, %zu constrained edges; %zu crossings split, "
+                "%zu flat triangles before repair, %zu after\n",
+                ctx.tin.report.vertices, ctx.tin.report.triangles, ctx.tin.report.constrainedEdges,
+                ctx.tin.report.crossings, ctx.tin.report.flatBefore, ctx.tin.report.flatAfter);
     std::printf("input vertices: %zu (contours %ld, spot heights %ld, break lines %ld)\n",
                 inputVertices, ctx.sizes.contourVertices, ctx.sizes.spotHeights,
                 ctx.sizes.breaklineVertices);
@@ -293,7 +318,7 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(r.pointsOnBreakLineVertices),
         static_cast<unsigned long long>(r.contourCrossings),
         static_cast<unsigned long long>(r.contourSelfCrossings));
-    std::printf("vertices after cleaning: %zu\n", countVertices(ctx.layers));
+    std::printf("vertices after cleaning: %zu\n", ctx.cleanedVertices);
   } catch (const Error& e) {
     std::fprintf(stderr, "ERROR: %s\n", e.what());
     return 1;
