@@ -5,6 +5,7 @@
 
 #include "core/base/error.hpp"
 #include "core/fit/binary_triangulation.hpp"
+#include "core/mesh/validate.hpp"
 #include "tests/core/fit_test_data.hpp"
 
 namespace tinsmith::fit {
@@ -24,6 +25,13 @@ std::pair<std::vector<Point2>, std::vector<Triangle>> extract(const BinaryTriang
 
 std::string checkMesh(const BinaryTriangulation& bt) {
   const auto [v, t] = extract(bt);
+  TinData tin;
+  for (const auto& p : v) tin.vertices.push_back({p.x, p.y, 0.0});
+  tin.triangles.assign(t.begin(), t.end());
+  ValidationOptions vo;
+  vo.checkDelaunay = false;  // binary triangulations need not be Delaunay
+  const ValidationReport report = validate(tin, vo);
+  if (!report.ok || report.boundaryLoops != 1) return "core validator: " + report.summary();
   return conformingSquareMesh(v, t, bt.origin(), bt.size());
 }
 

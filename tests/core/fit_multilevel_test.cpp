@@ -9,6 +9,7 @@
 
 #include "core/base/error.hpp"
 #include "core/fit/multilevel_fit.hpp"
+#include "core/mesh/validate.hpp"
 #include "tests/core/fit_test_data.hpp"
 
 namespace tinsmith::fit {
@@ -19,6 +20,10 @@ using testing::frankePoints;
 
 std::string meshProblem(const MultilevelFit& fit) {
   const TinData tin = fit.toTinData();
+  ValidationOptions vo;
+  vo.checkDelaunay = false;  // binary triangulations need not be Delaunay
+  const ValidationReport report = validate(tin, vo);
+  if (!report.ok || report.boundaryLoops != 1) return "core validator: " + report.summary();
   std::vector<Point2> v;
   for (const auto& p : tin.vertices) v.push_back(p.xy());
   std::vector<Triangle> t(tin.triangles.begin(), tin.triangles.end());
