@@ -51,7 +51,7 @@ def write_case(name, pts, lines=None, expect="ok", snap=0.0, tol=0.002, text_lin
         if text_lines:
             bl = "B.txt"
             with open(os.path.join(d, bl), "w") as f:
-                f.write("\n".join("\n".join(" ".join(fmt(c) for c in v) for v in line) for line in full) + "\n")
+                f.write("\n\n".join("\n".join(" ".join(fmt(c) for c in v) for v in line) for line in full) + "\n")
     manifest.append((name, str(expect), repr(snap), repr(tol), bl))
 
 
