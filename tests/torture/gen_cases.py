@@ -198,6 +198,25 @@ write_case("huge_1e9_grid", grid(100, h=1000.0, ox=1e9, oy=1e9))
 write_case("tiny_spacing_7e6", [(U + 1e-3 * rng.random() * 100, 7e6 + 1e-3 * rng.random() * 100) for _ in range(3000)], tol=1e-6)
 write_case("tiny_grid_1mm_7e6", grid(120, h=1e-3, ox=7e6, oy=7e6), tol=1e-5)
 write_case("tiny_coords_1e-6", [(rng.random() * 1e-6, rng.random() * 1e-6) for _ in range(2000)], tol=1e-10)
+# ---- nastier mixes
+write_case("constraint_1ulp_beside_vertices_utm", glu,
+           [[(500000.0, 7000000.0 + 5.0), (500000.0 + 10.0, math.nextafter(7000000.0 + 5.0, math.inf))],
+            [(500000.0, math.nextafter(7000000.0 + 2.0, -math.inf)), (500000.0 + 10.0, 7000000.0 + 2.0)]])
+fan = [[rot((-50.0, 0.0), 1e-9 * k, U + 0.3, V + 0.7), rot((50.0, 0.0), 1e-9 * k, U + 0.3, V + 0.7)] for k in range(50)]
+write_case("fan_50_near_parallel_utm", [(U + rng.uniform(-60, 60), V + rng.uniform(-60, 60)) for _ in range(2000)], fan)
+nodes = [(U + 10.0 * i, V + 10.0 * j) for i in range(11) for j in range(11)]
+gsegs = []
+for _ in range(500):
+    a, b = rng.sample(nodes, 2)
+    gsegs.append([a, b])
+write_case("lattice_500_segments_utm", [(U + rng.uniform(0, 100), V + rng.uniform(0, 100)) for _ in range(2000)] + nodes, gsegs)
+for name, (ox, oy) in (("lattice_3_segments_utm", (U, V)), ("lattice_3_segments", (0.0, 0.0))):
+    # reduced from lattice_500_segments_utm: the third segment passes exactly through node (50, 70)
+    write_case(name, [(ox + 10.0 * i, oy + 10.0 * j) for i in range(11) for j in range(11)],
+               [[(ox + 40.0, oy + 60.0), (ox + 70.0, oy + 60.0)], [(ox + 60.0, oy + 40.0), (ox + 40.0, oy + 100.0)],
+                [(ox + 60.0, oy + 80.0), (ox + 40.0, oy + 60.0)]])
+write_case("concurrent_3_through_node_utm", [(U + 10.0 * i, V + 10.0 * j) for i in range(11) for j in range(11)],
+           [[(U + 30, V + 0), (U + 70, V + 100)], [(U + 0, V + 50), (U + 100, V + 50)], [(U + 10, V + 30), (U + 90, V + 70)]])
 # ---- medium random + mixed (perf)
 write_case("random_100k_utm", [(U + 5000 * rng.random(), V + 5000 * rng.random()) for _ in range(100000)],
            [[(U + 5000 * rng.random(), V + 5000 * rng.random()) for _ in range(20)] for _ in range(50)])
