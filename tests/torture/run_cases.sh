@@ -63,6 +63,8 @@ while IFS=$'\t' read -r name expect snap tol bl; do
     [ -e "$w/out.tin" ] && fail="${fail:+$fail; }output file left behind"
     ls "$w" | grep -q -v -E '^(tin\.out|tin\.err)$' && [ ! -e "$w/out.tin" ] && fail="${fail:+$fail; }stray file: $(ls "$w" | tr '\n' ' ')"
   fi
+  san=$(grep -m1 -E 'runtime error|AddressSanitizer|LeakSanitizer' "$w/tin.err" | cut -c1-200)
+  [ -n "$san" ] && fail="${fail:+$fail; }sanitizer: $san"
   if [ -n "$fail" ]; then
     nfail=$((nfail+1)); printf 'FAIL %-32s %6ss  %s\n' "$name" "$secs" "$fail"
   else
