@@ -217,6 +217,11 @@ for name, (ox, oy) in (("lattice_3_segments_utm", (U, V)), ("lattice_3_segments"
                 [(ox + 60.0, oy + 80.0), (ox + 40.0, oy + 60.0)]])
 write_case("concurrent_3_through_node_utm", [(U + 10.0 * i, V + 10.0 * j) for i in range(11) for j in range(11)],
            [[(U + 30, V + 0), (U + 70, V + 100)], [(U + 0, V + 50), (U + 100, V + 50)], [(U + 10, V + 30), (U + 90, V + 70)]])
+# three break lines through input node (50, 70): check_tin passes but the TIN gets two extra
+# vertices 1e-10 m and 2.3e-10 m from the node (count near-coincident vertices in out.obj)
+write_case("concurrent_5_through_node_utm", [(U + 10.0 * i, V + 10.0 * j) for i in range(11) for j in range(11)],
+           [[(U + 80, V + 10), (U + 0, V + 80)], [(U + 70, V + 0), (U + 90, V + 20)], [(U + 30, V + 0), (U + 70, V + 100)],
+            [(U + 0, V + 50), (U + 100, V + 50)], [(U + 10, V + 30), (U + 90, V + 70)]])
 # ---- medium random + mixed (perf)
 write_case("random_100k_utm", [(U + 5000 * rng.random(), V + 5000 * rng.random()) for _ in range(100000)],
            [[(U + 5000 * rng.random(), V + 5000 * rng.random()) for _ in range(20)] for _ in range(50)])
