@@ -28,6 +28,9 @@ echo
 echo "-- export OBJ (full precision) and a 10 m GeoTIFF heightmap"
 "$tinsmith" export out/red-butte.tin --format obj -o out/red-butte.obj
 "$tinsmith" export out/red-butte.tin --format tif --cell 10 -o out/red-butte.tif
+echo "-- a shaded-relief picture of the TIN: out/red-butte-hillshade.png"
+gdaldem hillshade -q -multidirectional -compute_edges out/red-butte.tif out/red-butte-hillshade.tif
+gdal_translate -q -of PNG out/red-butte-hillshade.tif out/red-butte-hillshade.png
 echo "-- query the TIN at the middle of the area"
 "$tinsmith" query out/red-butte.tin 434000 4516000
 echo "== 2. tiles: out/red-butte.tin → out/red-butte.3dtiles"

@@ -117,10 +117,11 @@ std::string BuildReport::summary() const {
     s << "  bridge candidates (road × river): " << bridgeCandidates.size() << "\n";
     for (std::size_t i = 0; i < bridgeCandidates.size() && i < 5; ++i)
       s << "    at " << fixed(bridgeCandidates[i].at.x, 2) << ", " << fixed(bridgeCandidates[i].at.y, 2)
-        << ": " << bridgeCandidates[i].what << "\n";
+        << ": " << bridgeCandidates[i].what << " (TIN z " << fixed(bridgeCandidates[i].zKept, 2)
+        << " m from the river; the road there was " << fixed(bridgeCandidates[i].zOther, 2) << " m)\n";
   }
   if (riversDraped || riversChecked)
-    s << "  rivers: " << riversDraped << " draped, " << riversChecked << " 3D checked, "
+    s << "  rivers (pieces outside lakes): " << riversDraped << " draped, " << riversChecked << " 3D checked, "
       << riversReversed << " digitised upstream, " << riverVerticesAdjusted
       << " vertices lowered/raised to descend (max " << fixed(riverMaxAdjustment, 2) << " m)\n";
   if (roadsDraped)

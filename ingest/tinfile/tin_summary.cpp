@@ -44,7 +44,6 @@ TinSummary summariseTin(const TinData& tin) {
   return s;
 }
 
-std::string jsonString(const std::string& text) { return nlohmann::json(text).dump(); }
 
 std::string TinSummary::json() const {
   nlohmann::ordered_json j;

@@ -30,7 +30,4 @@ struct TinSummary {
 
 TinSummary summariseTin(const TinData& tin);
 
-/// `text` as a JSON string literal (quotes included, escapes as RFC 8259).
-std::string jsonString(const std::string& text);
-
 }  // namespace tinsmith::ingest

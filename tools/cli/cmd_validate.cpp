@@ -1,11 +1,11 @@
 // `tinsmith validate`: check a TIN: topology, orientation, constraints,
 // Delaunay property. Exit 0 when valid; 1 with the problems listed when not;
 // 3 when the file cannot be read (missing, damaged: see ingest/tinfile).
-#include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "core/base/error.hpp"
 #include "core/mesh/validate.hpp"
@@ -36,30 +36,25 @@ void addValidateCommand(CLI::App& app) {
     options.checkDelaunay = !opt->noDelaunay;
     const ValidationReport report = validate(tin, options);
     if (opt->json) {
-      std::string out = "{\n  \"file\": " + ingest::jsonString(opt->tin) +
-                        ",\n  \"valid\": " + (report.ok ? "true" : "false") +
-                        ",\n  \"vertices\": " + std::to_string(report.vertices) +
-                        ",\n  \"triangles\": " + std::to_string(report.triangles) +
-                        ",\n  \"edges\": " + std::to_string(report.edges) +
-                        ",\n  \"boundary_edges\": " + std::to_string(report.boundaryEdges) +
-                        ",\n  \"constrained_edges\": " + std::to_string(report.constrainedEdges) +
-                        ",\n  \"boundary_loops\": " + std::to_string(report.boundaryLoops) +
-                        ",\n  \"delaunay_checked\": " + (options.checkDelaunay ? "true" : "false") +
-                        ",\n  \"problem_count\": " + std::to_string(report.problemCount) +
-                        ",\n  \"problems\": [";
-      for (std::size_t i = 0; i < report.problems.size(); ++i)
-        out += std::string(i ? "," : "") + "\n    " + ingest::jsonString(report.problems[i]);
-      out += report.problems.empty() ? "]\n}\n" : "\n  ]\n}\n";
-      std::cout << out;
+      const nlohmann::ordered_json out = {
+          {"file", opt->tin},
+          {"valid", report.ok},
+          {"vertices", report.vertices},
+          {"triangles", report.triangles},
+          {"edges", report.edges},
+          {"boundary_edges", report.boundaryEdges},
+          {"constrained_edges", report.constrainedEdges},
+          {"boundary_loops", report.boundaryLoops},
+          {"delaunay_checked", options.checkDelaunay},
+          {"problem_count", report.problemCount},
+          {"problems", report.problems},
+      };
+      std::cout << out.dump(2) << "\n";
     } else {
       std::cout << opt->tin << ": " << (report.ok ? "valid" : "INVALID") << "\n"
                 << report.summary() << (report.summary().ends_with('\n') ? "" : "\n");
     }
-    if (!report.ok) {
-      std::cout.flush();
-      std::fflush(stdout);
-      std::exit(kExitCheckFailed);  // a completed check that failed: exit 1, not an error kind
-    }
+    if (!report.ok) throw CheckFailed{};
   });
 }
 

@@ -19,4 +19,9 @@ enum ExitCode : int {
 
 ExitCode exitCodeFor(ErrorKind kind);
 
+/// Thrown by a command whose check ran to the end and failed (after it has
+/// printed its findings): main() exits with kExitCheckFailed, printing nothing
+/// more. Not a tinsmith::Error — nothing went wrong in running the check.
+struct CheckFailed {};
+
 }  // namespace tinsmith::cli

@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);  // prints help, version or the parse error
     return rc == 0 ? kExitOk : kExitUsage;
+  } catch (const CheckFailed&) {
+    return kExitCheckFailed;
   } catch (const Error& e) {
     std::cerr << "ERROR: " << e.what() << "\n";
     return exitCodeFor(e.kind());
