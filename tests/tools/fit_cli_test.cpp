@@ -1,6 +1,5 @@
 // `tinsmith fit` end to end: points in, .tin and statistics out, bad options
-// rejected with usage errors. Skipped when the binary has not been built (the
-// sanitizer build compiles only the core tests).
+// rejected with usage errors. Skipped when the binary has not been built.
 #include <gtest/gtest.h>
 
 #include <filesystem>
