@@ -33,9 +33,23 @@ gdaldem hillshade -q -multidirectional -compute_edges out/red-butte.tif out/red-
 gdal_translate -q -of PNG out/red-butte-hillshade.tif out/red-butte-hillshade.png
 echo "-- query the TIN at the middle of the area"
 "$tinsmith" query out/red-butte.tin 434000 4516000
-echo "== 2. tiles: out/red-butte.tin → out/red-butte.3dtiles"
+
+echo
+echo "== 2. level of detail: multilevel least squares (book Alg. 8.1) over the DEM cells, max error 5 m"
+# `tinsmith fit` reads XYZ points; GDAL writes the DEM's cells as XYZ (nodata as nan, dropped).
+gdal_translate -q -of XYZ "$data/dem.tif" out/red-butte-dem.xyz.part
+grep -vi nan out/red-butte-dem.xyz.part > out/red-butte-dem.xyz && rm out/red-butte-dem.xyz.part
+"$tinsmith" fit out/red-butte-dem.xyz --tolerance 5 --lambda 0.1 --criterion error --crs EPSG:26912 \
+  -o out/red-butte-fit.tin --stats out/red-butte-fit.stats.json
+"$tinsmith" export out/red-butte-fit.tin --format tif --cell 10 -o out/red-butte-fit.tif
+gdaldem hillshade -q -multidirectional -compute_edges out/red-butte-fit.tif out/red-butte-fit-hillshade.tif
+gdal_translate -q -of PNG out/red-butte-fit-hillshade.tif out/red-butte-fit-hillshade.png
+echo "-- shaded relief of the fitted surface: out/red-butte-fit-hillshade.png"
+
+echo
+echo "== 3. tiles: out/red-butte.tin → out/red-butte.3dtiles"
 missing+=("tiles (tinsmith tile)")
-echo "== 3. server: http://127.0.0.1:8080/"
+echo "== 4. server: http://127.0.0.1:8080/"
 missing+=("server (tinsmith serve)")
 
 echo
