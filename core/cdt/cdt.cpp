@@ -173,12 +173,83 @@ struct Cdt::Impl {
   bool finalized = false;
   bool meshBuilt = false;
 
+  // After buildMesh() the working triangle arrays live in `mesh` (compacted);
+  // the triangles left out (ghosts, outside the domain) are kept here with
+  // their slots so that unpack() restores the working arrays exactly.
+  struct RemovedTriangle {
+    std::uint32_t slot;
+    std::uint32_t tv[3];
+    std::uint32_t opp[3];
+    std::uint8_t cons[3];
+  };
+  std::vector<RemovedTriangle> removed;
+  bool packed = false;
+  std::uint32_t packedTriangles = 0;
+
   std::uint32_t lastTriangle = 0;
   bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
   std::vector<std::uint32_t> visitStamp;
   std::uint32_t stamp = 0;
+
+  /// Takes the triangles back from the output mesh (inverse of the
+  /// compaction in buildMesh): the working arrays become exactly what they
+  /// were before the mesh was built.
+  void unpack() {
+    if (!packed) return;
+    const std::uint32_t outT = packedTriangles;
+    const auto nt = static_cast<std::uint32_t>(outT + removed.size());
+    // Mesh vertex → working vertex (live roots only have mesh vertices).
+    std::vector<std::uint32_t> inv(mesh.points_.size(), kNone);
+    for (std::uint32_t v = 0; v < rep.size(); ++v) {
+      if (rep[v] == v && meshOf[v] != kNone) inv[meshOf[v]] = v;
+    }
+    tv = std::move(mesh.corners_);
+    opp = std::move(mesh.twins_);
+    mesh = Mesh();
+    meshBuilt = false;
+    tv.resize(3 * static_cast<std::size_t>(nt));
+    opp.resize(3 * static_cast<std::size_t>(nt));
+    cons.resize(3 * static_cast<std::size_t>(nt));
+    std::vector<std::uint32_t> slotOf(outT);
+    // Back to front: kept triangle o moves to slot t >= o.
+    std::size_t r = removed.size();
+    std::uint32_t o = outT;
+    for (std::uint32_t t = nt; t-- > 0;) {
+      if (r > 0 && removed[r - 1].slot == t) {
+        --r;
+        continue;  // filled below
+      }
+      --o;
+      slotOf[o] = t;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        tv[3 * t + i] = inv[tv[3 * o + i]];
+        opp[3 * t + i] = opp[3 * o + i];  // a mesh half-edge id; remapped below
+        cons[3 * t + i] = cons[3 * o + i];
+      }
+    }
+    r = 0;
+    for (std::uint32_t t = 0; t < nt; ++t) {
+      if (r < removed.size() && removed[r].slot == t) {
+        ++r;
+        continue;
+      }
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t g = opp[3 * t + i];
+        if (g != kNone) opp[3 * t + i] = 3 * slotOf[g / 3] + g % 3;
+      }
+    }
+    for (const RemovedTriangle& x : removed) {
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        tv[3 * x.slot + i] = x.tv[i];
+        cons[3 * x.slot + i] = x.cons[i];
+        link(3 * x.slot + i, x.opp[i]);
+      }
+    }
+    std::vector<RemovedTriangle>().swap(removed);
+    packed = false;
+  }
 
   // ---------------------------------------------------------------- basics
   [[nodiscard]] bool triangulated() const { return !tv.empty(); }
@@ -638,15 +709,21 @@ struct Cdt::Impl {
     }
     radixSortHigh32(keys);
     for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
+    std::vector<std::uint64_t>().swap(keys);
     trackVhe = false;
     insertedUpTo = n;
     if (order.empty()) return;
 
     std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
     if (!triangulated()) {
-      tv.reserve(order.size() * 6 + 12);
-      opp.reserve(order.size() * 6 + 12);
-      cons.reserve(order.size() * 6 + 12);
+      // 2 triangles per point, plus room for a few constraint intersections
+      // per pending segment (each adds 2 triangles) so that the arrays rarely
+      // grow (a doubling would briefly hold both copies).
+      const std::size_t cap =
+          order.size() * 6 + 12 + 24 * (segments.size() - segmentsDone);
+      tv.reserve(cap);
+      opp.reserve(cap);
+      cons.reserve(cap);
       initialTriangle(order, skipA, skipB, skipC);
     }
     for (std::size_t i = 0; i < order.size(); ++i) {
@@ -1088,6 +1165,13 @@ void Cdt::finalize() {
   if (!m.triangulated() && m.xy.empty()) {
     throw geometryError("no points to triangulate", {}, "give at least three points");
   }
+  if (m.packed) {
+    if (m.insertedUpTo >= m.xy.size() && m.segmentsDone >= m.segments.size()) {
+      m.finalized = true;  // nothing new: the mesh stands
+      return;
+    }
+    m.unpack();
+  }
   m.insertPendingPoints();
   m.insertPendingSegments();
   m.finalized = true;
@@ -1097,47 +1181,83 @@ void Cdt::finalize() {
 void Cdt::buildMesh() const {
   Impl& m = *impl_;
   if (m.meshBuilt) return;
-  // Domain and the output mesh.
+  // The output mesh takes over the working arrays: triangles inside the domain
+  // are compacted in place (their order kept) and moved into the Mesh; ghosts
+  // and triangles outside the domain are set aside so that unpack() can restore
+  // the working triangulation exactly if more input comes.
   const std::vector<std::uint8_t> inside = m.classifyDomain();
   const std::uint32_t nt = m.triCount();
-  std::vector<std::uint32_t> triMap(nt, kNone);
+  // rank(t) = number of inside triangles before t: a bitset with per-word prefixes.
+  std::vector<std::uint64_t> bits((nt + 63) / 64, 0);
+  std::vector<std::uint32_t> prefix(bits.size() + 1, 0);
   std::vector<std::uint32_t> used(m.xy.size(), kNone);
-  std::uint32_t outT = 0;
   for (std::uint32_t t = 0; t < nt; ++t) {
     if (!inside[t]) continue;
-    triMap[t] = outT++;
+    bits[t / 64] |= std::uint64_t{1} << (t % 64);
     for (std::uint32_t i = 0; i < 3; ++i) used[m.tv[3 * t + i]] = 0;
   }
+  for (std::size_t w = 0; w < bits.size(); ++w) {
+    prefix[w + 1] = prefix[w] + static_cast<std::uint32_t>(std::popcount(bits[w]));
+  }
+  const std::uint32_t outT = prefix.back();
+  auto isIn = [&](std::uint32_t t) { return (bits[t / 64] >> (t % 64)) & 1u; };
+  auto rank = [&](std::uint32_t t) {
+    const std::uint64_t below = (std::uint64_t{1} << (t % 64)) - 1;
+    return prefix[t / 64] + static_cast<std::uint32_t>(std::popcount(bits[t / 64] & below));
+  };
   std::uint32_t outV = 0;
   for (std::size_t v = 0; v < used.size(); ++v) {
     if (used[v] != kNone) used[v] = outV++;
   }
-  Mesh& mesh = m.mesh;
-  mesh = Mesh();
-  std::vector<std::uint32_t>().swap(m.meshOf);
-  mesh.crs_ = m.options.crs;
-  mesh.features_ = m.features;
-  mesh.points_.resize(outV);
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
-  }
-  mesh.corners_.resize(3 * static_cast<std::size_t>(outT));
-  mesh.twins_.assign(3 * static_cast<std::size_t>(outT), HalfedgeId());
+  m.removed.clear();
+  m.removed.reserve(nt - outT);
   std::vector<std::pair<std::uint32_t, FeatureId>> hf;
   for (std::uint32_t t = 0; t < nt; ++t) {
-    if (triMap[t] == kNone) continue;
+    const std::uint32_t b = 3 * t;
+    if (!isIn(t)) {
+      m.removed.push_back({t,
+                           {m.tv[b], m.tv[b + 1], m.tv[b + 2]},
+                           {m.opp[b], m.opp[b + 1], m.opp[b + 2]},
+                           {m.cons[b], m.cons[b + 1], m.cons[b + 2]}});
+      continue;
+    }
+    // Read t completely before writing slot rank(t) <= t.
+    const std::uint32_t c[3] = {m.tv[b], m.tv[b + 1], m.tv[b + 2]};
+    const std::uint32_t g[3] = {m.opp[b], m.opp[b + 1], m.opp[b + 2]};
+    const std::uint8_t k[3] = {m.cons[b], m.cons[b + 1], m.cons[b + 2]};
+    const std::uint32_t o = 3 * rank(t);
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t h = 3 * t + i;
-      const std::uint32_t oh = 3 * triMap[t] + i;
-      mesh.corners_[oh] = used[m.tv[h]];
-      const std::uint32_t g = m.opp[h];
-      if (triMap[g / 3] != kNone) mesh.twins_[oh] = HalfedgeId(3 * triMap[g / 3] + g % 3);
-      if (m.cons[h]) {
-        for (FeatureId f : m.edgeFeatures.find(edgeKey(m.tv[h], m.tv[nxt(h)]))) {
-          if (f < m.features.size()) hf.emplace_back(oh, f);
+      if (k[i]) {
+        for (FeatureId f : m.edgeFeatures.find(edgeKey(c[i], c[(i + 1) % 3]))) {
+          if (f < m.features.size()) hf.emplace_back(o + i, f);
         }
       }
     }
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      m.tv[o + i] = used[c[i]];
+      m.opp[o + i] = isIn(g[i] / 3) ? 3 * rank(g[i] / 3) + g[i] % 3 : kNone;
+      m.cons[o + i] = k[i];
+    }
+  }
+  m.tv.resize(3 * static_cast<std::size_t>(outT));
+  m.opp.resize(3 * static_cast<std::size_t>(outT));
+  m.cons.resize(3 * static_cast<std::size_t>(outT));
+  m.packedTriangles = outT;
+  m.packed = true;
+  std::vector<std::uint64_t>().swap(bits);
+  std::vector<std::uint32_t>().swap(prefix);
+
+  Mesh& mesh = m.mesh;
+  mesh = Mesh();
+  mesh.crs_ = m.options.crs;
+  mesh.features_ = m.features;
+  mesh.corners_ = std::move(m.tv);
+  mesh.twins_ = std::move(m.opp);
+  m.tv.clear();
+  m.opp.clear();
+  mesh.points_.resize(outV);
+  for (std::size_t v = 0; v < used.size(); ++v) {
+    if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
   }
   std::sort(hf.begin(), hf.end());
   if (!hf.empty()) {
@@ -1151,28 +1271,30 @@ void Cdt::buildMesh() const {
       mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
     }
   }
+  std::vector<std::pair<std::uint32_t, FeatureId>>().swap(hf);
   mesh.outgoing_.assign(outV, HalfedgeId());
   for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {
     HalfedgeId& o = mesh.outgoing_[mesh.corners_[h]];
-    if (!o.valid() || (!mesh.twins_[h].valid() && mesh.twins_[o.value].valid())) o = HalfedgeId(h);
+    if (!o.valid() || (mesh.isBoundary(HalfedgeId(h)) && !mesh.isBoundary(o))) o = HalfedgeId(h);
   }
 
   // Input vertex → mesh vertex; live vertices outside the domain are dropped.
-  m.meshOf.assign(m.xy.size(), kNone);
   m.report.dropped.erase(
       std::remove_if(m.report.dropped.begin(), m.report.dropped.end(),
                      [](const CdtReport::Dropped& d) {
                        return d.what == CdtReport::Dropped::What::PointOutsideDomain;
                      }),
       m.report.dropped.end());
+  // used becomes meshOf: roots keep their entry, merged vertices take their root's.
   for (std::uint32_t v = 0; v < m.xy.size(); ++v) {
     const std::uint32_t r = m.find(v);
-    m.meshOf[v] = used[r];
+    if (r != v) used[v] = used[r];
     if (r == v && used[v] == kNone) {
       m.report.dropped.push_back(
           {CdtReport::Dropped::What::PointOutsideDomain, m.vfeat[v], m.xy[v]});
     }
   }
+  m.meshOf = std::move(used);
   m.meshBuilt = true;
 }
 

@@ -55,7 +55,7 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
 
   // Link twins: sort half-edges by undirected edge.
   const auto nh = static_cast<std::uint32_t>(m.corners_.size());
-  m.twins_.assign(nh, HalfedgeId());
+  m.twins_.assign(nh, HalfedgeId::kInvalid);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(nh);
   for (std::uint32_t h = 0; h < nh; ++h) {
     keyed[h] = {edgeKey(m.corners_[h], m.corners_[next(HalfedgeId(h)).value]), h};
@@ -68,8 +68,8 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
     if (j - i == 2) {
       const HalfedgeId h0(keyed[i].second), h1(keyed[i + 1].second);
       if (m.corners_[h0.value] != m.corners_[h1.value]) {
-        m.twins_[h0.value] = h1;
-        m.twins_[h1.value] = h0;
+        m.twins_[h0.value] = h1.value;
+        m.twins_[h1.value] = h0.value;
       } else if (nonManifold++ < 10) {
         m.buildProblems_.push_back("edge " + std::to_string(m.corners_[h0.value]) + "-" +
                                    std::to_string(m.corners_[next(h0).value]) +
@@ -88,7 +88,7 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
   m.outgoing_.assign(nv, HalfedgeId());
   for (std::uint32_t h = 0; h < nh; ++h) {
     HalfedgeId& o = m.outgoing_[m.corners_[h]];
-    if (!o.valid() || (!m.twins_[h].valid() && m.twins_[o.value].valid())) o = HalfedgeId(h);
+    if (!o.valid() || (m.isBoundary(HalfedgeId(h)) && !m.isBoundary(o))) o = HalfedgeId(h);
   }
 
   // Constraint features as CSR per half-edge.
@@ -141,7 +141,7 @@ TinData Mesh::toTinData() const {
   }
   for (std::uint32_t h = 0; h < corners_.size(); ++h) {
     const HalfedgeId he(h);
-    const HalfedgeId tw = twins_[h];
+    const HalfedgeId tw(twins_[h]);
     if (tw.valid() && tw.value < h) continue;
     std::uint32_t a = corners_[h], b = corners_[next(he).value];
     if (a > b) std::swap(a, b);
@@ -169,7 +169,7 @@ void Mesh::forEachOutgoing(VertexId v, const std::function<void(HalfedgeId)>& f)
 std::vector<HalfedgeId> Mesh::boundaryHalfedges() const {
   std::vector<HalfedgeId> out;
   for (std::uint32_t h = 0; h < twins_.size(); ++h) {
-    if (!twins_[h].valid()) out.push_back(HalfedgeId(h));
+    if (twins_[h] == HalfedgeId::kInvalid) out.push_back(HalfedgeId(h));
   }
   return out;
 }

@@ -89,14 +89,14 @@ class Mesh {
     return HalfedgeId(h.value % 3 == 0 ? h.value + 2 : h.value - 1);
   }
   /// The opposite half-edge, invalid on the mesh boundary.
-  [[nodiscard]] HalfedgeId twin(HalfedgeId h) const { return twins_[h.value]; }
+  [[nodiscard]] HalfedgeId twin(HalfedgeId h) const { return HalfedgeId(twins_[h.value]); }
   [[nodiscard]] VertexId origin(HalfedgeId h) const { return VertexId(corners_[h.value]); }
   [[nodiscard]] VertexId target(HalfedgeId h) const { return origin(next(h)); }
   [[nodiscard]] std::array<VertexId, 3> vertices(TriangleId t) const {
     return {VertexId(corners_[3 * t.value]), VertexId(corners_[3 * t.value + 1]),
             VertexId(corners_[3 * t.value + 2])};
   }
-  [[nodiscard]] bool isBoundary(HalfedgeId h) const { return !twins_[h.value].valid(); }
+  [[nodiscard]] bool isBoundary(HalfedgeId h) const { return twins_[h.value] == HalfedgeId::kInvalid; }
 
   /// One half-edge leaving v; for a boundary vertex the one whose clockwise
   /// neighbour is missing, so that star iteration (CCW) covers the whole fan.
@@ -139,7 +139,7 @@ class Mesh {
   friend class Cdt;  // builds its output mesh in place (no re-linking)
   std::vector<Point3> points_;
   std::vector<std::uint32_t> corners_;       // 3 per triangle
-  std::vector<HalfedgeId> twins_;            // per half-edge
+  std::vector<std::uint32_t> twins_;         // per half-edge (HalfedgeId values)
   std::vector<HalfedgeId> outgoing_;         // per vertex
   std::vector<std::uint32_t> featureBegin_;  // per half-edge + 1 (CSR); empty: no constraints
   std::vector<std::uint32_t> featureIds_;
