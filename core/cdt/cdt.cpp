@@ -1260,17 +1260,7 @@ void Cdt::buildMesh() const {
     if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
   }
   std::sort(hf.begin(), hf.end());
-  if (!hf.empty()) {
-    mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
-    mesh.featureIds_.reserve(hf.size());
-    for (const auto& [h, f] : hf) {
-      ++mesh.featureBegin_[h + 1];
-      mesh.featureIds_.push_back(f);
-    }
-    for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
-      mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
-    }
-  }
+  mesh.setEdgeFeatures(hf);
   std::vector<std::pair<std::uint32_t, FeatureId>>().swap(hf);
   mesh.outgoing_.assign(outV, HalfedgeId());
   for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {

@@ -118,15 +118,7 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
   }
   std::sort(hf.begin(), hf.end());
   hf.erase(std::unique(hf.begin(), hf.end()), hf.end());
-  if (!hf.empty()) {
-    m.featureBegin_.assign(nh + 1, 0);
-    m.featureIds_.reserve(hf.size());
-    for (const auto& [h, f] : hf) {
-      ++m.featureBegin_[h + 1];
-      m.featureIds_.push_back(f);
-    }
-    for (std::uint32_t h = 0; h < nh; ++h) m.featureBegin_[h + 1] += m.featureBegin_[h];
-  }
+  m.setEdgeFeatures(hf);
   return m;
 }
 
@@ -152,6 +144,29 @@ TinData Mesh::toTinData() const {
               return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
             });
   return tin;
+}
+
+void Mesh::setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hf) {
+  consBits_.clear();
+  consRank_.clear();
+  featureBegin_.clear();
+  featureIds_.clear();
+  if (hf.empty()) return;
+  const std::size_t words = corners_.size() / 64 + 1;
+  consBits_.assign(words, 0);
+  consRank_.assign(words + 1, 0);
+  featureIds_.reserve(hf.size());
+  featureBegin_.push_back(0);
+  for (std::size_t i = 0; i < hf.size(); ++i) {
+    const std::uint32_t h = hf[i].first;
+    if (i > 0 && hf[i - 1].first != h) featureBegin_.push_back(static_cast<std::uint32_t>(i));
+    consBits_[h / 64] |= std::uint64_t{1} << (h % 64);
+    featureIds_.push_back(hf[i].second);
+  }
+  featureBegin_.push_back(static_cast<std::uint32_t>(hf.size()));
+  for (std::size_t w = 0; w < words; ++w) {
+    consRank_[w + 1] = consRank_[w] + static_cast<std::uint32_t>(std::popcount(consBits_[w]));
+  }
 }
 
 void Mesh::forEachOutgoing(VertexId v, const std::function<void(HalfedgeId)>& f) const {
