@@ -1185,47 +1185,50 @@ void Cdt::buildMesh() const {
   // are compacted in place (their order kept) and moved into the Mesh; ghosts
   // and triangles outside the domain are set aside so that unpack() can restore
   // the working triangulation exactly if more input comes.
-  const std::vector<std::uint8_t> inside = m.classifyDomain();
   const std::uint32_t nt = m.triCount();
-  // rank(t) = number of inside triangles before t: a bitset with per-word prefixes.
-  std::vector<std::uint64_t> bits((nt + 63) / 64, 0);
-  std::vector<std::uint32_t> prefix(bits.size() + 1, 0);
+  // triMap: working triangle → output triangle (kNone outside); monotone, so
+  // the compaction below can run in place. Transient: freed before the output
+  // points are allocated.
+  std::vector<std::uint32_t> triMap;
+  {
+    const std::vector<std::uint8_t> inside = m.classifyDomain();
+    triMap.resize(nt);
+    std::uint32_t k = 0;
+    for (std::uint32_t t = 0; t < nt; ++t) triMap[t] = inside[t] ? k++ : kNone;
+  }
   std::vector<std::uint32_t> used(m.xy.size(), kNone);
+  std::uint32_t outT = 0;
   for (std::uint32_t t = 0; t < nt; ++t) {
-    if (!inside[t]) continue;
-    bits[t / 64] |= std::uint64_t{1} << (t % 64);
+    if (triMap[t] == kNone) continue;
+    ++outT;
     for (std::uint32_t i = 0; i < 3; ++i) used[m.tv[3 * t + i]] = 0;
   }
-  for (std::size_t w = 0; w < bits.size(); ++w) {
-    prefix[w + 1] = prefix[w] + static_cast<std::uint32_t>(std::popcount(bits[w]));
-  }
-  const std::uint32_t outT = prefix.back();
-  auto isIn = [&](std::uint32_t t) { return (bits[t / 64] >> (t % 64)) & 1u; };
-  auto rank = [&](std::uint32_t t) {
-    const std::uint64_t below = (std::uint64_t{1} << (t % 64)) - 1;
-    return prefix[t / 64] + static_cast<std::uint32_t>(std::popcount(bits[t / 64] & below));
-  };
   std::uint32_t outV = 0;
   for (std::size_t v = 0; v < used.size(); ++v) {
     if (used[v] != kNone) used[v] = outV++;
   }
+  Mesh& mesh = m.mesh;
+  mesh = Mesh();
+  mesh.crs_ = m.options.crs;
+  mesh.features_ = m.features;
+  mesh.outgoing_.assign(outV, HalfedgeId());
   m.removed.clear();
   m.removed.reserve(nt - outT);
   std::vector<std::pair<std::uint32_t, FeatureId>> hf;
   for (std::uint32_t t = 0; t < nt; ++t) {
     const std::uint32_t b = 3 * t;
-    if (!isIn(t)) {
+    if (triMap[t] == kNone) {
       m.removed.push_back({t,
                            {m.tv[b], m.tv[b + 1], m.tv[b + 2]},
                            {m.opp[b], m.opp[b + 1], m.opp[b + 2]},
                            {m.cons[b], m.cons[b + 1], m.cons[b + 2]}});
       continue;
     }
-    // Read t completely before writing slot rank(t) <= t.
+    // Read t completely before writing slot triMap[t] <= t.
     const std::uint32_t c[3] = {m.tv[b], m.tv[b + 1], m.tv[b + 2]};
     const std::uint32_t g[3] = {m.opp[b], m.opp[b + 1], m.opp[b + 2]};
     const std::uint8_t k[3] = {m.cons[b], m.cons[b + 1], m.cons[b + 2]};
-    const std::uint32_t o = 3 * rank(t);
+    const std::uint32_t o = 3 * triMap[t];
     for (std::uint32_t i = 0; i < 3; ++i) {
       if (k[i]) {
         for (FeatureId f : m.edgeFeatures.find(edgeKey(c[i], c[(i + 1) % 3]))) {
@@ -1234,23 +1237,27 @@ void Cdt::buildMesh() const {
       }
     }
     for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t n = triMap[g[i] / 3];
       m.tv[o + i] = used[c[i]];
-      m.opp[o + i] = isIn(g[i] / 3) ? 3 * rank(g[i] / 3) + g[i] % 3 : kNone;
+      m.opp[o + i] = n != kNone ? 3 * n + g[i] % 3 : kNone;
       m.cons[o + i] = k[i];
     }
+    // Outgoing half-edge per vertex, preferring boundary ones (fan start);
+    // same rule and order as Mesh::build.
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      HalfedgeId& out = mesh.outgoing_[m.tv[o + i]];
+      if (!out.valid() || (m.opp[o + i] == kNone && m.opp[out.value] != kNone)) {
+        out = HalfedgeId(o + i);
+      }
+    }
   }
+  std::vector<std::uint32_t>().swap(triMap);
   m.tv.resize(3 * static_cast<std::size_t>(outT));
   m.opp.resize(3 * static_cast<std::size_t>(outT));
   m.cons.resize(3 * static_cast<std::size_t>(outT));
   m.packedTriangles = outT;
   m.packed = true;
-  std::vector<std::uint64_t>().swap(bits);
-  std::vector<std::uint32_t>().swap(prefix);
 
-  Mesh& mesh = m.mesh;
-  mesh = Mesh();
-  mesh.crs_ = m.options.crs;
-  mesh.features_ = m.features;
   mesh.corners_ = std::move(m.tv);
   mesh.twins_ = std::move(m.opp);
   m.tv.clear();
@@ -1262,11 +1269,6 @@ void Cdt::buildMesh() const {
   std::sort(hf.begin(), hf.end());
   mesh.setEdgeFeatures(hf);
   std::vector<std::pair<std::uint32_t, FeatureId>>().swap(hf);
-  mesh.outgoing_.assign(outV, HalfedgeId());
-  for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {
-    HalfedgeId& o = mesh.outgoing_[mesh.corners_[h]];
-    if (!o.valid() || (mesh.isBoundary(HalfedgeId(h)) && !mesh.isBoundary(o))) o = HalfedgeId(h);
-  }
 
   // Input vertex → mesh vertex; live vertices outside the domain are dropped.
   m.report.dropped.erase(
