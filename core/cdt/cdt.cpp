@@ -8,10 +8,12 @@
 #include "core/cdt/cdt.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <deque>
 #include <string>
+#include <thread>
 #include <unordered_map>
 #include <utility>
 
@@ -57,14 +59,48 @@ std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
   return d;
 }
 
-// LSD radix sort of 64-bit values on their upper 32 bits (stable).
-void radixSortHigh32(std::vector<std::uint64_t>& v) {
+/// Runs f(chunk, begin, end) over [0, n) split into `threads` contiguous
+/// chunks (chunk k on its own thread; chunk 0 on the caller's). Chunk bounds
+/// depend only on n and threads.
+template <class F>
+void parallelChunks(unsigned threads, std::size_t n, const F& f) {
+  if (threads <= 1 || n < 4096) {
+    f(0u, std::size_t{0}, n);
+    return;
+  }
+  std::vector<std::thread> pool;
+  pool.reserve(threads - 1);
+  for (unsigned k = 1; k < threads; ++k) {
+    pool.emplace_back([&f, k, n, threads] { f(k, n * k / threads, n * (k + 1) / threads); });
+  }
+  f(0u, std::size_t{0}, n / threads);
+  for (auto& t : pool) t.join();
+}
+
+// LSD radix sort of 64-bit values on their upper 32 bits (stable). With
+// several threads each sorts its chunk's share into place through per-chunk
+// bucket offsets, so the result is the same for any thread count.
+void radixSortHigh32(std::vector<std::uint64_t>& v, unsigned threads) {
   std::vector<std::uint64_t> tmp(v.size());
+  if (v.size() < 4096) threads = 1;
+  std::vector<std::array<std::size_t, 256>> count(threads);
   for (int shift = 32; shift < 64; shift += 8) {
-    std::size_t count[257] = {};
-    for (std::uint64_t x : v) ++count[((x >> shift) & 0xff) + 1];
-    for (int i = 0; i < 256; ++i) count[i + 1] += count[i];
-    for (std::uint64_t x : v) tmp[count[(x >> shift) & 0xff]++] = x;
+    parallelChunks(threads, v.size(), [&](unsigned k, std::size_t b, std::size_t e) {
+      count[k].fill(0);
+      for (std::size_t i = b; i < e; ++i) ++count[k][(v[i] >> shift) & 0xff];
+    });
+    std::size_t sum = 0;
+    for (int d = 0; d < 256; ++d) {
+      for (unsigned k = 0; k < threads; ++k) {
+        const std::size_t c = count[k][d];
+        count[k][d] = sum;
+        sum += c;
+      }
+    }
+    parallelChunks(threads, v.size(), [&](unsigned k, std::size_t b, std::size_t e) {
+      auto& off = count[k];
+      for (std::size_t i = b; i < e; ++i) tmp[off[(v[i] >> shift) & 0xff]++] = v[i];
+    });
     v.swap(tmp);
   }
 }
@@ -667,18 +703,37 @@ struct Cdt::Impl {
     lastTriangle = t;
   }
 
+  [[nodiscard]] unsigned threadCount() const {
+    if (options.threads != 0) return options.threads;
+    return std::max(1u, std::thread::hardware_concurrency());
+  }
+
   void insertPendingPoints() {
     const std::size_t n = xy.size();
     if (insertedUpTo >= n) return;
-    std::vector<std::uint32_t> order;
-    order.reserve(n - insertedUpTo);
+    const unsigned threads = threadCount();
+    const std::size_t count = n - insertedUpTo;
+    struct Box {
+      double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+    };
+    std::vector<Box> boxes(threads);
+    parallelChunks(threads, count, [&](unsigned k, std::size_t b, std::size_t e) {
+      Box bx;
+      for (std::size_t i = insertedUpTo + b; i < insertedUpTo + e; ++i) {
+        if (rep[i] != kNone) continue;
+        bx.minX = std::min(bx.minX, xy[i].x);
+        bx.maxX = std::max(bx.maxX, xy[i].x);
+        bx.minY = std::min(bx.minY, xy[i].y);
+        bx.maxY = std::max(bx.maxY, xy[i].y);
+      }
+      boxes[k] = bx;
+    });
     double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    for (std::size_t i = insertedUpTo; i < n; ++i) {
-      if (rep[i] != kNone) continue;
-      minX = std::min(minX, xy[i].x);
-      maxX = std::max(maxX, xy[i].x);
-      minY = std::min(minY, xy[i].y);
-      maxY = std::max(maxY, xy[i].y);
+    for (const Box& bx : boxes) {
+      minX = std::min(minX, bx.minX);
+      maxX = std::max(maxX, bx.maxX);
+      minY = std::min(minY, bx.minY);
+      maxY = std::max(maxY, bx.maxY);
     }
     // BRIO (biased randomized insertion order): point i goes to round k with
     // probability 2^-(k+1) (from a fixed hash of i, so deterministic); rounds
@@ -689,26 +744,38 @@ struct Cdt::Impl {
     constexpr double kGrid = 8191.0;
     const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
     const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
-    const std::size_t count = n - insertedUpTo;
     std::uint32_t rounds = 0;
     while (rounds < 20 && (std::size_t{1000} << rounds) < count) ++rounds;
-    std::vector<std::uint64_t> keys;
-    keys.reserve(count);
-    for (std::size_t i = insertedUpTo; i < n; ++i) {
-      if (rep[i] != kNone) continue;
-      const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
-      const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
-      std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
-      h ^= h >> 31;
-      h *= 0xBF58476D1CE4E5B9ull;
-      h ^= h >> 29;
-      const auto round = static_cast<std::uint32_t>(
-          std::min<int>(std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
-      const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
-      keys.push_back((static_cast<std::uint64_t>(key) << 32) | i);
+    // Points already placed (merged during an earlier finalize) get the key
+    // 0xffffffff: they sort last and are cut off.
+    constexpr std::uint64_t kSkip = 0xffffffffull << 32;
+    std::vector<std::uint64_t> keys(count);
+    parallelChunks(threads, count, [&](unsigned, std::size_t b, std::size_t e) {
+      for (std::size_t j = b; j < e; ++j) {
+        const std::size_t i = insertedUpTo + j;
+        if (rep[i] != kNone) {
+          keys[j] = kSkip | i;
+          continue;
+        }
+        const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
+        const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
+        std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
+        h ^= h >> 31;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 29;
+        const auto round = static_cast<std::uint32_t>(std::min<int>(
+            std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
+        const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
+        keys[j] = (static_cast<std::uint64_t>(key) << 32) | i;
+      }
+    });
+    radixSortHigh32(keys, threads);
+    std::vector<std::uint32_t> order;
+    order.reserve(count);
+    for (std::uint64_t k : keys) {
+      if ((k & kSkip) == kSkip) break;
+      order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
     }
-    radixSortHigh32(keys);
-    for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
     std::vector<std::uint64_t>().swap(keys);
     trackVhe = false;
     insertedUpTo = n;
@@ -1263,9 +1330,11 @@ void Cdt::buildMesh() const {
   m.tv.clear();
   m.opp.clear();
   mesh.points_.resize(outV);
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
-  }
+  parallelChunks(m.threadCount(), used.size(), [&](unsigned, std::size_t b, std::size_t e) {
+    for (std::size_t v = b; v < e; ++v) {
+      if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
+    }
+  });
   std::sort(hf.begin(), hf.end());
   mesh.setEdgeFeatures(hf);
   std::vector<std::pair<std::uint32_t, FeatureId>>().swap(hf);

@@ -65,5 +65,34 @@ TEST(CdtIncremental, MeshBetweenFinalizesChangesNothing) {
   }
 }
 
+TEST(CdtThreads, SameResultForAnyThreadCount) {
+  const int n = testing::kSanitized ? 6000 : 40000;
+  auto run = [&](unsigned threads) {
+    CdtOptions options;
+    options.threads = threads;
+    Cdt cdt(options);
+    const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+    cdt.insertPoints(scatter(n, 21, 0, 1000));
+    // A lattice too: exact cocircular ties must be decided the same way.
+    std::vector<Point3> grid;
+    for (int j = 0; j < 60; ++j) {
+      for (int i = 0; i < 60; ++i) grid.push_back({200.0 + 5 * i, 300.0 + 5 * j, 1});
+    }
+    cdt.insertPoints(grid);
+    cdt.insertConstraint(std::vector<Point3>{{10, 10, 0}, {990, 990, 0}, {990, 20, 0}}, road);
+    cdt.finalize();
+    cdt.insertPoints(scatter(n / 2, 22, -50, 1050));
+    cdt.finalize();
+    return cdt.toTinData();
+  };
+  const TinData a = run(1);
+  for (const unsigned threads : {2u, 3u, 0u}) {
+    const TinData b = run(threads);
+    EXPECT_EQ(a.vertices, b.vertices) << threads;
+    EXPECT_EQ(a.triangles, b.triangles) << threads;
+    EXPECT_EQ(a.constrainedEdges, b.constrainedEdges) << threads;
+  }
+}
+
 }  // namespace
 }  // namespace tinsmith
