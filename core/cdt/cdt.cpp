@@ -1282,6 +1282,7 @@ void Cdt::buildMesh() const {
   m.removed.clear();
   m.removed.reserve(nt - outT);
   std::vector<std::pair<std::uint32_t, FeatureId>> hf;
+  std::vector<std::uint32_t> boundary;  // output half-edges without twin, ascending
   for (std::uint32_t t = 0; t < nt; ++t) {
     const std::uint32_t b = 3 * t;
     if (triMap[t] == kNone) {
@@ -1309,15 +1310,19 @@ void Cdt::buildMesh() const {
       m.opp[o + i] = n != kNone ? 3 * n + g[i] % 3 : kNone;
       m.cons[o + i] = k[i];
     }
-    // Outgoing half-edge per vertex, preferring boundary ones (fan start);
-    // same rule and order as Mesh::build.
     for (std::uint32_t i = 0; i < 3; ++i) {
-      HalfedgeId& out = mesh.outgoing_[m.tv[o + i]];
-      if (!out.valid() || (m.opp[o + i] == kNone && m.opp[out.value] != kNone)) {
-        out = HalfedgeId(o + i);
-      }
+      if (m.opp[o + i] == kNone) boundary.push_back(o + i);
     }
   }
+  // Outgoing half-edge per vertex, the rule of Mesh::build: the first boundary
+  // half-edge leaving v if there is one, else the first. Written back to
+  // front without reading (the vertex order is unrelated to the triangle
+  // order, so these stores are scattered).
+  for (std::uint32_t h = 3 * outT; h-- > 0;) mesh.outgoing_[m.tv[h]] = HalfedgeId(h);
+  for (std::size_t i = boundary.size(); i-- > 0;) {
+    mesh.outgoing_[m.tv[boundary[i]]] = HalfedgeId(boundary[i]);
+  }
+  std::vector<std::uint32_t>().swap(boundary);
   std::vector<std::uint32_t>().swap(triMap);
   m.tv.resize(3 * static_cast<std::size_t>(outT));
   m.opp.resize(3 * static_cast<std::size_t>(outT));

@@ -2,6 +2,7 @@
 // input after that must give exactly the result of never having built it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "core/cdt/cdt.hpp"
@@ -62,6 +63,32 @@ TEST(CdtIncremental, MeshBetweenFinalizesChangesNothing) {
     EXPECT_EQ(a.triangles, b.triangles);
     EXPECT_EQ(a.constrainedEdges, b.constrainedEdges);
     EXPECT_GT(a.triangles.size(), 1000u);
+  }
+}
+
+TEST(CdtIncremental, OutputMeshMatchesMeshBuiltFromItsTinData) {
+  Cdt cdt;
+  const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+  const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+  cdt.insertPoints(scatter(2000, 31, 0, 1000));
+  cdt.addHole(std::vector<Point3>{{400, 400, 0}, {600, 420, 0}, {500, 600, 0}}, lake);
+  cdt.insertConstraint(std::vector<Point3>{{10, 10, 0}, {990, 990, 0}}, road);
+  cdt.finalize();
+  const Mesh& a = cdt.mesh();
+  const Mesh b = Mesh::fromTinData(cdt.toTinData());
+  ASSERT_EQ(a.halfedgeCount(), b.halfedgeCount());
+  ASSERT_EQ(a.vertexCount(), b.vertexCount());
+  std::size_t constrained = 0;
+  for (std::uint32_t h = 0; h < a.halfedgeCount(); ++h) {
+    EXPECT_EQ(a.twin(HalfedgeId(h)), b.twin(HalfedgeId(h)));
+    EXPECT_EQ(a.isConstrained(HalfedgeId(h)), b.isConstrained(HalfedgeId(h)));
+    const auto fa = a.edgeFeatures(HalfedgeId(h)), fb = b.edgeFeatures(HalfedgeId(h));
+    EXPECT_TRUE(std::equal(fa.begin(), fa.end(), fb.begin(), fb.end()));
+    constrained += a.isConstrained(HalfedgeId(h));
+  }
+  EXPECT_GE(constrained, 5u);
+  for (std::uint32_t v = 0; v < a.vertexCount(); ++v) {
+    EXPECT_EQ(a.outgoing(VertexId(v)), b.outgoing(VertexId(v))) << v;
   }
 }
 
