@@ -793,7 +793,13 @@ struct Cdt::Impl {
       cons.reserve(cap);
       initialTriangle(order, skipA, skipB, skipC);
     }
+    // The insertion order jumps around the input arrays: fetch ahead.
+    constexpr std::size_t kAhead = 8;
     for (std::size_t i = 0; i < order.size(); ++i) {
+      if (i + kAhead < order.size()) {
+        __builtin_prefetch(&xy[order[i + kAhead]]);
+        __builtin_prefetch(&rep[order[i + kAhead]], 1);
+      }
       if (i == skipA || i == skipB || i == skipC) continue;
       insertVertex(order[i]);
     }
