@@ -8,10 +8,12 @@
 #include "core/cdt/cdt.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <deque>
 #include <string>
+#include <thread>
 #include <unordered_map>
 #include <utility>
 
@@ -57,14 +59,48 @@ std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
   return d;
 }
 
-// LSD radix sort of 64-bit values on their upper 32 bits (stable).
-void radixSortHigh32(std::vector<std::uint64_t>& v) {
+/// Runs f(chunk, begin, end) over [0, n) split into `threads` contiguous
+/// chunks (chunk k on its own thread; chunk 0 on the caller's). Chunk bounds
+/// depend only on n and threads.
+template <class F>
+void parallelChunks(unsigned threads, std::size_t n, const F& f) {
+  if (threads <= 1 || n < 4096) {
+    f(0u, std::size_t{0}, n);
+    return;
+  }
+  std::vector<std::thread> pool;
+  pool.reserve(threads - 1);
+  for (unsigned k = 1; k < threads; ++k) {
+    pool.emplace_back([&f, k, n, threads] { f(k, n * k / threads, n * (k + 1) / threads); });
+  }
+  f(0u, std::size_t{0}, n / threads);
+  for (auto& t : pool) t.join();
+}
+
+// LSD radix sort of 64-bit values on their upper 32 bits (stable). With
+// several threads each sorts its chunk's share into place through per-chunk
+// bucket offsets, so the result is the same for any thread count.
+void radixSortHigh32(std::vector<std::uint64_t>& v, unsigned threads) {
   std::vector<std::uint64_t> tmp(v.size());
+  if (v.size() < 4096) threads = 1;
+  std::vector<std::array<std::size_t, 256>> count(threads);
   for (int shift = 32; shift < 64; shift += 8) {
-    std::size_t count[257] = {};
-    for (std::uint64_t x : v) ++count[((x >> shift) & 0xff) + 1];
-    for (int i = 0; i < 256; ++i) count[i + 1] += count[i];
-    for (std::uint64_t x : v) tmp[count[(x >> shift) & 0xff]++] = x;
+    parallelChunks(threads, v.size(), [&](unsigned k, std::size_t b, std::size_t e) {
+      count[k].fill(0);
+      for (std::size_t i = b; i < e; ++i) ++count[k][(v[i] >> shift) & 0xff];
+    });
+    std::size_t sum = 0;
+    for (int d = 0; d < 256; ++d) {
+      for (unsigned k = 0; k < threads; ++k) {
+        const std::size_t c = count[k][d];
+        count[k][d] = sum;
+        sum += c;
+      }
+    }
+    parallelChunks(threads, v.size(), [&](unsigned k, std::size_t b, std::size_t e) {
+      auto& off = count[k];
+      for (std::size_t i = b; i < e; ++i) tmp[off[(v[i] >> shift) & 0xff]++] = v[i];
+    });
     v.swap(tmp);
   }
 }
@@ -173,12 +209,83 @@ struct Cdt::Impl {
   bool finalized = false;
   bool meshBuilt = false;
 
+  // After buildMesh() the working triangle arrays live in `mesh` (compacted);
+  // the triangles left out (ghosts, outside the domain) are kept here with
+  // their slots so that unpack() restores the working arrays exactly.
+  struct RemovedTriangle {
+    std::uint32_t slot;
+    std::uint32_t tv[3];
+    std::uint32_t opp[3];
+    std::uint8_t cons[3];
+  };
+  std::vector<RemovedTriangle> removed;
+  bool packed = false;
+  std::uint32_t packedTriangles = 0;
+
   std::uint32_t lastTriangle = 0;
   bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
   std::vector<std::uint32_t> visitStamp;
   std::uint32_t stamp = 0;
+
+  /// Takes the triangles back from the output mesh (inverse of the
+  /// compaction in buildMesh): the working arrays become exactly what they
+  /// were before the mesh was built.
+  void unpack() {
+    if (!packed) return;
+    const std::uint32_t outT = packedTriangles;
+    const auto nt = static_cast<std::uint32_t>(outT + removed.size());
+    // Mesh vertex → working vertex (live roots only have mesh vertices).
+    std::vector<std::uint32_t> inv(mesh.points_.size(), kNone);
+    for (std::uint32_t v = 0; v < rep.size(); ++v) {
+      if (rep[v] == v && meshOf[v] != kNone) inv[meshOf[v]] = v;
+    }
+    tv = std::move(mesh.corners_);
+    opp = std::move(mesh.twins_);
+    mesh = Mesh();
+    meshBuilt = false;
+    tv.resize(3 * static_cast<std::size_t>(nt));
+    opp.resize(3 * static_cast<std::size_t>(nt));
+    cons.resize(3 * static_cast<std::size_t>(nt));
+    std::vector<std::uint32_t> slotOf(outT);
+    // Back to front: kept triangle o moves to slot t >= o.
+    std::size_t r = removed.size();
+    std::uint32_t o = outT;
+    for (std::uint32_t t = nt; t-- > 0;) {
+      if (r > 0 && removed[r - 1].slot == t) {
+        --r;
+        continue;  // filled below
+      }
+      --o;
+      slotOf[o] = t;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        tv[3 * t + i] = inv[tv[3 * o + i]];
+        opp[3 * t + i] = opp[3 * o + i];  // a mesh half-edge id; remapped below
+        cons[3 * t + i] = cons[3 * o + i];
+      }
+    }
+    r = 0;
+    for (std::uint32_t t = 0; t < nt; ++t) {
+      if (r < removed.size() && removed[r].slot == t) {
+        ++r;
+        continue;
+      }
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t g = opp[3 * t + i];
+        if (g != kNone) opp[3 * t + i] = 3 * slotOf[g / 3] + g % 3;
+      }
+    }
+    for (const RemovedTriangle& x : removed) {
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        tv[3 * x.slot + i] = x.tv[i];
+        cons[3 * x.slot + i] = x.cons[i];
+        link(3 * x.slot + i, x.opp[i]);
+      }
+    }
+    std::vector<RemovedTriangle>().swap(removed);
+    packed = false;
+  }
 
   // ---------------------------------------------------------------- basics
   [[nodiscard]] bool triangulated() const { return !tv.empty(); }
@@ -596,18 +703,37 @@ struct Cdt::Impl {
     lastTriangle = t;
   }
 
+  [[nodiscard]] unsigned threadCount() const {
+    if (options.threads != 0) return options.threads;
+    return std::max(1u, std::thread::hardware_concurrency());
+  }
+
   void insertPendingPoints() {
     const std::size_t n = xy.size();
     if (insertedUpTo >= n) return;
-    std::vector<std::uint32_t> order;
-    order.reserve(n - insertedUpTo);
+    const unsigned threads = threadCount();
+    const std::size_t count = n - insertedUpTo;
+    struct Box {
+      double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+    };
+    std::vector<Box> boxes(threads);
+    parallelChunks(threads, count, [&](unsigned k, std::size_t b, std::size_t e) {
+      Box bx;
+      for (std::size_t i = insertedUpTo + b; i < insertedUpTo + e; ++i) {
+        if (rep[i] != kNone) continue;
+        bx.minX = std::min(bx.minX, xy[i].x);
+        bx.maxX = std::max(bx.maxX, xy[i].x);
+        bx.minY = std::min(bx.minY, xy[i].y);
+        bx.maxY = std::max(bx.maxY, xy[i].y);
+      }
+      boxes[k] = bx;
+    });
     double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    for (std::size_t i = insertedUpTo; i < n; ++i) {
-      if (rep[i] != kNone) continue;
-      minX = std::min(minX, xy[i].x);
-      maxX = std::max(maxX, xy[i].x);
-      minY = std::min(minY, xy[i].y);
-      maxY = std::max(maxY, xy[i].y);
+    for (const Box& bx : boxes) {
+      minX = std::min(minX, bx.minX);
+      maxX = std::max(maxX, bx.maxX);
+      minY = std::min(minY, bx.minY);
+      maxY = std::max(maxY, bx.maxY);
     }
     // BRIO (biased randomized insertion order): point i goes to round k with
     // probability 2^-(k+1) (from a fixed hash of i, so deterministic); rounds
@@ -618,38 +744,62 @@ struct Cdt::Impl {
     constexpr double kGrid = 8191.0;
     const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
     const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
-    const std::size_t count = n - insertedUpTo;
     std::uint32_t rounds = 0;
     while (rounds < 20 && (std::size_t{1000} << rounds) < count) ++rounds;
-    std::vector<std::uint64_t> keys;
-    keys.reserve(count);
-    for (std::size_t i = insertedUpTo; i < n; ++i) {
-      if (rep[i] != kNone) continue;
-      const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
-      const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
-      std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
-      h ^= h >> 31;
-      h *= 0xBF58476D1CE4E5B9ull;
-      h ^= h >> 29;
-      const auto round = static_cast<std::uint32_t>(
-          std::min<int>(std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
-      const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
-      keys.push_back((static_cast<std::uint64_t>(key) << 32) | i);
+    // Points already placed (merged during an earlier finalize) get the key
+    // 0xffffffff: they sort last and are cut off.
+    constexpr std::uint64_t kSkip = 0xffffffffull << 32;
+    std::vector<std::uint64_t> keys(count);
+    parallelChunks(threads, count, [&](unsigned, std::size_t b, std::size_t e) {
+      for (std::size_t j = b; j < e; ++j) {
+        const std::size_t i = insertedUpTo + j;
+        if (rep[i] != kNone) {
+          keys[j] = kSkip | i;
+          continue;
+        }
+        const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
+        const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
+        std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
+        h ^= h >> 31;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 29;
+        const auto round = static_cast<std::uint32_t>(std::min<int>(
+            std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
+        const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
+        keys[j] = (static_cast<std::uint64_t>(key) << 32) | i;
+      }
+    });
+    radixSortHigh32(keys, threads);
+    std::vector<std::uint32_t> order;
+    order.reserve(count);
+    for (std::uint64_t k : keys) {
+      if ((k & kSkip) == kSkip) break;
+      order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
     }
-    radixSortHigh32(keys);
-    for (std::uint64_t k : keys) order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
+    std::vector<std::uint64_t>().swap(keys);
     trackVhe = false;
     insertedUpTo = n;
     if (order.empty()) return;
 
     std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
     if (!triangulated()) {
-      tv.reserve(order.size() * 6 + 12);
-      opp.reserve(order.size() * 6 + 12);
-      cons.reserve(order.size() * 6 + 12);
+      // 2 triangles per point, plus room for a few constraint intersections
+      // per pending segment (each adds 2 triangles) so that the arrays rarely
+      // grow (a doubling would briefly hold both copies).
+      const std::size_t cap =
+          order.size() * 6 + 12 + 24 * (segments.size() - segmentsDone);
+      tv.reserve(cap);
+      opp.reserve(cap);
+      cons.reserve(cap);
       initialTriangle(order, skipA, skipB, skipC);
     }
+    // The insertion order jumps around the input arrays: fetch ahead.
+    constexpr std::size_t kAhead = 8;
     for (std::size_t i = 0; i < order.size(); ++i) {
+      if (i + kAhead < order.size()) {
+        __builtin_prefetch(&xy[order[i + kAhead]]);
+        __builtin_prefetch(&rep[order[i + kAhead]], 1);
+      }
       if (i == skipA || i == skipB || i == skipC) continue;
       insertVertex(order[i]);
     }
@@ -1088,6 +1238,13 @@ void Cdt::finalize() {
   if (!m.triangulated() && m.xy.empty()) {
     throw geometryError("no points to triangulate", {}, "give at least three points");
   }
+  if (m.packed) {
+    if (m.insertedUpTo >= m.xy.size() && m.segmentsDone >= m.segments.size()) {
+      m.finalized = true;  // nothing new: the mesh stands
+      return;
+    }
+    m.unpack();
+  }
   m.insertPendingPoints();
   m.insertPendingSegments();
   m.finalized = true;
@@ -1097,15 +1254,26 @@ void Cdt::finalize() {
 void Cdt::buildMesh() const {
   Impl& m = *impl_;
   if (m.meshBuilt) return;
-  // Domain and the output mesh.
-  const std::vector<std::uint8_t> inside = m.classifyDomain();
+  // The output mesh takes over the working arrays: triangles inside the domain
+  // are compacted in place (their order kept) and moved into the Mesh; ghosts
+  // and triangles outside the domain are set aside so that unpack() can restore
+  // the working triangulation exactly if more input comes.
   const std::uint32_t nt = m.triCount();
-  std::vector<std::uint32_t> triMap(nt, kNone);
+  // triMap: working triangle → output triangle (kNone outside); monotone, so
+  // the compaction below can run in place. Transient: freed before the output
+  // points are allocated.
+  std::vector<std::uint32_t> triMap;
+  {
+    const std::vector<std::uint8_t> inside = m.classifyDomain();
+    triMap.resize(nt);
+    std::uint32_t k = 0;
+    for (std::uint32_t t = 0; t < nt; ++t) triMap[t] = inside[t] ? k++ : kNone;
+  }
   std::vector<std::uint32_t> used(m.xy.size(), kNone);
   std::uint32_t outT = 0;
   for (std::uint32_t t = 0; t < nt; ++t) {
-    if (!inside[t]) continue;
-    triMap[t] = outT++;
+    if (triMap[t] == kNone) continue;
+    ++outT;
     for (std::uint32_t i = 0; i < 3; ++i) used[m.tv[3 * t + i]] = 0;
   }
   std::uint32_t outV = 0;
@@ -1114,65 +1282,91 @@ void Cdt::buildMesh() const {
   }
   Mesh& mesh = m.mesh;
   mesh = Mesh();
-  std::vector<std::uint32_t>().swap(m.meshOf);
   mesh.crs_ = m.options.crs;
   mesh.features_ = m.features;
-  mesh.points_.resize(outV);
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
-  }
-  mesh.corners_.resize(3 * static_cast<std::size_t>(outT));
-  mesh.twins_.assign(3 * static_cast<std::size_t>(outT), HalfedgeId());
+  mesh.outgoing_.assign(outV, HalfedgeId());
+  m.removed.clear();
+  m.removed.reserve(nt - outT);
   std::vector<std::pair<std::uint32_t, FeatureId>> hf;
+  std::vector<std::uint32_t> boundary;  // output half-edges without twin, ascending
   for (std::uint32_t t = 0; t < nt; ++t) {
-    if (triMap[t] == kNone) continue;
+    const std::uint32_t b = 3 * t;
+    if (triMap[t] == kNone) {
+      m.removed.push_back({t,
+                           {m.tv[b], m.tv[b + 1], m.tv[b + 2]},
+                           {m.opp[b], m.opp[b + 1], m.opp[b + 2]},
+                           {m.cons[b], m.cons[b + 1], m.cons[b + 2]}});
+      continue;
+    }
+    // Read t completely before writing slot triMap[t] <= t.
+    const std::uint32_t c[3] = {m.tv[b], m.tv[b + 1], m.tv[b + 2]};
+    const std::uint32_t g[3] = {m.opp[b], m.opp[b + 1], m.opp[b + 2]};
+    const std::uint8_t k[3] = {m.cons[b], m.cons[b + 1], m.cons[b + 2]};
+    const std::uint32_t o = 3 * triMap[t];
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t h = 3 * t + i;
-      const std::uint32_t oh = 3 * triMap[t] + i;
-      mesh.corners_[oh] = used[m.tv[h]];
-      const std::uint32_t g = m.opp[h];
-      if (triMap[g / 3] != kNone) mesh.twins_[oh] = HalfedgeId(3 * triMap[g / 3] + g % 3);
-      if (m.cons[h]) {
-        for (FeatureId f : m.edgeFeatures.find(edgeKey(m.tv[h], m.tv[nxt(h)]))) {
-          if (f < m.features.size()) hf.emplace_back(oh, f);
+      if (k[i]) {
+        for (FeatureId f : m.edgeFeatures.find(edgeKey(c[i], c[(i + 1) % 3]))) {
+          if (f < m.features.size()) hf.emplace_back(o + i, f);
         }
       }
     }
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t n = triMap[g[i] / 3];
+      m.tv[o + i] = used[c[i]];
+      m.opp[o + i] = n != kNone ? 3 * n + g[i] % 3 : kNone;
+      m.cons[o + i] = k[i];
+    }
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      if (m.opp[o + i] == kNone) boundary.push_back(o + i);
+    }
   }
+  // Outgoing half-edge per vertex, the rule of Mesh::build: the first boundary
+  // half-edge leaving v if there is one, else the first. Written back to
+  // front without reading (the vertex order is unrelated to the triangle
+  // order, so these stores are scattered).
+  for (std::uint32_t h = 3 * outT; h-- > 0;) mesh.outgoing_[m.tv[h]] = HalfedgeId(h);
+  for (std::size_t i = boundary.size(); i-- > 0;) {
+    mesh.outgoing_[m.tv[boundary[i]]] = HalfedgeId(boundary[i]);
+  }
+  std::vector<std::uint32_t>().swap(boundary);
+  std::vector<std::uint32_t>().swap(triMap);
+  m.tv.resize(3 * static_cast<std::size_t>(outT));
+  m.opp.resize(3 * static_cast<std::size_t>(outT));
+  m.cons.resize(3 * static_cast<std::size_t>(outT));
+  m.packedTriangles = outT;
+  m.packed = true;
+
+  mesh.corners_ = std::move(m.tv);
+  mesh.twins_ = std::move(m.opp);
+  m.tv.clear();
+  m.opp.clear();
+  mesh.points_.resize(outV);
+  parallelChunks(m.threadCount(), used.size(), [&](unsigned, std::size_t b, std::size_t e) {
+    for (std::size_t v = b; v < e; ++v) {
+      if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
+    }
+  });
   std::sort(hf.begin(), hf.end());
-  if (!hf.empty()) {
-    mesh.featureBegin_.assign(mesh.corners_.size() + 1, 0);
-    mesh.featureIds_.reserve(hf.size());
-    for (const auto& [h, f] : hf) {
-      ++mesh.featureBegin_[h + 1];
-      mesh.featureIds_.push_back(f);
-    }
-    for (std::size_t h = 0; h < mesh.corners_.size(); ++h) {
-      mesh.featureBegin_[h + 1] += mesh.featureBegin_[h];
-    }
-  }
-  mesh.outgoing_.assign(outV, HalfedgeId());
-  for (std::uint32_t h = 0; h < mesh.corners_.size(); ++h) {
-    HalfedgeId& o = mesh.outgoing_[mesh.corners_[h]];
-    if (!o.valid() || (!mesh.twins_[h].valid() && mesh.twins_[o.value].valid())) o = HalfedgeId(h);
-  }
+  mesh.setEdgeFeatures(hf);
+  std::vector<std::pair<std::uint32_t, FeatureId>>().swap(hf);
 
   // Input vertex → mesh vertex; live vertices outside the domain are dropped.
-  m.meshOf.assign(m.xy.size(), kNone);
   m.report.dropped.erase(
       std::remove_if(m.report.dropped.begin(), m.report.dropped.end(),
                      [](const CdtReport::Dropped& d) {
                        return d.what == CdtReport::Dropped::What::PointOutsideDomain;
                      }),
       m.report.dropped.end());
+  // used becomes meshOf: roots keep their entry, merged vertices take their root's.
   for (std::uint32_t v = 0; v < m.xy.size(); ++v) {
     const std::uint32_t r = m.find(v);
-    m.meshOf[v] = used[r];
+    if (r != v) used[v] = used[r];
     if (r == v && used[v] == kNone) {
       m.report.dropped.push_back(
           {CdtReport::Dropped::What::PointOutsideDomain, m.vfeat[v], m.xy[v]});
     }
   }
+  m.meshOf = std::move(used);
   m.meshBuilt = true;
 }
 

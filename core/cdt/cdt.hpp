@@ -64,6 +64,10 @@ struct CdtOptions {
   double snapTolerance = 0.0;
   /// Copied into TinData::crs.
   std::string crs;
+  /// Threads for the parallel stages (spatial sort keys and sort, output mesh
+  /// points); 0 = std::thread::hardware_concurrency(). The result is identical
+  /// for every value.
+  unsigned threads = 1;
 };
 
 /// What the CDT changed in its input, so callers can report it.

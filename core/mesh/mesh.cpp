@@ -55,7 +55,7 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
 
   // Link twins: sort half-edges by undirected edge.
   const auto nh = static_cast<std::uint32_t>(m.corners_.size());
-  m.twins_.assign(nh, HalfedgeId());
+  m.twins_.assign(nh, HalfedgeId::kInvalid);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(nh);
   for (std::uint32_t h = 0; h < nh; ++h) {
     keyed[h] = {edgeKey(m.corners_[h], m.corners_[next(HalfedgeId(h)).value]), h};
@@ -68,8 +68,8 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
     if (j - i == 2) {
       const HalfedgeId h0(keyed[i].second), h1(keyed[i + 1].second);
       if (m.corners_[h0.value] != m.corners_[h1.value]) {
-        m.twins_[h0.value] = h1;
-        m.twins_[h1.value] = h0;
+        m.twins_[h0.value] = h1.value;
+        m.twins_[h1.value] = h0.value;
       } else if (nonManifold++ < 10) {
         m.buildProblems_.push_back("edge " + std::to_string(m.corners_[h0.value]) + "-" +
                                    std::to_string(m.corners_[next(h0).value]) +
@@ -88,7 +88,7 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
   m.outgoing_.assign(nv, HalfedgeId());
   for (std::uint32_t h = 0; h < nh; ++h) {
     HalfedgeId& o = m.outgoing_[m.corners_[h]];
-    if (!o.valid() || (!m.twins_[h].valid() && m.twins_[o.value].valid())) o = HalfedgeId(h);
+    if (!o.valid() || (m.isBoundary(HalfedgeId(h)) && !m.isBoundary(o))) o = HalfedgeId(h);
   }
 
   // Constraint features as CSR per half-edge.
@@ -118,15 +118,7 @@ Mesh Mesh::build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
   }
   std::sort(hf.begin(), hf.end());
   hf.erase(std::unique(hf.begin(), hf.end()), hf.end());
-  if (!hf.empty()) {
-    m.featureBegin_.assign(nh + 1, 0);
-    m.featureIds_.reserve(hf.size());
-    for (const auto& [h, f] : hf) {
-      ++m.featureBegin_[h + 1];
-      m.featureIds_.push_back(f);
-    }
-    for (std::uint32_t h = 0; h < nh; ++h) m.featureBegin_[h + 1] += m.featureBegin_[h];
-  }
+  m.setEdgeFeatures(hf);
   return m;
 }
 
@@ -141,7 +133,7 @@ TinData Mesh::toTinData() const {
   }
   for (std::uint32_t h = 0; h < corners_.size(); ++h) {
     const HalfedgeId he(h);
-    const HalfedgeId tw = twins_[h];
+    const HalfedgeId tw(twins_[h]);
     if (tw.valid() && tw.value < h) continue;
     std::uint32_t a = corners_[h], b = corners_[next(he).value];
     if (a > b) std::swap(a, b);
@@ -152,6 +144,29 @@ TinData Mesh::toTinData() const {
               return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
             });
   return tin;
+}
+
+void Mesh::setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hf) {
+  consBits_.clear();
+  consRank_.clear();
+  featureBegin_.clear();
+  featureIds_.clear();
+  if (hf.empty()) return;
+  const std::size_t words = corners_.size() / 64 + 1;
+  consBits_.assign(words, 0);
+  consRank_.assign(words + 1, 0);
+  featureIds_.reserve(hf.size());
+  featureBegin_.push_back(0);
+  for (std::size_t i = 0; i < hf.size(); ++i) {
+    const std::uint32_t h = hf[i].first;
+    if (i > 0 && hf[i - 1].first != h) featureBegin_.push_back(static_cast<std::uint32_t>(i));
+    consBits_[h / 64] |= std::uint64_t{1} << (h % 64);
+    featureIds_.push_back(hf[i].second);
+  }
+  featureBegin_.push_back(static_cast<std::uint32_t>(hf.size()));
+  for (std::size_t w = 0; w < words; ++w) {
+    consRank_[w + 1] = consRank_[w] + static_cast<std::uint32_t>(std::popcount(consBits_[w]));
+  }
 }
 
 void Mesh::forEachOutgoing(VertexId v, const std::function<void(HalfedgeId)>& f) const {
@@ -169,7 +184,7 @@ void Mesh::forEachOutgoing(VertexId v, const std::function<void(HalfedgeId)>& f)
 std::vector<HalfedgeId> Mesh::boundaryHalfedges() const {
   std::vector<HalfedgeId> out;
   for (std::uint32_t h = 0; h < twins_.size(); ++h) {
-    if (!twins_[h].valid()) out.push_back(HalfedgeId(h));
+    if (twins_[h] == HalfedgeId::kInvalid) out.push_back(HalfedgeId(h));
   }
   return out;
 }

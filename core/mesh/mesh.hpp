@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <compare>
 #include <cstddef>
 #include <cstdint>
@@ -20,6 +21,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -89,14 +91,14 @@ class Mesh {
     return HalfedgeId(h.value % 3 == 0 ? h.value + 2 : h.value - 1);
   }
   /// The opposite half-edge, invalid on the mesh boundary.
-  [[nodiscard]] HalfedgeId twin(HalfedgeId h) const { return twins_[h.value]; }
+  [[nodiscard]] HalfedgeId twin(HalfedgeId h) const { return HalfedgeId(twins_[h.value]); }
   [[nodiscard]] VertexId origin(HalfedgeId h) const { return VertexId(corners_[h.value]); }
   [[nodiscard]] VertexId target(HalfedgeId h) const { return origin(next(h)); }
   [[nodiscard]] std::array<VertexId, 3> vertices(TriangleId t) const {
     return {VertexId(corners_[3 * t.value]), VertexId(corners_[3 * t.value + 1]),
             VertexId(corners_[3 * t.value + 2])};
   }
-  [[nodiscard]] bool isBoundary(HalfedgeId h) const { return !twins_[h.value].valid(); }
+  [[nodiscard]] bool isBoundary(HalfedgeId h) const { return twins_[h.value] == HalfedgeId::kInvalid; }
 
   /// One half-edge leaving v; for a boundary vertex the one whose clockwise
   /// neighbour is missing, so that star iteration (CCW) covers the whole fan.
@@ -113,13 +115,16 @@ class Mesh {
 
   // --- constraints -------------------------------------------------------
   [[nodiscard]] bool isConstrained(HalfedgeId h) const {
-    return !featureBegin_.empty() && featureBegin_[h.value] != featureBegin_[h.value + 1];
+    return !consBits_.empty() && ((consBits_[h.value / 64] >> (h.value % 64)) & 1u);
   }
   /// Feature ids (into features()) of the edge of h, ascending; empty if unconstrained.
   [[nodiscard]] std::span<const std::uint32_t> edgeFeatures(HalfedgeId h) const {
-    if (featureBegin_.empty()) return {};
-    return {featureIds_.data() + featureBegin_[h.value],
-            featureIds_.data() + featureBegin_[h.value + 1]};
+    if (!isConstrained(h)) return {};
+    const std::uint64_t below = (std::uint64_t{1} << (h.value % 64)) - 1;
+    const std::uint32_t r =
+        consRank_[h.value / 64] +
+        static_cast<std::uint32_t>(std::popcount(consBits_[h.value / 64] & below));
+    return {featureIds_.data() + featureBegin_[r], featureIds_.data() + featureBegin_[r + 1]};
   }
   [[nodiscard]] const std::vector<TinFeature>& features() const { return features_; }
   [[nodiscard]] const std::string& crs() const { return crs_; }
@@ -139,9 +144,17 @@ class Mesh {
   friend class Cdt;  // builds its output mesh in place (no re-linking)
   std::vector<Point3> points_;
   std::vector<std::uint32_t> corners_;       // 3 per triangle
-  std::vector<HalfedgeId> twins_;            // per half-edge
+  std::vector<std::uint32_t> twins_;         // per half-edge (HalfedgeId values)
   std::vector<HalfedgeId> outgoing_;         // per vertex
-  std::vector<std::uint32_t> featureBegin_;  // per half-edge + 1 (CSR); empty: no constraints
+  /// Sets the per-half-edge features from (half-edge, feature) pairs sorted
+  /// and without duplicates.
+  void setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hf);
+  // Constrained half-edges as a bitset (empty: none) with per-word ranks; the
+  // features of the r-th constrained half-edge are featureIds_[featureBegin_[r]
+  // .. featureBegin_[r + 1]) (CSR over constrained half-edges only).
+  std::vector<std::uint64_t> consBits_;
+  std::vector<std::uint32_t> consRank_;
+  std::vector<std::uint32_t> featureBegin_;
   std::vector<std::uint32_t> featureIds_;
   std::vector<TinFeature> features_;
   std::string crs_;

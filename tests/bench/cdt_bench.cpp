@@ -9,6 +9,8 @@
 //   cdt_bench                 all cases, 3 repetitions, best time reported
 //   cdt_bench --reps 5        more repetitions
 //   cdt_bench --case uniform  one case (uniform, grid, crossing, contours, scaling)
+//   cdt_bench --threads 2     tinsmith with 2 threads (CdtOptions::threads); CGAL
+//                             always runs on one
 //   cdt_bench --smoke         10k points, every case once, checks validity (ctest)
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -100,9 +102,13 @@ double now() {
 
 /// Builds with tinsmith; returns seconds, or −1 if the result fails validation.
 /// `withMesh` gets the time including the compact output Mesh (mesh()).
+unsigned gThreads = 1;
+
 double runTinsmith(const Input& in, bool check, double& withMesh) {
   const double t0 = now();
-  tinsmith::Cdt cdt;
+  tinsmith::CdtOptions options;
+  options.threads = gThreads;
+  tinsmith::Cdt cdt(options);
   const auto f = cdt.addFeature(tinsmith::FeatureKind::Contour, "bench");
   cdt.insertPoints(in.points);
   for (const auto& l : in.lines) cdt.insertConstraint(l, f);
@@ -201,6 +207,9 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--smoke")) smoke = true;
     if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--case") && i + 1 < argc) only = argv[++i];
+    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
+      gThreads = static_cast<unsigned>(std::atoi(argv[++i]));
+    }
   }
   struct Case {
     std::string kind;
@@ -230,6 +239,7 @@ int main(int argc, char** argv) {
 #else
   const bool haveCgal = false;
 #endif
+  std::printf("tinsmith threads: %u (CGAL: 1)\n\n", gThreads);
   std::printf("| case | tinsmith s | tinsmith + mesh() s | CGAL s | ratio | ratio incl. mesh() | "
               "tinsmith peak MB | CGAL peak MB |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
