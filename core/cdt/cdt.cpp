@@ -703,6 +703,14 @@ struct Cdt::Impl {
     return pr;
   }
 
+  /// Radius within which a constructed (rounded) point is taken to be an
+  /// existing vertex: 2^-40 of its coordinate magnitude (about 6e-6 m at UTM
+  /// northings), far above the rounding error of a crossing yet far below
+  /// survey precision.
+  static double constructionTolerance(const Point2& p) {
+    return std::ldexp(std::max(std::fabs(p.x), std::fabs(p.y)), -40);
+  }
+
   /// The constraint cur→tgt crosses constrained edge e (R→L, in the
   /// triangle on cur's side). Makes a vertex at the crossing — a new one
   /// splitting e, or R or L when the crossing is (nearly) at one of them —
@@ -721,8 +729,11 @@ struct Cdt::Impl {
       return dx * dx + dy * dy;
     };
     const std::uint32_t nearest = dist2(R) <= dist2(L) ? R : L;
-    const double tol = options.snapTolerance;
-    bool useExisting = tol > 0 && dist2(nearest) <= tol * tol;
+    // X is rounded, and R or L may itself be a rounded crossing of the same
+    // lines (three constraints through one point): a constructed point this
+    // close to a vertex is that vertex, even with snapTolerance 0.
+    const double tol = std::max(options.snapTolerance, constructionTolerance(X));
+    bool useExisting = dist2(nearest) <= tol * tol;
     if (!useExisting) {
       // The split must leave four strictly counter-clockwise triangles.
       const std::uint32_t c = tv[prv(e)], d = tv[prv(opp[e])];
@@ -756,8 +767,23 @@ struct Cdt::Impl {
     return v;
   }
 
+  /// Is u a vertex exactly on the input segment a0→b0 (exact orient2d) and
+  /// strictly between cur and tgt? After a split at a rounded crossing point,
+  /// cur→tgt is no longer on the input line, so a vertex exactly on it must be
+  /// found against a0→b0 or the constraint would bypass it by an ulp.
+  bool onInputSegment(std::uint32_t a0, std::uint32_t b0, std::uint32_t cur, std::uint32_t tgt,
+                      std::uint32_t u, const std::vector<std::uint32_t>& passed) const {
+    if (u == kInf || u == cur || u == tgt || orient(a0, b0, u) != 0) return false;
+    if (std::find(passed.begin(), passed.end(), u) != passed.end()) return false;
+    const Point2 &pc = xy[cur], &pt = xy[tgt], &pu = xy[u];
+    return (pu.x - pc.x) * (pt.x - pc.x) + (pu.y - pc.y) * (pt.y - pc.y) > 0 &&
+           (pu.x - pt.x) * (pc.x - pt.x) + (pu.y - pt.y) * (pc.y - pt.y) > 0;
+  }
+
   /// Inserts the constraint segment a→b (live vertices) for feature f.
   void insertSegment(std::uint32_t a, std::uint32_t b, FeatureId f) {
+    const std::uint32_t a0 = a, b0 = b;
+    std::vector<std::uint32_t> passed{a};  // vertices this segment already runs through
     std::vector<std::uint32_t> targets{b};
     std::uint32_t cur = a;
     const std::size_t guardLimit = 64 + 8 * xy.size();
@@ -786,12 +812,16 @@ struct Cdt::Impl {
               break;
             }
             const int ou = orient(cur, tgt, u);
-            if (ou == 0 && onRay(cur, tgt, u)) {
+            if ((ou == 0 && onRay(cur, tgt, u)) || onInputSegment(a0, b0, cur, tgt, u, passed)) {
               onLine = u;
               break;
             }
             if (w != kInf && ou < 0 && orient(cur, tgt, w) > 0) {
-              firstCross = nxt(h);  // u→w, u right of cur→tgt, w left
+              if (onInputSegment(a0, b0, cur, tgt, w, passed)) {
+                onLine = w;
+              } else {
+                firstCross = nxt(h);  // u→w, u right of cur→tgt, w left
+              }
               break;
             }
           }
@@ -801,6 +831,7 @@ struct Cdt::Impl {
       if (onLine != kNone) {
         addEdgeFeature(cur, onLine, f);
         cur = onLine;
+        passed.push_back(cur);
         continue;
       }
       if (firstCross == kNone) throw internalError("constraint direction found in no triangle");
@@ -808,7 +839,7 @@ struct Cdt::Impl {
       // Walk the crossed edges.
       crossed.clear();
       std::uint32_t e = firstCross;
-      std::uint32_t end = kNone;
+      std::uint32_t end = kNone, onInput = kNone;
       bool hitConstraint = false;
       for (;;) {
         if (cons[e]) {
@@ -828,7 +859,15 @@ struct Cdt::Impl {
           end = x;
           break;
         }
+        if (onInputSegment(a0, b0, cur, tgt, x, passed)) {
+          onInput = x;  // route through it: walk cur→x on its own line
+          break;
+        }
         e = ox > 0 ? nxt(g) : prv(g);
+      }
+      if (onInput != kNone) {
+        targets.push_back(onInput);
+        continue;
       }
       if (hitConstraint) {
         targets.push_back(crossingVertex(cur, tgt, e, f));
@@ -836,6 +875,7 @@ struct Cdt::Impl {
       }
       removeCrossings(cur, end, crossed, f);
       cur = end;
+      passed.push_back(cur);
     }
   }
 
