@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <string>
 #include <unordered_map>
@@ -1239,6 +1240,14 @@ const CdtReport& Cdt::report() const {
   return impl_->report;
 }
 
+namespace {
+std::string formatCoord(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+}  // namespace
+
 ValidationReport Cdt::validate(const ValidationOptions& options) const {
   ValidationReport r = tinsmith::validate(mesh(), options);
   const Impl& m = *impl_;
@@ -1262,35 +1271,64 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       }
     }
   }
-  // Every constraint segment is a chain of edges carrying its feature (checked
-  // when no domain clips the constraints).
+  // Every input constraint segment is a chain of mesh edges carrying its
+  // feature and running along the input segment (checked from the input
+  // coordinates, not from the edge flags, and when no domain clips the
+  // constraints): from the mesh vertex of one end, each step goes to a vertex
+  // within rounding/snap distance of the segment and strictly nearer the other
+  // end along it.
   if (!m.hasBoundary && !m.hasHole) {
-    std::unordered_map<std::uint64_t, std::uint32_t> index;  // (vertex, feature) → DSU slot
-    std::vector<std::uint32_t> parent;
-    auto slot = [&](std::uint32_t v, FeatureId f) {
-      const std::uint64_t key = (static_cast<std::uint64_t>(f) << 32) | v;
-      auto [it, fresh] = index.emplace(key, static_cast<std::uint32_t>(parent.size()));
-      if (fresh) parent.push_back(it->second);
-      return it->second;
-    };
-    auto root = [&](std::uint32_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
     const Mesh& me = mesh();
+    std::vector<std::vector<std::pair<std::uint32_t, FeatureId>>> adj(me.vertexCount());
     for (std::uint32_t h = 0; h < me.halfedgeCount(); ++h) {
+      const std::uint32_t o = me.origin(HalfedgeId(h)).value, t = me.target(HalfedgeId(h)).value;
       for (FeatureId f : me.edgeFeatures(HalfedgeId(h))) {
-        const std::uint32_t x = root(slot(me.origin(HalfedgeId(h)).value, f));
-        const std::uint32_t y = root(slot(me.target(HalfedgeId(h)).value, f));
-        parent[x] = y;
+        adj[o].emplace_back(t, f);
+        adj[t].emplace_back(o, f);
       }
     }
     for (const Segment& s : m.segments) {
       const std::uint32_t a = m.meshOf[s.a], b = m.meshOf[s.b];
       if (a == b || s.feature >= m.features.size()) continue;
-      if (a == kNone || b == kNone || root(slot(a, s.feature)) != root(slot(b, s.feature))) {
-        add("constraint segment " + std::to_string(s.a) + "-" + std::to_string(s.b) +
-            " (feature " + std::to_string(s.feature) + ") is not a chain of constrained edges");
+      const std::string name = "constraint segment " + std::to_string(s.a) + "-" +
+                               std::to_string(s.b) + " (feature " + std::to_string(s.feature) + ")";
+      if (a == kNone || b == kNone) {
+        add(name + " has an end that is not a mesh vertex");
+        continue;
+      }
+      const Point2 P = m.xy[s.a], Q = m.xy[s.b];
+      const double dx = Q.x - P.x, dy = Q.y - P.y, len2 = dx * dx + dy * dy;
+      const double len = std::sqrt(len2);
+      const double tol = std::max({m.options.snapTolerance, 16 * Impl::constructionTolerance(P),
+                                   16 * Impl::constructionTolerance(Q), 1e-6 * len});
+      auto near = [&](std::uint32_t v) {
+        const Point2 w = me.xy(VertexId(v));
+        const double along = ((w.x - P.x) * dx + (w.y - P.y) * dy) / len;
+        return std::fabs((w.x - P.x) * dy - (w.y - P.y) * dx) <= tol * len && along >= -tol &&
+               along <= len + tol;
+      };
+      // Breadth-first over the feature's edges between vertices near the
+      // segment (crossings of nearly parallel lines may come out of order
+      // along it, so the chain need not be monotone).
+      std::vector<std::uint32_t> todo{a}, seen{a};
+      bool reached = false;
+      while (!todo.empty() && !reached) {
+        const std::uint32_t v = todo.back();
+        todo.pop_back();
+        for (const auto& [w, f] : adj[v]) {
+          if (f != s.feature || std::find(seen.begin(), seen.end(), w) != seen.end()) continue;
+          if (w == b) {
+            reached = true;
+            break;
+          }
+          if (!near(w)) continue;
+          seen.push_back(w);
+          todo.push_back(w);
+        }
+      }
+      if (!reached) {
+        add(name + " is not a chain of mesh edges carrying its feature within " +
+            formatCoord(tol) + " m of it");
       }
     }
   }
