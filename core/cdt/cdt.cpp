@@ -106,6 +106,7 @@ class EdgeFeatureMap {
     }
     e.list = static_cast<std::uint32_t>(lists_.size() - 1);
   }
+  void erase(std::uint64_t key) { map_.erase(key); }
   /// The edge `from` was split into `a` and `b`: both inherit its features.
   void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
     auto it = map_.find(from);
@@ -729,7 +730,13 @@ struct Cdt::Impl {
       const double dx = xy[v].x - X.x, dy = xy[v].y - X.y;
       return dx * dx + dy * dy;
     };
-    const std::uint32_t nearest = dist2(R) <= dist2(L) ? R : L;
+    const std::uint32_t c = tv[prv(e)], d = tv[prv(opp[e])];
+    std::uint32_t nearest = dist2(R) <= dist2(L) ? R : L;
+    // The apexes count too: with nearly collinear constraints the crossing
+    // can be at cur itself (c) or at the vertex beyond (d).
+    for (const std::uint32_t u : {c, d}) {
+      if (u != kInf && dist2(u) < dist2(nearest)) nearest = u;
+    }
     // X is rounded, and R or L may itself be a rounded crossing of the same
     // lines (three constraints through one point): a constructed point this
     // close to a vertex is that vertex, even with snapTolerance 0.
@@ -737,7 +744,6 @@ struct Cdt::Impl {
     bool useExisting = dist2(nearest) <= tol * tol;
     if (!useExisting) {
       // The split must leave four strictly counter-clockwise triangles.
-      const std::uint32_t c = tv[prv(e)], d = tv[prv(opp[e])];
       const bool ok = c != kInf && d != kInf && orient2d(xy[c], xy[R], X) > 0 &&
                       orient2d(xy[L], xy[c], X) > 0 && orient2d(xy[d], xy[L], X) > 0 &&
                       orient2d(xy[R], xy[d], X) > 0;
@@ -751,6 +757,7 @@ struct Cdt::Impl {
     std::uint32_t v;
     if (useExisting) {
       v = nearest;
+      if (v == c || v == d) detourConstraint(e, v);
     } else {
       v = static_cast<std::uint32_t>(xy.size());
       xy.push_back(X);
@@ -766,6 +773,23 @@ struct Cdt::Impl {
     ev.at = {xy[v].x, xy[v].y, z[v]};
     report.intersections.push_back(ev);
     return v;
+  }
+
+  /// The constrained edge of e (R→L) is replaced by R→via→L, via being the
+  /// apex of e's triangle or of its twin's: the crossing of another
+  /// constraint with it is taken to be at via.
+  void detourConstraint(std::uint32_t e, std::uint32_t via) {
+    const std::uint32_t R = tv[e], L = tv[nxt(e)];
+    const auto view = edgeFeatures.find(edgeKey(R, L));
+    const std::vector<FeatureId> fs(view.begin(), view.end());
+    cons[e] = cons[opp[e]] = 0;
+    edgeFeatures.erase(edgeKey(R, L));
+    for (const FeatureId g : fs) {
+      addEdgeFeature(R, via, g);
+      addEdgeFeature(via, L, g);
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
+    lop(todo);
   }
 
   /// Is u a vertex exactly on the input segment a0→b0 (exact orient2d) and
@@ -1327,8 +1351,8 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
         }
       }
       if (!reached) {
-        add(name + " is not a chain of mesh edges carrying its feature within " +
-            formatCoord(tol) + " m of it");
+        add(name + " is not a chain of mesh edges carrying its feature within " + formatCoord(tol) +
+            " m of it");
       }
     }
   }
