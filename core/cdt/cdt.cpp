@@ -741,19 +741,21 @@ struct Cdt::Impl {
     // lines (three constraints through one point): a constructed point this
     // close to a vertex is that vertex, even with snapTolerance 0.
     const double tol = std::max(options.snapTolerance, constructionTolerance(X));
-    bool useExisting = dist2(nearest) <= tol * tol;
+    bool useExisting = dist2(nearest) <= tol * tol, forced = false;
     if (!useExisting) {
       // The split must leave four strictly counter-clockwise triangles.
       const bool ok = c != kInf && d != kInf && orient2d(xy[c], xy[R], X) > 0 &&
                       orient2d(xy[L], xy[c], X) > 0 && orient2d(xy[d], xy[L], X) > 0 &&
                       orient2d(xy[R], xy[d], X) > 0;
       useExisting = !ok;
+      forced = !ok;
     }
     CdtReport::Intersection ev;
     ev.existing = existing;
     ev.inserted = f;
     ev.zExisting = zE;
     ev.zInserted = zI;
+    ev.forced = forced;
     std::uint32_t v;
     if (useExisting) {
       v = nearest;
@@ -1298,9 +1300,9 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
   // Every input constraint segment is a chain of mesh edges carrying its
   // feature and running along the input segment (checked from the input
   // coordinates, not from the edge flags, and when no domain clips the
-  // constraints): from the mesh vertex of one end, each step goes to a vertex
-  // within rounding/snap distance of the segment and strictly nearer the other
-  // end along it.
+  // constraints): a path of edges with its feature from the mesh vertex of one
+  // end to the other through vertices within rounding/snap distance of the
+  // segment (only connected, for features bent by a forced crossing).
   if (!m.hasBoundary && !m.hasHole) {
     const Mesh& me = mesh();
     std::vector<std::vector<std::pair<std::uint32_t, FeatureId>>> adj(me.vertexCount());
@@ -1309,6 +1311,16 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       for (FeatureId f : me.edgeFeatures(HalfedgeId(h))) {
         adj[o].emplace_back(t, f);
         adj[t].emplace_back(o, f);
+      }
+    }
+    // A crossing moved to a vertex beyond the tolerance is reported (forced);
+    // it bends both features' constraints, and later crossings may split the
+    // bent edges, so their segments are checked for connectivity only.
+    std::vector<std::uint8_t> bent(m.features.size(), 0);
+    for (const auto& ev : m.report.intersections) {
+      if (!ev.forced) continue;
+      for (const FeatureId g : {ev.existing, ev.inserted}) {
+        if (g < bent.size()) bent[g] = 1;
       }
     }
     for (const Segment& s : m.segments) {
@@ -1323,7 +1335,7 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       const Point2 P = m.xy[s.a], Q = m.xy[s.b];
       const double dx = Q.x - P.x, dy = Q.y - P.y, len2 = dx * dx + dy * dy;
       const double len = std::sqrt(len2);
-      const double tol = std::max({m.options.snapTolerance, 16 * Impl::constructionTolerance(P),
+      const double tol = std::max({2 * m.options.snapTolerance, 16 * Impl::constructionTolerance(P),
                                    16 * Impl::constructionTolerance(Q), 1e-6 * len});
       auto near = [&](std::uint32_t v) {
         const Point2 w = me.xy(VertexId(v));
@@ -1345,7 +1357,7 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
             reached = true;
             break;
           }
-          if (!near(w)) continue;
+          if (!bent[s.feature] && !near(w)) continue;
           seen.push_back(w);
           todo.push_back(w);
         }
