@@ -11,6 +11,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <string>
 #include <thread>
@@ -141,6 +142,7 @@ class EdgeFeatureMap {
     }
     e.list = static_cast<std::uint32_t>(lists_.size() - 1);
   }
+  void erase(std::uint64_t key) { map_.erase(key); }
   /// The edge `from` was split into `a` and `b`: both inherit its features.
   void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
     auto it = map_.find(from);
@@ -853,6 +855,14 @@ struct Cdt::Impl {
     return pr;
   }
 
+  /// Radius within which a constructed (rounded) point is taken to be an
+  /// existing vertex: 2^-40 of its coordinate magnitude (about 6e-6 m at UTM
+  /// northings), far above the rounding error of a crossing yet far below
+  /// survey precision.
+  static double constructionTolerance(const Point2& p) {
+    return std::ldexp(std::max(std::fabs(p.x), std::fabs(p.y)), -40);
+  }
+
   /// The constraint cur→tgt crosses constrained edge e (R→L, in the
   /// triangle on cur's side). Makes a vertex at the crossing — a new one
   /// splitting e, or R or L when the crossing is (nearly) at one of them —
@@ -870,25 +880,36 @@ struct Cdt::Impl {
       const double dx = xy[v].x - X.x, dy = xy[v].y - X.y;
       return dx * dx + dy * dy;
     };
-    const std::uint32_t nearest = dist2(R) <= dist2(L) ? R : L;
-    const double tol = options.snapTolerance;
-    bool useExisting = tol > 0 && dist2(nearest) <= tol * tol;
+    const std::uint32_t c = tv[prv(e)], d = tv[prv(opp[e])];
+    std::uint32_t nearest = dist2(R) <= dist2(L) ? R : L;
+    // The apexes count too: with nearly collinear constraints the crossing
+    // can be at cur itself (c) or at the vertex beyond (d).
+    for (const std::uint32_t u : {c, d}) {
+      if (u != kInf && dist2(u) < dist2(nearest)) nearest = u;
+    }
+    // X is rounded, and R or L may itself be a rounded crossing of the same
+    // lines (three constraints through one point): a constructed point this
+    // close to a vertex is that vertex, even with snapTolerance 0.
+    const double tol = std::max(options.snapTolerance, constructionTolerance(X));
+    bool useExisting = dist2(nearest) <= tol * tol, forced = false;
     if (!useExisting) {
       // The split must leave four strictly counter-clockwise triangles.
-      const std::uint32_t c = tv[prv(e)], d = tv[prv(opp[e])];
       const bool ok = c != kInf && d != kInf && orient2d(xy[c], xy[R], X) > 0 &&
                       orient2d(xy[L], xy[c], X) > 0 && orient2d(xy[d], xy[L], X) > 0 &&
                       orient2d(xy[R], xy[d], X) > 0;
       useExisting = !ok;
+      forced = !ok;
     }
     CdtReport::Intersection ev;
     ev.existing = existing;
     ev.inserted = f;
     ev.zExisting = zE;
     ev.zInserted = zI;
+    ev.forced = forced;
     std::uint32_t v;
     if (useExisting) {
       v = nearest;
+      if (v == c || v == d) detourConstraint(e, v);
     } else {
       v = static_cast<std::uint32_t>(xy.size());
       xy.push_back(X);
@@ -906,8 +927,40 @@ struct Cdt::Impl {
     return v;
   }
 
+  /// The constrained edge of e (R→L) is replaced by R→via→L, via being the
+  /// apex of e's triangle or of its twin's: the crossing of another
+  /// constraint with it is taken to be at via.
+  void detourConstraint(std::uint32_t e, std::uint32_t via) {
+    const std::uint32_t R = tv[e], L = tv[nxt(e)];
+    const auto view = edgeFeatures.find(edgeKey(R, L));
+    const std::vector<FeatureId> fs(view.begin(), view.end());
+    cons[e] = cons[opp[e]] = 0;
+    edgeFeatures.erase(edgeKey(R, L));
+    for (const FeatureId g : fs) {
+      addEdgeFeature(R, via, g);
+      addEdgeFeature(via, L, g);
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
+    lop(todo);
+  }
+
+  /// Is u a vertex exactly on the input segment a0→b0 (exact orient2d) and
+  /// strictly between cur and tgt? After a split at a rounded crossing point,
+  /// cur→tgt is no longer on the input line, so a vertex exactly on it must be
+  /// found against a0→b0 or the constraint would bypass it by an ulp.
+  bool onInputSegment(std::uint32_t a0, std::uint32_t b0, std::uint32_t cur, std::uint32_t tgt,
+                      std::uint32_t u, const std::vector<std::uint32_t>& passed) const {
+    if (u == kInf || u == cur || u == tgt || orient(a0, b0, u) != 0) return false;
+    if (std::find(passed.begin(), passed.end(), u) != passed.end()) return false;
+    const Point2 &pc = xy[cur], &pt = xy[tgt], &pu = xy[u];
+    return (pu.x - pc.x) * (pt.x - pc.x) + (pu.y - pc.y) * (pt.y - pc.y) > 0 &&
+           (pu.x - pt.x) * (pc.x - pt.x) + (pu.y - pt.y) * (pc.y - pt.y) > 0;
+  }
+
   /// Inserts the constraint segment a→b (live vertices) for feature f.
   void insertSegment(std::uint32_t a, std::uint32_t b, FeatureId f) {
+    const std::uint32_t a0 = a, b0 = b;
+    std::vector<std::uint32_t> passed{a};  // vertices this segment already runs through
     std::vector<std::uint32_t> targets{b};
     std::uint32_t cur = a;
     const std::size_t guardLimit = 64 + 8 * xy.size();
@@ -936,12 +989,16 @@ struct Cdt::Impl {
               break;
             }
             const int ou = orient(cur, tgt, u);
-            if (ou == 0 && onRay(cur, tgt, u)) {
+            if ((ou == 0 && onRay(cur, tgt, u)) || onInputSegment(a0, b0, cur, tgt, u, passed)) {
               onLine = u;
               break;
             }
             if (w != kInf && ou < 0 && orient(cur, tgt, w) > 0) {
-              firstCross = nxt(h);  // u→w, u right of cur→tgt, w left
+              if (onInputSegment(a0, b0, cur, tgt, w, passed)) {
+                onLine = w;
+              } else {
+                firstCross = nxt(h);  // u→w, u right of cur→tgt, w left
+              }
               break;
             }
           }
@@ -951,6 +1008,7 @@ struct Cdt::Impl {
       if (onLine != kNone) {
         addEdgeFeature(cur, onLine, f);
         cur = onLine;
+        passed.push_back(cur);
         continue;
       }
       if (firstCross == kNone) throw internalError("constraint direction found in no triangle");
@@ -958,7 +1016,7 @@ struct Cdt::Impl {
       // Walk the crossed edges.
       crossed.clear();
       std::uint32_t e = firstCross;
-      std::uint32_t end = kNone;
+      std::uint32_t end = kNone, onInput = kNone;
       bool hitConstraint = false;
       for (;;) {
         if (cons[e]) {
@@ -978,7 +1036,15 @@ struct Cdt::Impl {
           end = x;
           break;
         }
+        if (onInputSegment(a0, b0, cur, tgt, x, passed)) {
+          onInput = x;  // route through it: walk cur→x on its own line
+          break;
+        }
         e = ox > 0 ? nxt(g) : prv(g);
+      }
+      if (onInput != kNone) {
+        targets.push_back(onInput);
+        continue;
       }
       if (hitConstraint) {
         targets.push_back(crossingVertex(cur, tgt, e, f));
@@ -986,6 +1052,7 @@ struct Cdt::Impl {
       }
       removeCrossings(cur, end, crossed, f);
       cur = end;
+      passed.push_back(cur);
     }
   }
 
@@ -1393,6 +1460,14 @@ const CdtReport& Cdt::report() const {
   return impl_->report;
 }
 
+namespace {
+std::string formatCoord(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+}  // namespace
+
 ValidationReport Cdt::validate(const ValidationOptions& options) const {
   ValidationReport r = tinsmith::validate(mesh(), options);
   const Impl& m = *impl_;
@@ -1416,35 +1491,74 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       }
     }
   }
-  // Every constraint segment is a chain of edges carrying its feature (checked
-  // when no domain clips the constraints).
+  // Every input constraint segment is a chain of mesh edges carrying its
+  // feature and running along the input segment (checked from the input
+  // coordinates, not from the edge flags, and when no domain clips the
+  // constraints): a path of edges with its feature from the mesh vertex of one
+  // end to the other through vertices within rounding/snap distance of the
+  // segment (only connected, for features bent by a forced crossing).
   if (!m.hasBoundary && !m.hasHole) {
-    std::unordered_map<std::uint64_t, std::uint32_t> index;  // (vertex, feature) → DSU slot
-    std::vector<std::uint32_t> parent;
-    auto slot = [&](std::uint32_t v, FeatureId f) {
-      const std::uint64_t key = (static_cast<std::uint64_t>(f) << 32) | v;
-      auto [it, fresh] = index.emplace(key, static_cast<std::uint32_t>(parent.size()));
-      if (fresh) parent.push_back(it->second);
-      return it->second;
-    };
-    auto root = [&](std::uint32_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
     const Mesh& me = mesh();
+    std::vector<std::vector<std::pair<std::uint32_t, FeatureId>>> adj(me.vertexCount());
     for (std::uint32_t h = 0; h < me.halfedgeCount(); ++h) {
+      const std::uint32_t o = me.origin(HalfedgeId(h)).value, t = me.target(HalfedgeId(h)).value;
       for (FeatureId f : me.edgeFeatures(HalfedgeId(h))) {
-        const std::uint32_t x = root(slot(me.origin(HalfedgeId(h)).value, f));
-        const std::uint32_t y = root(slot(me.target(HalfedgeId(h)).value, f));
-        parent[x] = y;
+        adj[o].emplace_back(t, f);
+        adj[t].emplace_back(o, f);
+      }
+    }
+    // A crossing moved to a vertex beyond the tolerance is reported (forced);
+    // it bends both features' constraints, and later crossings may split the
+    // bent edges, so their segments are checked for connectivity only.
+    std::vector<std::uint8_t> bent(m.features.size(), 0);
+    for (const auto& ev : m.report.intersections) {
+      if (!ev.forced) continue;
+      for (const FeatureId g : {ev.existing, ev.inserted}) {
+        if (g < bent.size()) bent[g] = 1;
       }
     }
     for (const Segment& s : m.segments) {
       const std::uint32_t a = m.meshOf[s.a], b = m.meshOf[s.b];
       if (a == b || s.feature >= m.features.size()) continue;
-      if (a == kNone || b == kNone || root(slot(a, s.feature)) != root(slot(b, s.feature))) {
-        add("constraint segment " + std::to_string(s.a) + "-" + std::to_string(s.b) +
-            " (feature " + std::to_string(s.feature) + ") is not a chain of constrained edges");
+      const std::string name = "constraint segment " + std::to_string(s.a) + "-" +
+                               std::to_string(s.b) + " (feature " + std::to_string(s.feature) + ")";
+      if (a == kNone || b == kNone) {
+        add(name + " has an end that is not a mesh vertex");
+        continue;
+      }
+      const Point2 P = m.xy[s.a], Q = m.xy[s.b];
+      const double dx = Q.x - P.x, dy = Q.y - P.y, len2 = dx * dx + dy * dy;
+      const double len = std::sqrt(len2);
+      const double tol = std::max({2 * m.options.snapTolerance, 16 * Impl::constructionTolerance(P),
+                                   16 * Impl::constructionTolerance(Q), 1e-6 * len});
+      auto near = [&](std::uint32_t v) {
+        const Point2 w = me.xy(VertexId(v));
+        const double along = ((w.x - P.x) * dx + (w.y - P.y) * dy) / len;
+        return std::fabs((w.x - P.x) * dy - (w.y - P.y) * dx) <= tol * len && along >= -tol &&
+               along <= len + tol;
+      };
+      // Breadth-first over the feature's edges between vertices near the
+      // segment (crossings of nearly parallel lines may come out of order
+      // along it, so the chain need not be monotone).
+      std::vector<std::uint32_t> todo{a}, seen{a};
+      bool reached = false;
+      while (!todo.empty() && !reached) {
+        const std::uint32_t v = todo.back();
+        todo.pop_back();
+        for (const auto& [w, f] : adj[v]) {
+          if (f != s.feature || std::find(seen.begin(), seen.end(), w) != seen.end()) continue;
+          if (w == b) {
+            reached = true;
+            break;
+          }
+          if (!bent[s.feature] && !near(w)) continue;
+          seen.push_back(w);
+          todo.push_back(w);
+        }
+      }
+      if (!reached) {
+        add(name + " is not a chain of mesh edges carrying its feature within " + formatCoord(tol) +
+            " m of it");
       }
     }
   }

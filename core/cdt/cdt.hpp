@@ -85,6 +85,11 @@ struct CdtReport {
     FeatureId existing = kNoFeature;  ///< feature of the constraint already there
     FeatureId inserted = kNoFeature;  ///< feature of the constraint being inserted
     double zExisting = 0, zInserted = 0;  ///< z of each constraint at that point
+    /// The rounded crossing could not split the crossed edge (degenerate
+    /// triangles there) and was moved to the nearest vertex of the two
+    /// triangles beside it, farther than the snap tolerance: the constraints
+    /// bend through `at`.
+    bool forced = false;
   };
   struct Dropped {
     enum class What { ZeroLengthSegment, PointOutsideDomain };
@@ -156,7 +161,10 @@ class Cdt {
 
   /// validate(mesh()) plus: every input point is a mesh vertex or reported as
   /// merged/dropped, and every inserted constraint segment is present as a chain
-  /// of mesh edges carrying its feature (unless outside the domain).
+  /// of mesh edges carrying its feature, through vertices within rounding/snap
+  /// distance of the input segment (for features bent by a crossing reported
+  /// as forced: connected only; checked when no boundary or hole clips the
+  /// constraints).
   [[nodiscard]] ValidationReport validate(const ValidationOptions& options = {}) const;
 
   /// Re-triangulates a TinData: its vertices and constrained edges become input

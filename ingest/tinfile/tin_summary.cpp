@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "ingest/tinfile/tin_file.hpp"
 
@@ -14,7 +16,17 @@ TinSummary summariseTin(const TinData& tin) {
   s.crs = tin.crs;
   s.vertices = tin.vertices.size();
   s.triangles = tin.triangles.size();
-  s.constrainedEdges = tin.constrainedEdges.size();
+  // Distinct edges, as `tinsmith validate` counts them: an edge shared by
+  // several features has one record per feature.
+  {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    edges.reserve(tin.constrainedEdges.size());
+    for (const auto& e : tin.constrainedEdges)
+      edges.emplace_back(std::min(e.a, e.b), std::max(e.a, e.b));
+    std::sort(edges.begin(), edges.end());
+    s.constrainedEdges =
+        static_cast<std::size_t>(std::unique(edges.begin(), edges.end()) - edges.begin());
+  }
   s.features = tin.features.size();
   s.empty = tin.vertices.empty();
   if (!s.empty) {

@@ -14,6 +14,7 @@ struct TinSummary {
   std::string file;
   std::size_t fileBytes = 0;
   std::string crs;
+  /// constrainedEdges: distinct edges (an edge of several features counts once).
   std::size_t vertices = 0, triangles = 0, constrainedEdges = 0, features = 0;
   bool empty = true;  ///< no vertices: extent and z range are meaningless
   double minX = 0, minY = 0, maxX = 0, maxY = 0, minZ = 0, maxZ = 0;
