@@ -13,7 +13,7 @@ CASES=${2:-}
 FILTER=${3:-.}
 shift $(( $# < 3 ? $# : 3 ))
 WRAP=("$@")
-CHECK=${CHECK_TIN:-/work/shared/tools/check_tin.py}
+CHECK=${CHECK_TIN:-$(readlink -f "$HERE/../../../shared/tools/check_tin.py")}
 TMO=${TORTURE_TIMEOUT:-60}
 if [ -z "$CASES" ]; then
   CASES=$(mktemp -d)
