@@ -22,6 +22,26 @@ void appendIndex(std::string& out, std::uint64_t value) {
   out.append(buf, r.ptr);
 }
 
+// "x y z\n" at full precision.
+void appendXyzLine(std::string& buf, const Point3& v) {
+  appendG17(buf, v.x);
+  buf += ' ';
+  appendG17(buf, v.y);
+  buf += ' ';
+  appendG17(buf, v.z);
+  buf += '\n';
+}
+
+// "a b c\n" with each index offset by `base`.
+void appendIndexLine(std::string& buf, const TinData::Triangle& t, std::uint64_t base) {
+  appendIndex(buf, std::uint64_t{t[0]} + base);
+  buf += ' ';
+  appendIndex(buf, std::uint64_t{t[1]} + base);
+  buf += ' ';
+  appendIndex(buf, std::uint64_t{t[2]} + base);
+  buf += '\n';
+}
+
 // Streams text produced in chunks, so a million-vertex export needs no
 // file-sized string in memory.
 template <class Emit>
@@ -32,22 +52,12 @@ void produceObj(const TinData& tin, Emit&& emit) {
          std::to_string(tin.triangles.size()) + " triangles\n";
   for (const auto& v : tin.vertices) {
     buf += "v ";
-    appendG17(buf, v.x);
-    buf += ' ';
-    appendG17(buf, v.y);
-    buf += ' ';
-    appendG17(buf, v.z);
-    buf += '\n';
+    appendXyzLine(buf, v);
     if (buf.size() > (1 << 16)) emit(buf);
   }
   for (const auto& t : tin.triangles) {
     buf += "f ";
-    appendIndex(buf, std::uint64_t{t[0]} + 1);
-    buf += ' ';
-    appendIndex(buf, std::uint64_t{t[1]} + 1);
-    buf += ' ';
-    appendIndex(buf, std::uint64_t{t[2]} + 1);
-    buf += '\n';
+    appendIndexLine(buf, t, 1);  // OBJ indices are 1-based
     if (buf.size() > (1 << 16)) emit(buf);
   }
   emit(buf);
@@ -61,22 +71,12 @@ void producePly(const TinData& tin, Emit&& emit) {
       "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
       std::to_string(tin.triangles.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
   for (const auto& v : tin.vertices) {
-    appendG17(buf, v.x);
-    buf += ' ';
-    appendG17(buf, v.y);
-    buf += ' ';
-    appendG17(buf, v.z);
-    buf += '\n';
+    appendXyzLine(buf, v);
     if (buf.size() > (1 << 16)) emit(buf);
   }
   for (const auto& t : tin.triangles) {
     buf += "3 ";
-    appendIndex(buf, t[0]);
-    buf += ' ';
-    appendIndex(buf, t[1]);
-    buf += ' ';
-    appendIndex(buf, t[2]);
-    buf += '\n';
+    appendIndexLine(buf, t, 0);
     if (buf.size() > (1 << 16)) emit(buf);
   }
   emit(buf);
