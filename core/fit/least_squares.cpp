@@ -107,12 +107,13 @@ std::vector<MeshEdge> meshEdges(std::size_t vertexCount, std::span<const Triangl
   return edges;
 }
 
-NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
-                               std::span<const TriangleMoments> moments) {
-  std::vector<Triplet> triplets;
-  triplets.reserve(triangles.size() * 9);
-  NormalEquations eq;
-  eq.btz = Vector::Zero(static_cast<Eigen::Index>(vertexCount));
+// Scatters each data-holding triangle's local 3×3 block of BᵀB (stored as the
+// upper triangle in TriangleMoments::bb) and its 3 entries of Bᵀz into global
+// indices: addMatrix(i, j, value), addRhs(i, value). Triangles without data
+// are skipped.
+template <class AddMatrix, class AddRhs>
+void scatterTriangleMoments(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
+                            AddMatrix&& addMatrix, AddRhs&& addRhs) {
   static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const auto& m = moments[t];
@@ -121,12 +122,24 @@ NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle
     for (double v : m.bb) empty = empty && v == 0.0;
     if (empty) continue;
     for (int a = 0; a < 3; ++a) {
-      eq.btz[tri[a]] += m.bz[a];
-      for (int b = 0; b < 3; ++b) {
-        triplets.emplace_back(static_cast<int>(tri[a]), static_cast<int>(tri[b]), m.bb[kIndex[a][b]]);
-      }
+      addRhs(tri[a], m.bz[a]);
+      for (int b = 0; b < 3; ++b) addMatrix(tri[a], tri[b], m.bb[kIndex[a][b]]);
     }
   }
+}
+
+NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
+                               std::span<const TriangleMoments> moments) {
+  std::vector<Triplet> triplets;
+  triplets.reserve(triangles.size() * 9);
+  NormalEquations eq;
+  eq.btz = Vector::Zero(static_cast<Eigen::Index>(vertexCount));
+  scatterTriangleMoments(
+      triangles, moments,
+      [&](std::uint32_t i, std::uint32_t j, double v) {
+        triplets.emplace_back(static_cast<int>(i), static_cast<int>(j), v);
+      },
+      [&](std::uint32_t i, double v) { eq.btz[i] += v; });
   eq.btb = fromTriplets(vertexCount, triplets);
   return eq;
 }
@@ -154,18 +167,9 @@ PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span
   SparseMatrix btb = energy;
   std::fill(btb.valuePtr(), btb.valuePtr() + btb.nonZeros(), 0.0);
   sys.b = Vector::Zero(energy.rows());
-  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
-    const auto& m = moments[t];
-    const auto& tri = triangles[t];
-    bool empty = true;
-    for (double v : m.bb) empty = empty && v == 0.0;
-    if (empty) continue;
-    for (int i = 0; i < 3; ++i) {
-      sys.b[tri[i]] += m.bz[i];
-      for (int j = 0; j < 3; ++j) btb.coeffRef(tri[i], tri[j]) += m.bb[kIndex[i][j]];
-    }
-  }
+  scatterTriangleMoments(
+      triangles, moments, [&](std::uint32_t i, std::uint32_t j, double v) { btb.coeffRef(i, j) += v; },
+      [&](std::uint32_t i, double v) { sys.b[i] += v; });
   btb.makeCompressed();
   sys.lambdaDefault = defaultLambda(btb, energy);
   sys.lambda = lambdaAbsolute ? *lambdaAbsolute : lambdaFactor * sys.lambdaDefault;
