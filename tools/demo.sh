@@ -36,10 +36,7 @@ echo "-- query the TIN at the middle of the area"
 
 echo
 echo "== 2. level of detail: multilevel least squares (book Alg. 8.1) over the DEM cells, max error 5 m"
-# `tinsmith fit` reads XYZ points; GDAL writes the DEM's cells as XYZ (nodata as nan, dropped).
-gdal_translate -q -of XYZ "$data/dem.tif" out/red-butte-dem.xyz.part
-grep -vi nan out/red-butte-dem.xyz.part > out/red-butte-dem.xyz && rm out/red-butte-dem.xyz.part
-"$tinsmith" fit out/red-butte-dem.xyz --tolerance 5 --lambda 0.1 --criterion error --crs EPSG:26912 \
+"$tinsmith" fit "$data/dem.tif" --tolerance 5 --lambda 0.1 --criterion error \
   -o out/red-butte-fit.tin --stats out/red-butte-fit.stats.json
 "$tinsmith" export out/red-butte-fit.tin --format tif --cell 10 -o out/red-butte-fit.tif
 gdaldem hillshade -q -multidirectional -compute_edges out/red-butte-fit.tif out/red-butte-fit-hillshade.tif

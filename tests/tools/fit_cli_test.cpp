@@ -45,5 +45,28 @@ TEST(FitCli, FitsPointsAndWritesTinAndStats) {
   EXPECT_NE(missing.err.find("nope.xyz"), std::string::npos);
 }
 
+
+TEST(FitCli, FitsTheValidCellsOfARasterAndKeepsItsCrs) {
+  if (!std::filesystem::exists(binary())) GTEST_SKIP() << "tinsmith binary not built";
+  const auto dir = test::scratchDir("fit_cli_raster");
+  const std::string dem = std::string(TINSMITH_SHARED_DATA) + "/red-butte/dem.tif";
+  const auto r = test::runCommand(binary() + " fit " + dem + " --tolerance 5 --lambda 0.1 --criterion error -q -o " +
+                                  (dir / "fit.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  // "… level L, max error E, rms R": the error criterion holds at every DEM cell.
+  const auto at = r.err.find("max error ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_LE(std::stod(r.err.substr(at + 10)), 5.0) << r.err;
+  const auto info = test::runCommand(binary() + " info " + (dir / "fit.tin").string());
+  ASSERT_EQ(info.exitCode, 0) << info.err;
+  EXPECT_NE(info.out.find("EPSG:26912"), std::string::npos) << info.out;
+
+  const auto missing = test::runCommand(binary() + " fit " + (dir / "nope.tif").string() +
+                                        " --tolerance 1 -o " + (dir / "x.tin").string());
+  EXPECT_EQ(missing.exitCode, 3) << missing.err;
+  EXPECT_NE(missing.err.find("nope.tif"), std::string::npos) << missing.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.tin"));
+}
+
 }  // namespace
 }  // namespace tinsmith::fit

@@ -1,6 +1,9 @@
 // `tinsmith fit`: fit a multilevel least-squares surface over binary
 // triangulations (Algorithm 8.1) to an XYZ/CSV point file and write it as .tin.
+#include <cctype>
 #include <chrono>
+#include <filesystem>
+#include <set>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +15,7 @@
 
 #include "core/base/error.hpp"
 #include "core/fit/multilevel_fit.hpp"
+#include "ingest/readers/raster_io.hpp"
 #include "ingest/readers/text_points.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
@@ -141,10 +145,29 @@ std::string statsJson(const fit::MultilevelFit& result, std::size_t points, doub
 
 }  // namespace
 
+namespace {
+
+/// The data points of `path`: a raster's valid cell centres (by extension),
+/// otherwise a text point file. A raster's CRS fills `crs` when none was given.
+std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  static const std::set<std::string> kRasterExtensions = {".tif", ".tiff", ".exr", ".img", ".asc", ".vrt"};
+  if (!kRasterExtensions.contains(ext)) return ingest::readTextPoints(path);
+  const ingest::HeightGrid grid = ingest::readHeightGrid(path);
+  if (crs.empty()) crs = grid.crs;
+  return ingest::gridToPoints(grid);
+}
+
+}  // namespace
+
 void addFitCommand(CLI::App& app) {
   auto o = std::make_shared<FitCliOptions>();
   auto* cmd = app.add_subcommand("fit", "Fit a multilevel least-squares surface over binary triangulations");
-  cmd->add_option("points", o->points, "XYZ/CSV point file (x, y, z; projected metres)")->required();
+  cmd->add_option("points", o->points,
+                  "XYZ/CSV point file (x, y, z; projected metres), or a projected raster "
+                  "(GeoTIFF or any GDAL raster, EXR heightmap) whose valid cells are the points")
+      ->required();
   cmd->add_option("--tolerance", o->tolerance, "Error criterion: z units (2.5), or a percentage of the z range (0.25%)");
   cmd->add_option("--lambda", o->lambda, "Smoothing weight as a multiple of the default lambda_d (default 1)");
   cmd->add_option("--lambda-abs", o->lambdaAbs, "Absolute smoothing weight (overrides --lambda)");
@@ -174,11 +197,12 @@ void addFitCommand(CLI::App& app) {
     opt.threads = o->threads;
     if (!o->quiet) opt.progress = [](const std::string& line) { std::cerr << line << "\n"; };
 
-    const std::vector<Point3> points = ingest::readTextPoints(o->points);
+    std::string crs = o->crs;
+    const std::vector<Point3> points = readFitInput(o->points, crs);
     const auto start = std::chrono::steady_clock::now();
     const fit::MultilevelFit result = fit::fitMultilevel(points, opt);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ingest::writeTinFile(o->output, result.toTinData(o->crs));
+    ingest::writeTinFile(o->output, result.toTinData(crs));
     if (o->stats) {
       std::ofstream out(*o->stats, std::ios::binary | std::ios::trunc);
       out << statsJson(result, points.size(), seconds);
