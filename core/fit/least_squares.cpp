@@ -107,6 +107,8 @@ std::vector<MeshEdge> meshEdges(std::size_t vertexCount, std::span<const Triangl
   return edges;
 }
 
+namespace {
+
 // Scatters each data-holding triangle's local 3×3 block of BᵀB (stored as the
 // upper triangle in TriangleMoments::bb) and its 3 entries of Bᵀz into global
 // indices: addMatrix(i, j, value), addRhs(i, value). Triangles without data
@@ -127,6 +129,8 @@ void scatterTriangleMoments(std::span<const Triangle> triangles, std::span<const
     }
   }
 }
+
+}  // namespace
 
 NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
                                std::span<const TriangleMoments> moments) {

@@ -143,10 +143,6 @@ std::string statsJson(const fit::MultilevelFit& result, std::size_t points, doub
   return j.str();
 }
 
-}  // namespace
-
-namespace {
-
 /// The data points of `path`: a raster's valid cell centres (by extension),
 /// otherwise a text point file. A raster's CRS fills `crs` when none was given.
 std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
