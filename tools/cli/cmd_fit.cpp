@@ -6,16 +6,17 @@
 #include <set>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "core/base/error.hpp"
 #include "core/fit/multilevel_fit.hpp"
 #include "ingest/readers/raster_io.hpp"
+#include "ingest/tinfile/atomic_file.hpp"
 #include "ingest/readers/text_points.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
@@ -123,24 +124,31 @@ const char* solverName(fit::SolverKind s) {
 }
 
 std::string statsJson(const fit::MultilevelFit& result, std::size_t points, double seconds) {
-  std::ostringstream j;
-  j.precision(17);
   const auto levels = result.levels();
-  j << "{\n  \"points\": " << points << ",\n  \"seconds\": " << seconds << ",\n  \"final\": {\"level\": "
-    << levels.back().level << ", \"vertices\": " << levels.back().vertices << ", \"triangles\": "
-    << levels.back().triangles << ", \"max_error\": " << levels.back().maxError << ", \"rms_error\": "
-    << levels.back().rmsError << "},\n  \"levels\": [\n";
-  for (std::size_t i = 0; i < levels.size(); ++i) {
-    const auto& s = levels[i];
-    j << "    {\"level\": " << s.level << ", \"vertices\": " << s.vertices << ", \"triangles\": " << s.triangles
-      << ", \"solver\": \"" << solverName(s.solver) << "\", \"iterations\": " << s.iterations
-      << ", \"relative_residual\": " << s.relativeResidual << ", \"lambda\": " << s.lambda
-      << ", \"max_error\": " << s.maxError << ", \"rms_error\": " << s.rmsError
-      << ", \"cells_refined\": " << s.cellsRefined << ", \"seconds\": " << s.seconds << "}"
-      << (i + 1 < levels.size() ? ",\n" : "\n");
+  const auto& last = levels.back();
+  nlohmann::ordered_json j;
+  j["points"] = points;
+  j["seconds"] = seconds;
+  j["final"] = {{"level", last.level},
+                {"vertices", last.vertices},
+                {"triangles", last.triangles},
+                {"max_error", last.maxError},
+                {"rms_error", last.rmsError}};
+  j["levels"] = nlohmann::ordered_json::array();
+  for (const auto& s : levels) {
+    j["levels"].push_back({{"level", s.level},
+                           {"vertices", s.vertices},
+                           {"triangles", s.triangles},
+                           {"solver", solverName(s.solver)},
+                           {"iterations", s.iterations},
+                           {"relative_residual", s.relativeResidual},
+                           {"lambda", s.lambda},
+                           {"max_error", s.maxError},
+                           {"rms_error", s.rmsError},
+                           {"cells_refined", s.cellsRefined},
+                           {"seconds", s.seconds}});
   }
-  j << "  ]\n}\n";
-  return j.str();
+  return j.dump(2) + "\n";  // NaN/inf become null: the file is always valid JSON
 }
 
 /// The data points of `path`: a raster's valid cell centres (by extension),
@@ -200,9 +208,9 @@ void addFitCommand(CLI::App& app) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ingest::writeTinFile(o->output, result.toTinData(crs));
     if (o->stats) {
-      std::ofstream out(*o->stats, std::ios::binary | std::ios::trunc);
-      out << statsJson(result, points.size(), seconds);
-      if (!out) throw ioError("cannot write the statistics file", {*o->stats}, "check the directory exists and is writable");
+      ingest::AtomicFile out(*o->stats);
+      out.write(statsJson(result, points.size(), seconds));
+      out.commit();
     }
     const auto& last = result.levels().back();
     std::cerr << "wrote " << o->output << ": " << last.vertices << " vertices, " << last.triangles
