@@ -13,6 +13,8 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <exception>
+#include <limits>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -658,27 +660,37 @@ struct Cdt::Impl {
     }
   }
 
-  /// Builds the first triangle from pending vertices in `order`; returns the
-  /// three used, or throws when all pending points are collinear.
-  void initialTriangle(const std::vector<std::uint32_t>& order, std::size_t& usedA,
-                       std::size_t& usedB, std::size_t& usedC) {
+  /// Positions ib, ic in `order` such that order[0], order[ib], order[ic] are
+  /// distinct and not collinear; false when every point of `order` lies on
+  /// one line.
+  bool findFirstTriangle(const std::vector<std::uint32_t>& order, std::size_t& ib,
+                         std::size_t& ic) const {
     const std::uint32_t a = order[0];
-    std::size_t ib = kNone, ic = kNone;
+    ib = kNone;
+    ic = kNone;
     for (std::size_t i = 1; i < order.size(); ++i) {
       if (!(xy[order[i]] == xy[a])) {
         ib = i;
         break;
       }
     }
-    if (ib != kNone) {
-      for (std::size_t i = ib + 1; i < order.size(); ++i) {
-        if (orient(a, order[ib], order[i]) != 0) {
-          ic = i;
-          break;
-        }
+    if (ib == kNone) return false;
+    for (std::size_t i = ib + 1; i < order.size(); ++i) {
+      if (orient(a, order[ib], order[i]) != 0) {
+        ic = i;
+        return true;
       }
     }
-    if (ic == kNone) {
+    return false;
+  }
+
+  /// Builds the first triangle from pending vertices in `order`; returns the
+  /// three used, or throws when all pending points are collinear.
+  void initialTriangle(const std::vector<std::uint32_t>& order, std::size_t& usedA,
+                       std::size_t& usedB, std::size_t& usedC) {
+    const std::uint32_t a = order[0];
+    std::size_t ib = kNone, ic = kNone;
+    if (!findFirstTriangle(order, ib, ic)) {
       throw geometryError(
           "the input has fewer than 3 non-collinear distinct points (" +
               std::to_string(order.size()) + " points given)",
@@ -783,18 +795,30 @@ struct Cdt::Impl {
     insertedUpTo = n;
     if (order.empty()) return;
 
-    std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
     if (!triangulated()) {
       // 2 triangles per point, plus room for a few constraint intersections
       // per pending segment (each adds 2 triangles) so that the arrays rarely
       // grow (a doubling would briefly hold both copies).
-      const std::size_t cap =
-          order.size() * 6 + 12 + 24 * (segments.size() - segmentsDone);
-      tv.reserve(cap);
-      opp.reserve(cap);
-      cons.reserve(cap);
-      initialTriangle(order, skipA, skipB, skipC);
+      reserveTriangles(order.size() * 2 + 4 + 8 * (segments.size() - segmentsDone));
+      if (options.splitMinPoints > 0 && order.size() >= options.splitMinPoints &&
+          insertAsTwoHalves(order)) {
+        return;
+      }
     }
+    insertInOrder(order);
+  }
+
+  void reserveTriangles(std::size_t triangles) {
+    tv.reserve(3 * triangles);
+    opp.reserve(3 * triangles);
+    cons.reserve(3 * triangles);
+  }
+
+  /// Inserts the pending vertices `order` in that order (starting the
+  /// triangulation with its first non-degenerate triple if there is none).
+  void insertInOrder(const std::vector<std::uint32_t>& order) {
+    std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
+    if (!triangulated()) initialTriangle(order, skipA, skipB, skipC);
     // The insertion order jumps around the input arrays: fetch ahead.
     constexpr std::size_t kAhead = 8;
     for (std::size_t i = 0; i < order.size(); ++i) {
@@ -805,6 +829,352 @@ struct Cdt::Impl {
       if (i == skipA || i == skipB || i == skipC) continue;
       insertVertex(order[i]);
     }
+  }
+
+  // ------------------------------------------------- two-half bulk build
+  // The first bulk of points may be triangulated as two halves on either side
+  // of a vertical line x = xr, each on its own thread, and then merged by
+  // repairing the seam between them:
+  //   * a triangle of DT(left) whose circumcircle lies strictly left of every
+  //     right point is a triangle of DT(all) — "safe" (likewise on the right);
+  //   * every other triangle of DT(all) has its corners among the corners of
+  //     the unsafe triangles (ghosts count as unsafe): the seam set S;
+  //   * so DT(all) = safe left ∪ safe right ∪ the triangles of DT(S) in the
+  //     hole the safe ones leave. DT(S) is built with the hole's border edges
+  //     as constraints (they are Delaunay edges of all the points), which
+  //     keeps the two sides consistent on cocircular input.
+  // The split depends on the points only, never on the thread count, so
+  // neither does the mesh.
+
+  /// x-extent [lo, hi] of the circumcircle of (a, b, c), CCW, widened by a
+  /// bound on its rounding error; false when the triangle is too flat for the
+  /// bound to hold (callers then treat it as unsafe).
+  static bool circleXRange(const Point2& a, const Point2& b, const Point2& c, double& lo,
+                           double& hi) {
+    constexpr double eps = 0x1p-52;
+    const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+    const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+    const double d = 2 * (bx * cy - by * cx);
+    const double dErr = 16 * eps * (std::abs(bx * cy) + std::abs(by * cx));
+    if (!(d > 4 * dErr)) return false;
+    const double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
+    // |error| of each centre coordinate: numerator rounding plus the relative
+    // error of d (at most a third here), with a factor 2 to spare.
+    const double uxErr = 2 * (16 * eps * (std::abs(cy) * b2 + std::abs(by) * c2) / d +
+                              std::abs(ux) * dErr / (d - dErr));
+    const double uyErr = 2 * (16 * eps * (std::abs(bx) * c2 + std::abs(cx) * b2) / d +
+                              std::abs(uy) * dErr / (d - dErr));
+    const double r = std::sqrt(ux * ux + uy * uy);
+    const double slack = uxErr + uxErr + uyErr + 8 * eps * (std::abs(a.x) + std::abs(ux) + r);
+    lo = a.x + ux - r - slack;
+    hi = a.x + ux + r + slack;
+    return std::isfinite(lo) && std::isfinite(hi);
+  }
+
+  /// Per triangle: 1 unless it is certainly Delaunay in the union of the two
+  /// halves, the left one's points having x <= leftMax and the right one's
+  /// x >= rightMin; `leftHalf` says which half this is. Ghosts are unsafe.
+  [[nodiscard]] std::vector<std::uint8_t> unsafeTriangles(bool leftHalf, double leftMax,
+                                                          double rightMin) const {
+    std::vector<std::uint8_t> unsafe(triCount(), 1);
+    for (std::uint32_t t = 0; t < triCount(); ++t) {
+      if (isGhost(t)) continue;
+      double lo = 0, hi = 0;
+      if (!circleXRange(xy[tv[3 * t]], xy[tv[3 * t + 1]], xy[tv[3 * t + 2]], lo, hi)) continue;
+      unsafe[t] = leftHalf ? !(hi < rightMin) : !(lo > leftMax);
+    }
+    return unsafe;
+  }
+
+  /// The x value that splits the pending points `order` into a left part
+  /// (x < split) and a right part (x >= split) of comparable size, with every
+  /// left–right pair farther apart than the snap tolerance (so no merge can
+  /// span the seam). NaN when there is none.
+  [[nodiscard]] double splitValue(const std::vector<std::uint32_t>& order) const {
+    std::vector<double> xs(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) xs[i] = xy[order[i]].x;
+    const std::size_t mid = xs.size() / 2;
+    std::nth_element(xs.begin(), xs.begin() + static_cast<std::ptrdiff_t>(mid), xs.end());
+    const double median = xs[mid];
+    const double tol = options.snapTolerance;
+    if (!(tol > 0)) return median;
+    // The gap wider than tol in x nearest to the median, from the sorted
+    // values around it.
+    for (double window = 64 * tol; window <= 1e6 * tol; window *= 64) {
+      std::vector<double> near;
+      for (double x : xs) {
+        if (std::abs(x - median) <= window) near.push_back(x);
+      }
+      if (near.size() > xs.size() / 4) break;  // too dense around the median
+      std::sort(near.begin(), near.end());
+      double best = std::numeric_limits<double>::quiet_NaN();
+      for (std::size_t i = 0; i + 1 < near.size(); ++i) {
+        if (near[i + 1] - near[i] > tol &&
+            !(std::abs(near[i + 1] - median) >= std::abs(best - median))) {
+          best = near[i + 1];
+        }
+      }
+      if (!std::isnan(best)) return best;
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+
+  /// Triangulates the pending points `order` (first bulk, nothing triangulated
+  /// yet) as two halves and merges them; false, with nothing changed, when
+  /// the points do not split well (then the caller inserts them in one go).
+  bool insertAsTwoHalves(const std::vector<std::uint32_t>& order) {
+    const double split = splitValue(order);
+    if (std::isnan(split)) return false;
+    std::vector<std::uint32_t> leftOrder, rightOrder;
+    leftOrder.reserve(order.size() / 2 + 1);
+    rightOrder.reserve(order.size() / 2 + 1);
+    double leftMax = -INFINITY, rightMin = INFINITY;
+    for (std::uint32_t v : order) {
+      const double x = xy[v].x;
+      if (x < split) {
+        leftOrder.push_back(v);
+        leftMax = std::max(leftMax, x);
+      } else {
+        rightOrder.push_back(v);
+        rightMin = std::min(rightMin, x);
+      }
+    }
+    std::size_t ib = 0, ic = 0;
+    if (leftOrder.size() < order.size() / 8 || rightOrder.size() < order.size() / 8 ||
+        !findFirstTriangle(leftOrder, ib, ic) || !findFirstTriangle(rightOrder, ib, ic)) {
+      return false;
+    }
+
+    // The right half in an Impl of its own, its vertices numbered in input
+    // order (so that merge ties still go to the earlier input).
+    std::vector<std::uint32_t> rightGlobal(rightOrder);
+    std::sort(rightGlobal.begin(), rightGlobal.end());
+    std::vector<std::uint32_t> localOf(xy.size(), kNone);
+    for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) localOf[rightGlobal[j]] = j;
+    for (std::uint32_t& v : rightOrder) v = localOf[v];
+    Impl right;
+    right.options.snapTolerance = options.snapTolerance;
+    right.options.splitMinPoints = 0;
+    right.features = features;
+    right.xy.resize(rightGlobal.size());
+    right.z.resize(rightGlobal.size());
+    right.vfeat.resize(rightGlobal.size());
+    for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
+      right.xy[j] = xy[rightGlobal[j]];
+      right.z[j] = z[rightGlobal[j]];
+      right.vfeat[j] = vfeat[rightGlobal[j]];
+    }
+    right.rep.assign(rightGlobal.size(), kNone);
+    right.insertedUpTo = rightGlobal.size();
+    right.reserveTriangles(rightOrder.size() * 2 + 4);
+
+    std::exception_ptr rightError;
+    auto buildRight = [&] {
+      try {
+        right.insertInOrder(rightOrder);
+      } catch (...) {
+        rightError = std::current_exception();
+      }
+    };
+    if (threadCount() >= 2) {
+      std::thread worker(buildRight);
+      try {
+        insertInOrder(leftOrder);
+      } catch (...) {
+        worker.join();
+        throw;
+      }
+      worker.join();
+    } else {
+      insertInOrder(leftOrder);
+      buildRight();
+    }
+    if (rightError) std::rethrow_exception(rightError);
+    std::vector<std::uint32_t>().swap(leftOrder);
+    std::vector<std::uint32_t>().swap(rightOrder);
+
+    // The right half's merges, in global ids.
+    for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
+      const std::uint32_t g = rightGlobal[j];
+      rep[g] = rightGlobal[right.rep[j]];
+      z[g] = right.z[j];
+      vfeat[g] = right.vfeat[j];
+    }
+    for (const auto& [keep, from] : right.zSource) zSource[rightGlobal[keep]] = rightGlobal[from];
+    for (CdtReport::Merge mg : right.report.merges) {
+      mg.kept = VertexId(rightGlobal[mg.kept.value]);
+      mg.merged = VertexId(rightGlobal[mg.merged.value]);
+      report.merges.push_back(mg);
+    }
+
+    mergeHalves(right, rightGlobal, leftMax, rightMin, localOf);
+    return true;
+  }
+
+  /// A border edge between a safe triangle and the hole: u→v (global ids) has
+  /// the hole on its left; `safe` is the twin half-edge in the safe triangle
+  /// (in this Impl for the left half, in `right` for the right half).
+  struct SeamBorder {
+    std::uint32_t u, v, safe;
+    bool rightHalf;
+  };
+
+  /// Replaces this Impl's triangles (the left half, global ids) by the union
+  /// of the safe triangles of both halves and the triangles of DT(S) that
+  /// fill the hole between them. `right` has the right half in local ids
+  /// (rightGlobal maps them); `scratch` is a vertex-sized buffer.
+  void mergeHalves(const Impl& right, const std::vector<std::uint32_t>& rightGlobal,
+                   double leftMax, double rightMin, std::vector<std::uint32_t>& scratch) {
+    std::vector<std::uint8_t> unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
+    std::vector<std::uint8_t> unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
+
+    // The seam set S (corners of unsafe triangles), numbered in input order,
+    // and the border edges of the hole.
+    std::vector<std::uint32_t>& seamOf = scratch;
+    std::fill(seamOf.begin(), seamOf.end(), kNone);
+    std::vector<std::uint32_t> seamGlobal;
+    std::vector<SeamBorder> borders;
+    auto collect = [&](const std::vector<std::uint32_t>& corners,
+                       const std::vector<std::uint32_t>& twins,
+                       const std::vector<std::uint8_t>& unsafe, bool rightHalf) {
+      for (std::uint32_t t = 0; t < unsafe.size(); ++t) {
+        if (!unsafe[t]) continue;
+        for (std::uint32_t i = 0; i < 3; ++i) {
+          std::uint32_t v = corners[3 * t + i];
+          if (v == kInf) continue;
+          if (rightHalf) v = rightGlobal[v];
+          if (seamOf[v] == kNone) {
+            seamOf[v] = 0;
+            seamGlobal.push_back(v);
+          }
+          const std::uint32_t h = 3 * t + i, g = twins[h];
+          if (!unsafe[g / 3]) {
+            std::uint32_t w = corners[nxt(h)];
+            if (rightHalf) w = rightGlobal[w];
+            borders.push_back({v, w, g, rightHalf});
+          }
+        }
+      }
+    };
+    collect(tv, opp, unsafeLeft, false);
+    collect(right.tv, right.opp, unsafeRight, true);
+    std::sort(seamGlobal.begin(), seamGlobal.end());
+    for (std::uint32_t j = 0; j < seamGlobal.size(); ++j) seamOf[seamGlobal[j]] = j;
+
+    // DT(S) with the border edges as constraints.
+    Impl seam;
+    seam.options.splitMinPoints = 0;
+    seam.xy.reserve(seamGlobal.size());
+    for (std::uint32_t g : seamGlobal) seam.xy.push_back(xy[g]);
+    seam.z.assign(seamGlobal.size(), 0.0);
+    seam.vfeat.assign(seamGlobal.size(), kNoFeature);
+    seam.rep.assign(seamGlobal.size(), kNone);
+    for (const SeamBorder& b : borders) {
+      seam.segments.push_back({seamOf[b.u], seamOf[b.v], kNoFeature, Role::None});
+    }
+    seam.insertPendingPoints();
+    seam.insertPendingSegments();
+    if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
+        !seam.report.dropped.empty()) {
+      throw internalError("the seam between the two halves changed its input");
+    }
+
+    // The hole: DT(S) triangles reachable from the border without crossing it.
+    // (With no safe triangle at all, DT(S) is the whole triangulation.)
+    std::vector<std::uint8_t> inHole(seam.triCount(), borders.empty() ? 1 : 0);
+    std::vector<std::uint32_t> seamHalfedge(borders.size());
+    std::vector<std::uint32_t> todo;
+    for (std::size_t k = 0; k < borders.size(); ++k) {
+      const std::uint32_t h = seam.findHalfedge(seamOf[borders[k].u], seamOf[borders[k].v]);
+      if (h == kNone) throw internalError("a seam border edge is missing");
+      seamHalfedge[k] = h;
+      if (!inHole[h / 3]) {
+        inHole[h / 3] = 1;
+        todo.push_back(h / 3);
+      }
+    }
+    while (!todo.empty()) {
+      const std::uint32_t t = todo.back();
+      todo.pop_back();
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        if (seam.cons[3 * t + i]) continue;
+        const std::uint32_t n = seam.opp[3 * t + i] / 3;
+        if (!inHole[n]) {
+          inHole[n] = 1;
+          todo.push_back(n);
+        }
+      }
+    }
+    for (std::uint32_t h : seamHalfedge) {
+      if (inHole[seam.opp[h] / 3]) throw internalError("the seam hole is not closed");
+    }
+
+    // New slots: freed left slots first, then appended.
+    std::vector<std::uint32_t> freeSlots;
+    for (std::uint32_t t = 0; t < unsafeLeft.size(); ++t) {
+      if (unsafeLeft[t]) {
+        freeSlots.push_back(t);
+        tv[3 * t] = kNone;
+      }
+    }
+    std::size_t used = 0;
+    auto takeSlot = [&] { return used < freeSlots.size() ? freeSlots[used++] : newTriangle(); };
+    std::vector<std::uint32_t> rightSlot(right.triCount(), kNone);
+    for (std::uint32_t t = 0; t < right.triCount(); ++t) {
+      if (!unsafeRight[t]) rightSlot[t] = takeSlot();
+    }
+    std::vector<std::uint32_t> seamSlot(seam.triCount(), kNone);
+    for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
+      if (inHole[t]) seamSlot[t] = takeSlot();
+    }
+    // Copies the kept triangles of another Impl; their twins outside the kept
+    // set are linked through the borders below.
+    auto copyKept = [&](const Impl& from, const std::vector<std::uint32_t>& slot,
+                        const std::vector<std::uint32_t>& global) {
+      for (std::uint32_t t = 0; t < slot.size(); ++t) {
+        if (slot[t] == kNone) continue;
+        for (std::uint32_t i = 0; i < 3; ++i) {
+          const std::uint32_t h = 3 * t + i, out = 3 * slot[t] + i;
+          const std::uint32_t v = from.tv[h], g = from.opp[h];
+          tv[out] = v == kInf ? kInf : global[v];
+          cons[out] = 0;
+          opp[out] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+        }
+      }
+    };
+    copyKept(right, rightSlot, rightGlobal);
+    copyKept(seam, seamSlot, seamGlobal);
+    for (std::size_t k = 0; k < borders.size(); ++k) {
+      const SeamBorder& b = borders[k];
+      const std::uint32_t h = seamHalfedge[k];
+      const std::uint32_t safe = b.rightHalf ? 3 * rightSlot[b.safe / 3] + b.safe % 3 : b.safe;
+      link(safe, 3 * seamSlot[h / 3] + h % 3);
+    }
+
+    // Close the gaps the unused freed slots left: the last triangles move in.
+    std::uint32_t end = triCount();
+    for (std::size_t k = used; k < freeSlots.size(); ++k) {
+      const std::uint32_t f = freeSlots[k];
+      while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
+      if (f >= end) break;
+      const std::uint32_t t = --end;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        tv[3 * f + i] = tv[3 * t + i];
+        cons[3 * f + i] = cons[3 * t + i];
+        link(3 * f + i, opp[3 * t + i]);
+      }
+      tv[3 * t] = kNone;
+    }
+    while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
+    tv.resize(3 * static_cast<std::size_t>(end));
+    opp.resize(3 * static_cast<std::size_t>(end));
+    cons.resize(3 * static_cast<std::size_t>(end));
+    for (std::uint32_t h = 0; h < opp.size(); ++h) {
+      if (opp[h] >= opp.size() || opp[opp[h]] != h || tv[h] == kNone) {
+        throw internalError("merging the two halves left a broken triangle");
+      }
+    }
+    lastTriangle = 0;
   }
 
   // --------------------------------------------------------- constraints

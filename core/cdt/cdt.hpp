@@ -68,6 +68,12 @@ struct CdtOptions {
   /// points); 0 = std::thread::hardware_concurrency(). The result is identical
   /// for every value.
   unsigned threads = 1;
+  /// The first bulk of at least this many points is triangulated as two
+  /// halves, left and right of a vertical line (concurrently when threads >=
+  /// 2), which are then merged along the seam; 0 = always in one go. With
+  /// cocircular input the mesh may depend on this value (any choice is
+  /// Delaunay); it never depends on `threads`.
+  std::size_t splitMinPoints = 50000;
 };
 
 /// What the CDT changed in its input, so callers can report it.

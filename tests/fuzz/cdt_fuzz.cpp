@@ -46,6 +46,8 @@ int runOne(const std::uint8_t* data, std::size_t size) {
   const double offset = in.PickValueInArray({0.0, 7000000.0, 500000.25});
   tinsmith::CdtOptions options;
   options.snapTolerance = in.PickValueInArray({0.0, 0.0, 0.0005 * scale, 1.5 * scale});
+  // Small thresholds send the first bulk through the two-half build.
+  options.splitMinPoints = in.PickValueInArray<std::size_t>({0, 6, 24, 50000});
   tinsmith::Cdt cdt(options);
   std::vector<tinsmith::FeatureId> features;
   for (int k = 0; k < 6; ++k) {
