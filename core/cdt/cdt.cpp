@@ -874,14 +874,35 @@ struct Cdt::Impl {
   /// Per triangle: 1 unless it is certainly Delaunay in the union of the two
   /// halves, the left one's points having x <= leftMax and the right one's
   /// x >= rightMin; `leftHalf` says which half this is. Ghosts are unsafe.
+  /// Only triangles connected to a ghost through unsafe ones are tested: the
+  /// triangles in conflict with any one point of the other half (outside this
+  /// half's hull) form a connected set holding a ghost, so the unsafe set is
+  /// connected too, and a triangle never reached is safe.
   [[nodiscard]] std::vector<std::uint8_t> unsafeTriangles(bool leftHalf, double leftMax,
                                                           double rightMin) const {
-    std::vector<std::uint8_t> unsafe(triCount(), 1);
+    std::vector<std::uint8_t> unsafe(triCount(), 0);
+    std::vector<std::uint8_t> tested(triCount(), 0);
+    std::vector<std::uint32_t> todo;
     for (std::uint32_t t = 0; t < triCount(); ++t) {
-      if (isGhost(t)) continue;
-      double lo = 0, hi = 0;
-      if (!circleXRange(xy[tv[3 * t]], xy[tv[3 * t + 1]], xy[tv[3 * t + 2]], lo, hi)) continue;
-      unsafe[t] = leftHalf ? !(hi < rightMin) : !(lo > leftMax);
+      if (isGhost(t)) {
+        unsafe[t] = tested[t] = 1;
+        todo.push_back(t);
+      }
+    }
+    while (!todo.empty()) {
+      const std::uint32_t t = todo.back();
+      todo.pop_back();
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t n = opp[3 * t + i] / 3;
+        if (tested[n]) continue;
+        tested[n] = 1;
+        double lo = 0, hi = 0;
+        const bool known = circleXRange(xy[tv[3 * n]], xy[tv[3 * n + 1]], xy[tv[3 * n + 2]], lo, hi);
+        if (!known || (leftHalf ? !(hi < rightMin) : !(lo > leftMax))) {
+          unsafe[n] = 1;
+          todo.push_back(n);
+        }
+      }
     }
     return unsafe;
   }
@@ -947,10 +968,15 @@ struct Cdt::Impl {
 
     // The right half in an Impl of its own, its vertices numbered in input
     // order (so that merge ties still go to the earlier input).
-    std::vector<std::uint32_t> rightGlobal(rightOrder);
-    std::sort(rightGlobal.begin(), rightGlobal.end());
     std::vector<std::uint32_t> localOf(xy.size(), kNone);
-    for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) localOf[rightGlobal[j]] = j;
+    for (std::uint32_t v : rightOrder) localOf[v] = 0;
+    std::vector<std::uint32_t> rightGlobal;
+    rightGlobal.reserve(rightOrder.size());
+    for (std::uint32_t g = 0; g < localOf.size(); ++g) {
+      if (localOf[g] == kNone) continue;
+      localOf[g] = static_cast<std::uint32_t>(rightGlobal.size());
+      rightGlobal.push_back(g);
+    }
     for (std::uint32_t& v : rightOrder) v = localOf[v];
     Impl right;
     right.options.snapTolerance = options.snapTolerance;
@@ -968,25 +994,32 @@ struct Cdt::Impl {
     right.insertedUpTo = rightGlobal.size();
     right.reserveTriangles(rightOrder.size() * 2 + 4);
 
+    // Each half is triangulated and classified on its own thread.
+    std::vector<std::uint8_t> unsafeLeft, unsafeRight;
     std::exception_ptr rightError;
     auto buildRight = [&] {
       try {
         right.insertInOrder(rightOrder);
+        unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
       } catch (...) {
         rightError = std::current_exception();
       }
     };
+    auto buildLeft = [&] {
+      insertInOrder(leftOrder);
+      unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
+    };
     if (threadCount() >= 2) {
       std::thread worker(buildRight);
       try {
-        insertInOrder(leftOrder);
+        buildLeft();
       } catch (...) {
         worker.join();
         throw;
       }
       worker.join();
     } else {
-      insertInOrder(leftOrder);
+      buildLeft();
       buildRight();
     }
     if (rightError) std::rethrow_exception(rightError);
@@ -1007,7 +1040,7 @@ struct Cdt::Impl {
       report.merges.push_back(mg);
     }
 
-    mergeHalves(right, rightGlobal, leftMax, rightMin, localOf);
+    mergeHalves(right, rightGlobal, unsafeLeft, unsafeRight, localOf);
     return true;
   }
 
@@ -1022,12 +1055,12 @@ struct Cdt::Impl {
   /// Replaces this Impl's triangles (the left half, global ids) by the union
   /// of the safe triangles of both halves and the triangles of DT(S) that
   /// fill the hole between them. `right` has the right half in local ids
-  /// (rightGlobal maps them); `scratch` is a vertex-sized buffer.
+  /// (rightGlobal maps them); unsafeLeft/unsafeRight flag each half's
+  /// triangles (unsafeTriangles()); `scratch` is a vertex-sized buffer.
   void mergeHalves(const Impl& right, const std::vector<std::uint32_t>& rightGlobal,
-                   double leftMax, double rightMin, std::vector<std::uint32_t>& scratch) {
-    std::vector<std::uint8_t> unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
-    std::vector<std::uint8_t> unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
-
+                   const std::vector<std::uint8_t>& unsafeLeft,
+                   const std::vector<std::uint8_t>& unsafeRight,
+                   std::vector<std::uint32_t>& scratch) {
     // The seam set S (corners of unsafe triangles), numbered in input order,
     // and the border edges of the hole.
     std::vector<std::uint32_t>& seamOf = scratch;
@@ -1118,7 +1151,8 @@ struct Cdt::Impl {
       }
     }
     std::size_t used = 0;
-    auto takeSlot = [&] { return used < freeSlots.size() ? freeSlots[used++] : newTriangle(); };
+    std::uint32_t appended = triCount();
+    auto takeSlot = [&] { return used < freeSlots.size() ? freeSlots[used++] : appended++; };
     std::vector<std::uint32_t> rightSlot(right.triCount(), kNone);
     for (std::uint32_t t = 0; t < right.triCount(); ++t) {
       if (!unsafeRight[t]) rightSlot[t] = takeSlot();
@@ -1127,14 +1161,18 @@ struct Cdt::Impl {
     for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
       if (inHole[t]) seamSlot[t] = takeSlot();
     }
-    // Copies the kept triangles of another Impl; their twins outside the kept
-    // set are linked through the borders below.
+    tv.resize(3 * static_cast<std::size_t>(appended));
+    opp.resize(3 * static_cast<std::size_t>(appended));
+    cons.resize(3 * static_cast<std::size_t>(appended));
+    // Copies the kept triangles [begin, end) of another Impl; their twins
+    // outside the kept set are linked through the borders below.
     auto copyKept = [&](const Impl& from, const std::vector<std::uint32_t>& slot,
-                        const std::vector<std::uint32_t>& global) {
-      for (std::uint32_t t = 0; t < slot.size(); ++t) {
+                        const std::vector<std::uint32_t>& global, std::size_t begin,
+                        std::size_t end) {
+      for (std::size_t t = begin; t < end; ++t) {
         if (slot[t] == kNone) continue;
         for (std::uint32_t i = 0; i < 3; ++i) {
-          const std::uint32_t h = 3 * t + i, out = 3 * slot[t] + i;
+          const std::size_t h = 3 * t + i, out = 3 * static_cast<std::size_t>(slot[t]) + i;
           const std::uint32_t v = from.tv[h], g = from.opp[h];
           tv[out] = v == kInf ? kInf : global[v];
           cons[out] = 0;
@@ -1142,13 +1180,24 @@ struct Cdt::Impl {
         }
       }
     };
-    copyKept(right, rightSlot, rightGlobal);
-    copyKept(seam, seamSlot, seamGlobal);
+    parallelChunks(threadCount(), right.triCount(), [&](unsigned, std::size_t b, std::size_t e) {
+      copyKept(right, rightSlot, rightGlobal, b, e);
+    });
+    copyKept(seam, seamSlot, seamGlobal, 0, seam.triCount());
     for (std::size_t k = 0; k < borders.size(); ++k) {
       const SeamBorder& b = borders[k];
       const std::uint32_t h = seamHalfedge[k];
       const std::uint32_t safe = b.rightHalf ? 3 * rightSlot[b.safe / 3] + b.safe % 3 : b.safe;
       link(safe, 3 * seamSlot[h / 3] + h % 3);
+    }
+    for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
+      if (seamSlot[t] == kNone) continue;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t h = 3 * seamSlot[t] + i;
+        if (opp[h] >= opp.size() || opp[opp[h]] != h) {
+          throw internalError("merging the two halves left a broken triangle");
+        }
+      }
     }
 
     // Close the gaps the unused freed slots left: the last triangles move in.
@@ -1169,11 +1218,6 @@ struct Cdt::Impl {
     tv.resize(3 * static_cast<std::size_t>(end));
     opp.resize(3 * static_cast<std::size_t>(end));
     cons.resize(3 * static_cast<std::size_t>(end));
-    for (std::uint32_t h = 0; h < opp.size(); ++h) {
-      if (opp[h] >= opp.size() || opp[opp[h]] != h || tv[h] == kNone) {
-        throw internalError("merging the two halves left a broken triangle");
-      }
-    }
     lastTriangle = 0;
   }
 
