@@ -1256,17 +1256,20 @@ struct Cdt::Impl {
     return z[u] + t * (z[w] - z[u]);
   }
 
-  int edgePriority(std::uint32_t u, std::uint32_t w, FeatureId* best) const {
-    int pr = -1;
-    *best = kNoFeature;
+  /// Does feature f win a crossing or an edge against g? Higher
+  /// constraintPriority() first, then the earlier registered feature.
+  bool outranks(FeatureId f, FeatureId g) const {
+    const int pf = priorityOf(features, f), pg = priorityOf(features, g);
+    return pf > pg || (pf == pg && f < g);
+  }
+
+  /// The highest-ranking (outranks()) feature of the constrained edge u–w.
+  FeatureId edgeWinner(std::uint32_t u, std::uint32_t w) const {
+    FeatureId best = kNoFeature;
     for (FeatureId f : edgeFeatures.find(edgeKey(u, w))) {
-      const int p = priorityOf(features, f);
-      if (p > pr || *best == kNoFeature) {
-        pr = std::max(pr, p);
-        *best = f;
-      }
+      if (best == kNoFeature || outranks(f, best)) best = f;
     }
-    return pr;
+    return best;
   }
 
   /// Radius within which a constructed (rounded) point is taken to be an
@@ -1285,9 +1288,8 @@ struct Cdt::Impl {
                                FeatureId f) {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     const Point2 X = geometry::intersectionPoint(xy[cur], xy[tgt], xy[R], xy[L]);
-    FeatureId existing;
-    const int pe = edgePriority(R, L, &existing);
-    const int pi = priorityOf(features, f);
+    const FeatureId existing = edgeWinner(R, L);
+    const bool insertedWins = outranks(f, existing);
     const double zE = zAlong(R, L, X), zI = zAlong(cur, tgt, X);
 
     auto dist2 = [&](std::uint32_t v) {
@@ -1327,8 +1329,8 @@ struct Cdt::Impl {
     } else {
       v = static_cast<std::uint32_t>(xy.size());
       xy.push_back(X);
-      z.push_back(pi > pe ? zI : zE);
-      vfeat.push_back(pi > pe ? f : existing);
+      z.push_back(insertedWins ? zI : zE);
+      vfeat.push_back(insertedWins ? f : existing);
       rep.push_back(v);
       vhe.push_back(kNone);
       insertedUpTo = xy.size();
@@ -1543,17 +1545,46 @@ struct Cdt::Impl {
     lop(todo);
   }
 
+  /// Inserts the pending segments in the Hilbert order of their midpoints, so
+  /// that consecutive ones work on the same part of the mesh (and of memory).
+  /// Nothing but rounding depends on this order: crossing ties are decided by
+  /// feature (outranks()), not by which segment came first.
   void insertPendingSegments() {
-    if (segmentsDone < segments.size()) startTrackingVhe();
-    for (; segmentsDone < segments.size(); ++segmentsDone) {
-      const Segment s = segments[segmentsDone];
-      const std::uint32_t a = find(s.a), b = find(s.b);
+    if (segmentsDone >= segments.size()) return;
+    startTrackingVhe();
+    const std::size_t count = segments.size() - segmentsDone;
+    double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+    std::vector<Point2> mid(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const Segment& sg = segments[segmentsDone + k];
+      const Point2 &p = xy[sg.a], &q = xy[sg.b];
+      mid[k] = {0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
+      minX = std::min(minX, mid[k].x);
+      maxX = std::max(maxX, mid[k].x);
+      minY = std::min(minY, mid[k].y);
+      maxY = std::max(maxY, mid[k].y);
+    }
+    constexpr double kGrid = 8191.0;
+    const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
+    const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
+    std::vector<std::uint64_t> keys(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (mid[k].x - minX) * sx));
+      const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (mid[k].y - minY) * sy));
+      keys[k] = (static_cast<std::uint64_t>(hilbertIndex13(gx, gy)) << 32) | k;
+    }
+    std::vector<Point2>().swap(mid);
+    radixSortHigh32(keys, threadCount());
+    for (const std::uint64_t key : keys) {
+      const Segment sg = segments[segmentsDone + (key & 0xffffffffu)];
+      const std::uint32_t a = find(sg.a), b = find(sg.b);
       if (a == b) {
-        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, s.feature, xy[a]});
+        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
         continue;
       }
-      insertSegment(a, b, s.feature);
+      insertSegment(a, b, sg.feature);
     }
+    segmentsDone = segments.size();
   }
 
   bool isDomainEdge(std::uint32_t h) const {

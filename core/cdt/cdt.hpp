@@ -22,8 +22,9 @@
 //   * a constraint through existing vertices is split at them; collinear
 //     overlapping constraints share edges (the edge records every feature);
 //   * crossing constraints are split at their intersection; the new vertex's z
-//     is interpolated along the higher-priority feature (ties: the earlier
-//     inserted one); the event is recorded;
+//     is interpolated along the higher-priority feature (ties: the feature
+//     registered first); the event is recorded. Segments go in in the Hilbert
+//     order of their midpoints, whatever their input order;
 //   * zero-length segments (after merging) are dropped and recorded.
 //
 // Usage:
