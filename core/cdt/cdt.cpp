@@ -145,6 +145,17 @@ class EdgeFeatureMap {
     e.list = static_cast<std::uint32_t>(lists_.size() - 1);
   }
   void erase(std::uint64_t key) { map_.erase(key); }
+  /// Calls f(key, features) for every edge.
+  template <class F>
+  void forEach(const F& f) const {
+    for (const auto& [key, e] : map_) {
+      if (e.list == kNoList) {
+        f(key, View{&e.single, 1});
+      } else {
+        f(key, View{lists_[e.list].data(), lists_[e.list].size()});
+      }
+    }
+  }
   /// The edge `from` was split into `a` and `b`: both inherit its features.
   void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
     auto it = map_.find(from);
@@ -978,7 +989,20 @@ struct Cdt::Impl {
       rightGlobal.push_back(g);
     }
     for (std::uint32_t& v : rightOrder) v = localOf[v];
+    // Segments with both ends on one side go in with that half (a segment
+    // lies on the side of its ends); the rest after the merge.
+    std::vector<std::uint32_t> leftSegments, rightSegments, seamSegments;
+    for (auto k = static_cast<std::uint32_t>(segmentsDone); k < segments.size(); ++k) {
+      const bool leftA = xy[segments[k].a].x < split, leftB = xy[segments[k].b].x < split;
+      (leftA && leftB ? leftSegments : !leftA && !leftB ? rightSegments : seamSegments).push_back(k);
+    }
     Impl right;
+    for (std::uint32_t k : rightSegments) {
+      Segment sg = segments[k];
+      sg.a = localOf[sg.a];
+      sg.b = localOf[sg.b];
+      right.segments.push_back(sg);
+    }
     right.options.snapTolerance = options.snapTolerance;
     right.options.splitMinPoints = 0;
     right.features = features;
@@ -1000,6 +1024,7 @@ struct Cdt::Impl {
     auto buildRight = [&] {
       try {
         right.insertInOrder(rightOrder);
+        right.insertPendingSegments();
         unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
       } catch (...) {
         rightError = std::current_exception();
@@ -1007,6 +1032,7 @@ struct Cdt::Impl {
     };
     auto buildLeft = [&] {
       insertInOrder(leftOrder);
+      insertSegments(leftSegments);
       unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
     };
     if (threadCount() >= 2) {
@@ -1026,7 +1052,16 @@ struct Cdt::Impl {
     std::vector<std::uint32_t>().swap(leftOrder);
     std::vector<std::uint32_t>().swap(rightOrder);
 
-    // The right half's merges, in global ids.
+    // The right half's vertices (its crossings get new global ids), merges,
+    // crossings and constrained edges, in global ids.
+    for (std::size_t j = rightGlobal.size(); j < right.xy.size(); ++j) {
+      rightGlobal.push_back(static_cast<std::uint32_t>(xy.size()));
+      xy.push_back(right.xy[j]);
+      z.push_back(0);
+      vfeat.push_back(kNoFeature);
+      rep.push_back(kNone);
+    }
+    insertedUpTo = xy.size();
     for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
       const std::uint32_t g = rightGlobal[j];
       rep[g] = rightGlobal[right.rep[j]];
@@ -1039,8 +1074,23 @@ struct Cdt::Impl {
       mg.merged = VertexId(rightGlobal[mg.merged.value]);
       report.merges.push_back(mg);
     }
+    for (CdtReport::Intersection ev : right.report.intersections) {
+      ev.vertex = VertexId(rightGlobal[ev.vertex.value]);
+      report.intersections.push_back(ev);
+    }
+    report.dropped.insert(report.dropped.end(), right.report.dropped.begin(),
+                          right.report.dropped.end());
+    right.edgeFeatures.forEach([&](std::uint64_t key, EdgeFeatureMap::View fs) {
+      const std::uint64_t global = edgeKey(rightGlobal[key >> 32], rightGlobal[key & 0xffffffffu]);
+      for (FeatureId f : fs) edgeFeatures.add(global, f);
+    });
+    if (localOf.size() < xy.size()) localOf.resize(xy.size());
 
     mergeHalves(right, rightGlobal, unsafeLeft, unsafeRight, localOf);
+    // Vertex half-edges are recomputed when next needed.
+    trackVhe = false;
+    insertSegments(seamSegments);
+    segmentsDone = segments.size();
     return true;
   }
 
@@ -1067,8 +1117,10 @@ struct Cdt::Impl {
     std::fill(seamOf.begin(), seamOf.end(), kNone);
     std::vector<std::uint32_t> seamGlobal;
     std::vector<SeamBorder> borders;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> inner;  // constrained edges in the hole
     auto collect = [&](const std::vector<std::uint32_t>& corners,
                        const std::vector<std::uint32_t>& twins,
+                       const std::vector<std::uint8_t>& constrained,
                        const std::vector<std::uint8_t>& unsafe, bool rightHalf) {
       for (std::uint32_t t = 0; t < unsafe.size(); ++t) {
         if (!unsafe[t]) continue;
@@ -1081,30 +1133,35 @@ struct Cdt::Impl {
             seamGlobal.push_back(v);
           }
           const std::uint32_t h = 3 * t + i, g = twins[h];
+          std::uint32_t w = corners[nxt(h)];
+          if (rightHalf && w != kInf) w = rightGlobal[w];
           if (!unsafe[g / 3]) {
-            std::uint32_t w = corners[nxt(h)];
-            if (rightHalf) w = rightGlobal[w];
             borders.push_back({v, w, g, rightHalf});
+          } else if (constrained[h] && h < g) {
+            inner.emplace_back(v, w);
           }
         }
       }
     };
-    collect(tv, opp, unsafeLeft, false);
-    collect(right.tv, right.opp, unsafeRight, true);
+    collect(tv, opp, cons, unsafeLeft, false);
+    collect(right.tv, right.opp, right.cons, unsafeRight, true);
     std::sort(seamGlobal.begin(), seamGlobal.end());
     for (std::uint32_t j = 0; j < seamGlobal.size(); ++j) seamOf[seamGlobal[j]] = j;
 
-    // DT(S) with the border edges as constraints.
+    // DT(S) with the border edges (feature 0) and the constrained edges in the
+    // hole (feature 1) as constraints.
     Impl seam;
     seam.options.splitMinPoints = 0;
+    seam.features = {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}};
     seam.xy.reserve(seamGlobal.size());
     for (std::uint32_t g : seamGlobal) seam.xy.push_back(xy[g]);
     seam.z.assign(seamGlobal.size(), 0.0);
     seam.vfeat.assign(seamGlobal.size(), kNoFeature);
     seam.rep.assign(seamGlobal.size(), kNone);
     for (const SeamBorder& b : borders) {
-      seam.segments.push_back({seamOf[b.u], seamOf[b.v], kNoFeature, Role::None});
+      seam.segments.push_back({seamOf[b.u], seamOf[b.v], 0, Role::None});
     }
+    for (const auto& [u, w] : inner) seam.segments.push_back({seamOf[u], seamOf[w], 1, Role::None});
     seam.insertPendingPoints();
     seam.insertPendingSegments();
     if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
@@ -1130,8 +1187,12 @@ struct Cdt::Impl {
       const std::uint32_t t = todo.back();
       todo.pop_back();
       for (std::uint32_t i = 0; i < 3; ++i) {
-        if (seam.cons[3 * t + i]) continue;
-        const std::uint32_t n = seam.opp[3 * t + i] / 3;
+        const std::uint32_t h = 3 * t + i;
+        if (seam.cons[h]) {
+          const auto fs = seam.edgeFeatures.find(edgeKey(seam.tv[h], seam.tv[nxt(h)]));
+          if (std::find(fs.begin(), fs.end(), FeatureId{0}) != fs.end()) continue;  // border
+        }
+        const std::uint32_t n = seam.opp[h] / 3;
         if (!inHole[n]) {
           inHole[n] = 1;
           todo.push_back(n);
@@ -1165,25 +1226,33 @@ struct Cdt::Impl {
     opp.resize(3 * static_cast<std::size_t>(appended));
     cons.resize(3 * static_cast<std::size_t>(appended));
     // Copies the kept triangles [begin, end) of another Impl; their twins
-    // outside the kept set are linked through the borders below.
+    // outside the kept set are linked through the borders below. Constrained
+    // flags come with the right half's triangles; for the seam's they are
+    // looked up (its border edges are constraints only there).
     auto copyKept = [&](const Impl& from, const std::vector<std::uint32_t>& slot,
-                        const std::vector<std::uint32_t>& global, std::size_t begin,
-                        std::size_t end) {
+                        const std::vector<std::uint32_t>& global, bool lookUpConstraints,
+                        std::size_t begin, std::size_t end) {
       for (std::size_t t = begin; t < end; ++t) {
         if (slot[t] == kNone) continue;
+        const std::size_t base = 3 * static_cast<std::size_t>(slot[t]);
         for (std::uint32_t i = 0; i < 3; ++i) {
-          const std::size_t h = 3 * t + i, out = 3 * static_cast<std::size_t>(slot[t]) + i;
+          const std::size_t h = 3 * t + i;
           const std::uint32_t v = from.tv[h], g = from.opp[h];
-          tv[out] = v == kInf ? kInf : global[v];
-          cons[out] = 0;
-          opp[out] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+          tv[base + i] = v == kInf ? kInf : global[v];
+          cons[base + i] = from.cons[h];
+          opp[base + i] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+        }
+        if (!lookUpConstraints) continue;
+        for (std::uint32_t i = 0; i < 3; ++i) {
+          const std::uint32_t u = tv[base + i], w = tv[base + (i + 1) % 3];
+          cons[base + i] = u != kInf && w != kInf && !edgeFeatures.find(edgeKey(u, w)).empty();
         }
       }
     };
     parallelChunks(threadCount(), right.triCount(), [&](unsigned, std::size_t b, std::size_t e) {
-      copyKept(right, rightSlot, rightGlobal, b, e);
+      copyKept(right, rightSlot, rightGlobal, false, b, e);
     });
-    copyKept(seam, seamSlot, seamGlobal, 0, seam.triCount());
+    copyKept(seam, seamSlot, seamGlobal, true, 0, seam.triCount());
     for (std::size_t k = 0; k < borders.size(); ++k) {
       const SeamBorder& b = borders[k];
       const std::uint32_t h = seamHalfedge[k];
@@ -1545,18 +1614,28 @@ struct Cdt::Impl {
     lop(todo);
   }
 
-  /// Inserts the pending segments in the Hilbert order of their midpoints, so
-  /// that consecutive ones work on the same part of the mesh (and of memory).
-  /// Nothing but rounding depends on this order: crossing ties are decided by
-  /// feature (outranks()), not by which segment came first.
   void insertPendingSegments() {
     if (segmentsDone >= segments.size()) return;
+    std::vector<std::uint32_t> pending(segments.size() - segmentsDone);
+    for (std::size_t k = 0; k < pending.size(); ++k) {
+      pending[k] = static_cast<std::uint32_t>(segmentsDone + k);
+    }
+    insertSegments(pending);
+    segmentsDone = segments.size();
+  }
+
+  /// Inserts segments[k] for every k in `which`, in the Hilbert order of
+  /// their midpoints, so that consecutive ones work on the same part of the
+  /// mesh (and of memory). Nothing but rounding depends on this order:
+  /// crossing ties are decided by feature (outranks()), not by which segment
+  /// came first.
+  void insertSegments(const std::vector<std::uint32_t>& which) {
+    if (which.empty()) return;
     startTrackingVhe();
-    const std::size_t count = segments.size() - segmentsDone;
     double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    std::vector<Point2> mid(count);
-    for (std::size_t k = 0; k < count; ++k) {
-      const Segment& sg = segments[segmentsDone + k];
+    std::vector<Point2> mid(which.size());
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      const Segment& sg = segments[which[k]];
       const Point2 &p = xy[sg.a], &q = xy[sg.b];
       mid[k] = {0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
       minX = std::min(minX, mid[k].x);
@@ -1567,16 +1646,16 @@ struct Cdt::Impl {
     constexpr double kGrid = 8191.0;
     const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
     const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
-    std::vector<std::uint64_t> keys(count);
-    for (std::size_t k = 0; k < count; ++k) {
+    std::vector<std::uint64_t> keys(which.size());
+    for (std::size_t k = 0; k < which.size(); ++k) {
       const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (mid[k].x - minX) * sx));
       const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (mid[k].y - minY) * sy));
-      keys[k] = (static_cast<std::uint64_t>(hilbertIndex13(gx, gy)) << 32) | k;
+      keys[k] = (static_cast<std::uint64_t>(hilbertIndex13(gx, gy)) << 32) | which[k];
     }
     std::vector<Point2>().swap(mid);
     radixSortHigh32(keys, threadCount());
     for (const std::uint64_t key : keys) {
-      const Segment sg = segments[segmentsDone + (key & 0xffffffffu)];
+      const Segment sg = segments[key & 0xffffffffu];
       const std::uint32_t a = find(sg.a), b = find(sg.b);
       if (a == b) {
         report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
@@ -1584,7 +1663,6 @@ struct Cdt::Impl {
       }
       insertSegment(a, b, sg.feature);
     }
-    segmentsDone = segments.size();
   }
 
   bool isDomainEdge(std::uint32_t h) const {

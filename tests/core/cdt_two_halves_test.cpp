@@ -152,16 +152,75 @@ TEST(CdtTwoHalves, DuplicatesAndSnapMergesAreKept) {
   EXPECT_EQ(zs(halves.tin), zs(whole.tin));
 }
 
-TEST(CdtTwoHalves, ConstraintsGoInAfterTheMerge) {
+TEST(CdtTwoHalves, ConstraintsOnEachSideAndAcrossTheSeam) {
+  // Disjoint segments (horizontal, at distinct heights): some left, some
+  // right, some across the split line. The CDT is unique.
   const std::vector<Point3> pts = randomPoints(kSanitized ? 3000 : 10000, 13, 0, 1000);
   std::vector<std::vector<Point3>> lines;
   std::mt19937_64 rng(17);
-  std::uniform_real_distribution<double> d(0, 1000);
-  for (int i = 0; i < 60; ++i) lines.push_back({{d(rng), d(rng), 5}, {d(rng), d(rng), 6}});
-  lines.push_back({{500, 0, 1}, {500, 1000, 1}});  // along the seam
+  std::uniform_real_distribution<double> d(0, 1000), len(5, 300);
+  for (int i = 0; i < 120; ++i) {
+    const double x = d(rng), y = 2.0 + 8.0 * i;
+    lines.push_back({{x, y, 5}, {std::min(999.0, x + len(rng)), y, 6}});
+  }
+  lines.push_back({{500, 1.0, 1}, {500, 999.0, 1}});  // along the seam
   const Built whole = build(pts, 0, 1, 0.0, lines);
   const Built halves = build(pts, kSplit, 1, 0.0, lines);
   EXPECT_EQ(canonical(whole.tin), canonical(halves.tin));
+  EXPECT_EQ(whole.tin.constrainedEdges.size(), halves.tin.constrainedEdges.size());
+}
+
+TEST(CdtTwoHalves, CrossingConstraintsOnEachSideAndAcrossTheSeam) {
+  // Crossings are computed in another order than in one go, so rounded
+  // crossing points may differ in the last bits: compare what is counted.
+  const std::vector<Point3> pts = randomPoints(kSanitized ? 3000 : 10000, 13, 0, 1000);
+  std::vector<std::vector<Point3>> lines;
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> d(0, 1000), len(-150, 150);
+  for (int i = 0; i < 200; ++i) {
+    const double x = d(rng), y = d(rng);
+    lines.push_back({{x, y, 5}, {std::clamp(x + len(rng), 0.0, 1000.0),
+                                 std::clamp(y + len(rng), 0.0, 1000.0), 6}});
+  }
+  CdtOptions options;
+  options.splitMinPoints = kSplit;
+  auto crossings = [&](std::size_t splitMin) {
+    options.splitMinPoints = splitMin;
+    Cdt cdt(options);
+    const FeatureId road = cdt.addFeature(FeatureKind::Road, "roads");
+    cdt.insertPoints(pts);
+    for (const auto& line : lines) cdt.insertConstraint(line, road);
+    cdt.finalize();
+    EXPECT_TRUE(isValid(cdt));
+    return std::make_pair(cdt.report().intersections.size(), cdt.mesh().triangleCount());
+  };
+  const auto whole = crossings(0), halves = crossings(kSplit);
+  EXPECT_GT(whole.first, 100u);
+  EXPECT_EQ(whole, halves);
+}
+
+TEST(CdtTwoHalves, BoundaryAndHoleRings) {
+  // The boundary ring crosses the split line; one hole is left of it, one
+  // straddles it: the domain is classified after the merge.
+  const std::vector<Point3> pts = randomPoints(kSanitized ? 3000 : 10000, 29, 0, 1000);
+  auto run = [&](std::size_t splitMin) {
+    CdtOptions options;
+    options.splitMinPoints = splitMin;
+    Cdt cdt(options);
+    const FeatureId edge = cdt.addFeature(FeatureKind::Boundary, "edge");
+    const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+    cdt.insertPoints(pts);
+    cdt.addBoundary(std::vector<Point3>{{20, 30, 0}, {980, 10, 0}, {960, 990, 0}, {40, 950, 0}},
+                    edge);
+    cdt.addHole(std::vector<Point3>{{100, 100, 0}, {300, 120, 0}, {200, 300, 0}}, lake);
+    cdt.addHole(std::vector<Point3>{{450, 600, 0}, {560, 610, 0}, {500, 700, 0}}, lake);
+    cdt.finalize();
+    EXPECT_TRUE(isValid(cdt));
+    return cdt.toTinData();
+  };
+  const TinData whole = run(0), halves = run(kSplit);
+  EXPECT_EQ(canonical(whole), canonical(halves));
+  EXPECT_EQ(whole.constrainedEdges.size(), halves.constrainedEdges.size());
 }
 
 TEST(CdtTwoHalves, SameMeshForAnyThreadCount) {
@@ -169,11 +228,16 @@ TEST(CdtTwoHalves, SameMeshForAnyThreadCount) {
   for (int j = 0; j < 40; ++j) {
     for (int i = 0; i < 40; ++i) pts.push_back({400.0 + 5 * i, 300.0 + 5 * j, 1});
   }
-  const Built one = build(pts, kSplit, 1);
+  std::vector<std::vector<Point3>> lines;
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> d(0, 1000);
+  for (int i = 0; i < 80; ++i) lines.push_back({{d(rng), d(rng), 5}, {d(rng), d(rng), 6}});
+  const Built one = build(pts, kSplit, 1, 0.0, lines);
   for (const unsigned threads : {2u, 0u}) {
-    const Built many = build(pts, kSplit, threads);
+    const Built many = build(pts, kSplit, threads, 0.0, lines);
     EXPECT_EQ(one.tin.vertices, many.tin.vertices) << threads;
     EXPECT_EQ(one.tin.triangles, many.tin.triangles) << threads;
+    EXPECT_EQ(one.tin.constrainedEdges, many.tin.constrainedEdges) << threads;
   }
 }
 
