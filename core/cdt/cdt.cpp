@@ -807,10 +807,11 @@ struct Cdt::Impl {
     if (order.empty()) return;
 
     if (!triangulated()) {
-      // 2 triangles per point, plus room for a few constraint intersections
-      // per pending segment (each adds 2 triangles) so that the arrays rarely
-      // grow (a doubling would briefly hold both copies).
-      reserveTriangles(order.size() * 2 + 4 + 8 * (segments.size() - segmentsDone));
+      // 2 triangles per point, plus room for 16 constraint intersections per
+      // pending segment (each adds 2 triangles) so that the arrays rarely
+      // grow: a doubling would briefly hold both copies, while capacity never
+      // used costs address space only (the pages are never touched).
+      reserveTriangles(order.size() * 2 + 4 + kTrianglesPerSegment * (segments.size() - segmentsDone));
       if (options.splitMinPoints > 0 && order.size() >= options.splitMinPoints &&
           insertAsTwoHalves(order)) {
         return;
@@ -819,6 +820,7 @@ struct Cdt::Impl {
     insertInOrder(order);
   }
 
+  static constexpr std::size_t kTrianglesPerSegment = 32;
   void reserveTriangles(std::size_t triangles) {
     tv.reserve(3 * triangles);
     opp.reserve(3 * triangles);
@@ -952,9 +954,10 @@ struct Cdt::Impl {
   }
 
   /// Triangulates the pending points `order` (first bulk, nothing triangulated
-  /// yet) as two halves and merges them; false, with nothing changed, when
-  /// the points do not split well (then the caller inserts them in one go).
-  bool insertAsTwoHalves(const std::vector<std::uint32_t>& order) {
+  /// yet) as two halves and merges them, emptying `order`; false, with
+  /// nothing changed, when the points do not split well (then the caller
+  /// inserts them in one go).
+  bool insertAsTwoHalves(std::vector<std::uint32_t>& order) {
     const double split = splitValue(order);
     if (std::isnan(split)) return false;
     std::vector<std::uint32_t> leftOrder, rightOrder;
@@ -976,6 +979,7 @@ struct Cdt::Impl {
         !findFirstTriangle(leftOrder, ib, ic) || !findFirstTriangle(rightOrder, ib, ic)) {
       return false;
     }
+    std::vector<std::uint32_t>().swap(order);
 
     // The right half in an Impl of its own, its vertices numbered in input
     // order (so that merge ties still go to the earlier input).
@@ -1003,6 +1007,7 @@ struct Cdt::Impl {
       sg.b = localOf[sg.b];
       right.segments.push_back(sg);
     }
+    std::vector<std::uint32_t>().swap(localOf);
     right.options.snapTolerance = options.snapTolerance;
     right.options.splitMinPoints = 0;
     right.features = features;
@@ -1016,7 +1021,7 @@ struct Cdt::Impl {
     }
     right.rep.assign(rightGlobal.size(), kNone);
     right.insertedUpTo = rightGlobal.size();
-    right.reserveTriangles(rightOrder.size() * 2 + 4);
+    right.reserveTriangles(rightOrder.size() * 2 + 4 + kTrianglesPerSegment * rightSegments.size());
 
     // Each half is triangulated and classified on its own thread.
     std::vector<std::uint8_t> unsafeLeft, unsafeRight;
@@ -1084,9 +1089,16 @@ struct Cdt::Impl {
       const std::uint64_t global = edgeKey(rightGlobal[key >> 32], rightGlobal[key & 0xffffffffu]);
       for (FeatureId f : fs) edgeFeatures.add(global, f);
     });
-    if (localOf.size() < xy.size()) localOf.resize(xy.size());
+    // Only the right half's triangles are needed from here on.
+    std::vector<Point2>().swap(right.xy);
+    std::vector<double>().swap(right.z);
+    std::vector<FeatureId>().swap(right.vfeat);
+    std::vector<std::uint32_t>().swap(right.rep);
+    std::vector<std::uint32_t>().swap(right.vhe);
+    right.edgeFeatures = EdgeFeatureMap();
+    right.report = CdtReport();
 
-    mergeHalves(right, rightGlobal, unsafeLeft, unsafeRight, localOf);
+    mergeHalves(right, rightGlobal, unsafeLeft, unsafeRight);
     // Vertex half-edges are recomputed when next needed.
     trackVhe = false;
     insertSegments(seamSegments);
@@ -1106,15 +1118,14 @@ struct Cdt::Impl {
   /// of the safe triangles of both halves and the triangles of DT(S) that
   /// fill the hole between them. `right` has the right half in local ids
   /// (rightGlobal maps them); unsafeLeft/unsafeRight flag each half's
-  /// triangles (unsafeTriangles()); `scratch` is a vertex-sized buffer.
-  void mergeHalves(const Impl& right, const std::vector<std::uint32_t>& rightGlobal,
+  /// triangles (unsafeTriangles()). Frees right's triangle arrays as it
+  /// copies them.
+  void mergeHalves(Impl& right, const std::vector<std::uint32_t>& rightGlobal,
                    const std::vector<std::uint8_t>& unsafeLeft,
-                   const std::vector<std::uint8_t>& unsafeRight,
-                   std::vector<std::uint32_t>& scratch) {
+                   const std::vector<std::uint8_t>& unsafeRight) {
     // The seam set S (corners of unsafe triangles), numbered in input order,
     // and the border edges of the hole.
-    std::vector<std::uint32_t>& seamOf = scratch;
-    std::fill(seamOf.begin(), seamOf.end(), kNone);
+    std::unordered_map<std::uint32_t, std::uint32_t> seamOf;
     std::vector<std::uint32_t> seamGlobal;
     std::vector<SeamBorder> borders;
     std::vector<std::pair<std::uint32_t, std::uint32_t>> inner;  // constrained edges in the hole
@@ -1128,10 +1139,7 @@ struct Cdt::Impl {
           std::uint32_t v = corners[3 * t + i];
           if (v == kInf) continue;
           if (rightHalf) v = rightGlobal[v];
-          if (seamOf[v] == kNone) {
-            seamOf[v] = 0;
-            seamGlobal.push_back(v);
-          }
+          if (seamOf.try_emplace(v, 0).second) seamGlobal.push_back(v);
           const std::uint32_t h = 3 * t + i, g = twins[h];
           std::uint32_t w = corners[nxt(h)];
           if (rightHalf && w != kInf) w = rightGlobal[w];
@@ -1222,47 +1230,58 @@ struct Cdt::Impl {
     for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
       if (inHole[t]) seamSlot[t] = takeSlot();
     }
-    tv.resize(3 * static_cast<std::size_t>(appended));
-    opp.resize(3 * static_cast<std::size_t>(appended));
-    cons.resize(3 * static_cast<std::size_t>(appended));
-    // Copies the kept triangles [begin, end) of another Impl; their twins
-    // outside the kept set are linked through the borders below. Constrained
-    // flags come with the right half's triangles; for the seam's they are
-    // looked up (its border edges are constraints only there).
-    auto copyKept = [&](const Impl& from, const std::vector<std::uint32_t>& slot,
-                        const std::vector<std::uint32_t>& global, bool lookUpConstraints,
-                        std::size_t begin, std::size_t end) {
-      for (std::size_t t = begin; t < end; ++t) {
-        if (slot[t] == kNone) continue;
-        const std::size_t base = 3 * static_cast<std::size_t>(slot[t]);
-        for (std::uint32_t i = 0; i < 3; ++i) {
-          const std::size_t h = 3 * t + i;
-          const std::uint32_t v = from.tv[h], g = from.opp[h];
-          tv[base + i] = v == kInf ? kInf : global[v];
-          cons[base + i] = from.cons[h];
-          opp[base + i] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
-        }
-        if (!lookUpConstraints) continue;
-        for (std::uint32_t i = 0; i < 3; ++i) {
-          const std::uint32_t u = tv[base + i], w = tv[base + (i + 1) % 3];
-          cons[base + i] = u != kInf && w != kInf && !edgeFeatures.find(edgeKey(u, w)).empty();
-        }
-      }
+    // Copies the kept triangles of another Impl array by array, freeing each
+    // source array once copied (two full copies of the right half's arrays
+    // never coexist); twins outside the kept set are linked through the
+    // borders below.
+    const std::size_t size = 3 * static_cast<std::size_t>(appended);
+    auto copyKept = [&](Impl& from, const std::vector<std::uint32_t>& slot,
+                        const std::vector<std::uint32_t>& global) {
+      auto each = [&](const auto& f) {
+        parallelChunks(threadCount(), slot.size(), [&](unsigned, std::size_t b, std::size_t e) {
+          for (std::size_t t = b; t < e; ++t) {
+            if (slot[t] == kNone) continue;
+            for (std::uint32_t i = 0; i < 3; ++i) f(3 * t + i, 3 * std::size_t{slot[t]} + i);
+          }
+        });
+      };
+      tv.resize(size);
+      each([&](std::size_t h, std::size_t out) {
+        const std::uint32_t v = from.tv[h];
+        tv[out] = v == kInf ? kInf : global[v];
+      });
+      std::vector<std::uint32_t>().swap(from.tv);
+      opp.resize(size);
+      each([&](std::size_t h, std::size_t out) {
+        const std::uint32_t g = from.opp[h];
+        opp[out] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+      });
+      std::vector<std::uint32_t>().swap(from.opp);
+      cons.resize(size);
+      each([&](std::size_t h, std::size_t out) { cons[out] = from.cons[h]; });
+      std::vector<std::uint8_t>().swap(from.cons);
     };
-    parallelChunks(threadCount(), right.triCount(), [&](unsigned, std::size_t b, std::size_t e) {
-      copyKept(right, rightSlot, rightGlobal, false, b, e);
-    });
-    copyKept(seam, seamSlot, seamGlobal, true, 0, seam.triCount());
+    copyKept(right, rightSlot, rightGlobal);
+    copyKept(seam, seamSlot, seamGlobal);
+    // The seam's constraints include the hole's border: take the flags from
+    // the real constrained edges instead.
+    for (const std::uint32_t t : seamSlot) {
+      if (t == kNone) continue;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t u = tv[3 * t + i], w = tv[3 * t + (i + 1) % 3];
+        cons[3 * t + i] = u != kInf && w != kInf && !edgeFeatures.find(edgeKey(u, w)).empty();
+      }
+    }
     for (std::size_t k = 0; k < borders.size(); ++k) {
       const SeamBorder& b = borders[k];
       const std::uint32_t h = seamHalfedge[k];
       const std::uint32_t safe = b.rightHalf ? 3 * rightSlot[b.safe / 3] + b.safe % 3 : b.safe;
       link(safe, 3 * seamSlot[h / 3] + h % 3);
     }
-    for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
-      if (seamSlot[t] == kNone) continue;
+    for (const std::uint32_t t : seamSlot) {
+      if (t == kNone) continue;
       for (std::uint32_t i = 0; i < 3; ++i) {
-        const std::uint32_t h = 3 * seamSlot[t] + i;
+        const std::uint32_t h = 3 * t + i;
         if (opp[h] >= opp.size() || opp[opp[h]] != h) {
           throw internalError("merging the two halves left a broken triangle");
         }

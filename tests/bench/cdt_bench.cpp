@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/allocator.hpp"
 #include "core/cdt/cdt.hpp"
 
 #ifdef TINSMITH_BENCH_CGAL
@@ -205,6 +206,7 @@ Result measure(const std::string& kind, std::size_t n, Run run, bool check) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tinsmith::returnLargeBlocksToSystem();  // as the tinsmith binary does; CGAL runs with it too
   int reps = 3;
   bool smoke = false;
   std::string only;
