@@ -1413,6 +1413,7 @@ struct Cdt::Impl {
     std::uint32_t v;
     if (useExisting) {
       v = nearest;
+      ev.moved = std::sqrt(dist2(v));
       if (v == c || v == d) detourConstraint(e, v);
     } else {
       v = static_cast<std::uint32_t>(xy.size());
@@ -2052,11 +2053,16 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
     // A crossing moved to a vertex beyond the tolerance is reported (forced);
     // it bends both features' constraints, and later crossings may split the
     // bent edges, so their segments are checked for connectivity only.
+    // Crossings snapped to a vertex bend both constraints by the distance
+    // moved, and a later crossing on the bent piece may snap again: a
+    // feature's chain may stray by the sum of its crossings' moves.
     std::vector<std::uint8_t> bent(m.features.size(), 0);
+    std::vector<double> moved(m.features.size(), 0.0);
     for (const auto& ev : m.report.intersections) {
-      if (!ev.forced) continue;
       for (const FeatureId g : {ev.existing, ev.inserted}) {
-        if (g < bent.size()) bent[g] = 1;
+        if (g >= bent.size()) continue;
+        if (ev.forced) bent[g] = 1;
+        moved[g] += ev.moved;
       }
     }
     for (const Segment& s : m.segments) {
@@ -2072,7 +2078,8 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       const double dx = Q.x - P.x, dy = Q.y - P.y, len2 = dx * dx + dy * dy;
       const double len = std::sqrt(len2);
       const double tol = std::max({2 * m.options.snapTolerance, 16 * Impl::constructionTolerance(P),
-                                   16 * Impl::constructionTolerance(Q), 1e-6 * len});
+                                   16 * Impl::constructionTolerance(Q), 1e-6 * len}) +
+                         moved[s.feature];
       auto near = [&](std::uint32_t v) {
         const Point2 w = me.xy(VertexId(v));
         const double along = ((w.x - P.x) * dx + (w.y - P.y) * dy) / len;

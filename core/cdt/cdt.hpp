@@ -97,6 +97,10 @@ struct CdtReport {
     /// triangles beside it, farther than the snap tolerance: the constraints
     /// bend through `at`.
     bool forced = false;
+    /// How far the vertex used lies from the computed crossing (0 for a new
+    /// vertex; up to the snap tolerance when snapped; more when forced). Both
+    /// constraints bend by this much; bends add up along a constraint.
+    double moved = 0;
   };
   struct Dropped {
     enum class What { ZeroLengthSegment, PointOutsideDomain };

@@ -1,6 +1,9 @@
 // Fuzz target: bytes → a PSLG. Coordinates come from a small integer lattice
 // (so collinear, cocircular, duplicate and overlapping input is common), scaled
 // and offset to UTM-sized values, some nudged by a few ulps.
+// tests/fuzz/seeds keeps inputs that once failed (named for what they showed);
+// tools/test.sh runs them before the fuzzing proper. CDT_FUZZ_VERBOSE=1
+// prints a run's operations.
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <cmath>
