@@ -62,6 +62,42 @@ std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
   return d;
 }
 
+/// A bounding box that grows by points and boxes.
+struct Box {
+  double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+  void add(const Point2& p) {
+    minX = std::min(minX, p.x);
+    maxX = std::max(maxX, p.x);
+    minY = std::min(minY, p.y);
+    maxY = std::max(maxY, p.y);
+  }
+  void add(const Box& b) {
+    minX = std::min(minX, b.minX);
+    maxX = std::max(maxX, b.maxX);
+    minY = std::min(minY, b.minY);
+    maxY = std::max(maxY, b.maxY);
+  }
+};
+
+/// Hilbert index (hilbertIndex13) of points on a 2^13 grid over a box.
+class HilbertGrid {
+ public:
+  explicit HilbertGrid(const Box& box)
+      : box_(box),
+        sx_(box.maxX > box.minX ? kGrid / (box.maxX - box.minX) : 0.0),
+        sy_(box.maxY > box.minY ? kGrid / (box.maxY - box.minY) : 0.0) {}
+  [[nodiscard]] std::uint32_t operator()(const Point2& p) const {
+    const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (p.x - box_.minX) * sx_));
+    const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (p.y - box_.minY) * sy_));
+    return hilbertIndex13(gx, gy);
+  }
+
+ private:
+  static constexpr double kGrid = 8191.0;
+  Box box_;
+  double sx_, sy_;
+};
+
 /// Runs f(chunk, begin, end) over [0, n) split into `threads` contiguous
 /// chunks (chunk k on its own thread; chunk 0 on the caller's). Chunk bounds
 /// depend only on n and threads.
@@ -738,37 +774,21 @@ struct Cdt::Impl {
     if (insertedUpTo >= n) return;
     const unsigned threads = threadCount();
     const std::size_t count = n - insertedUpTo;
-    struct Box {
-      double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    };
     std::vector<Box> boxes(threads);
     parallelChunks(threads, count, [&](unsigned k, std::size_t b, std::size_t e) {
-      Box bx;
       for (std::size_t i = insertedUpTo + b; i < insertedUpTo + e; ++i) {
-        if (rep[i] != kNone) continue;
-        bx.minX = std::min(bx.minX, xy[i].x);
-        bx.maxX = std::max(bx.maxX, xy[i].x);
-        bx.minY = std::min(bx.minY, xy[i].y);
-        bx.maxY = std::max(bx.maxY, xy[i].y);
+        if (rep[i] == kNone) boxes[k].add(xy[i]);
       }
-      boxes[k] = bx;
     });
-    double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    for (const Box& bx : boxes) {
-      minX = std::min(minX, bx.minX);
-      maxX = std::max(maxX, bx.maxX);
-      minY = std::min(minY, bx.minY);
-      maxY = std::max(maxY, bx.maxY);
-    }
+    Box box;
+    for (const Box& bx : boxes) box.add(bx);
     // BRIO (biased randomized insertion order): point i goes to round k with
     // probability 2^-(k+1) (from a fixed hash of i, so deterministic); rounds
     // go in from the smallest, each in Hilbert order on a 2^13 grid over the
     // bounding box (ties keep input order). Random rounds keep the number of
     // flips per insertion near the random-order expectation; the Hilbert order
     // keeps walks short.
-    constexpr double kGrid = 8191.0;
-    const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
-    const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
+    const HilbertGrid hilbert(box);
     std::uint32_t rounds = 0;
     while (rounds < 20 && (std::size_t{1000} << rounds) < count) ++rounds;
     // Points already placed (merged during an earlier finalize) get the key
@@ -782,15 +802,13 @@ struct Cdt::Impl {
           keys[j] = kSkip | i;
           continue;
         }
-        const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
-        const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
         std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
         h ^= h >> 31;
         h *= 0xBF58476D1CE4E5B9ull;
         h ^= h >> 29;
         const auto round = static_cast<std::uint32_t>(std::min<int>(
             std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
-        const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
+        const std::uint32_t key = ((rounds - round) << 26) | hilbert(xy[i]);
         keys[j] = (static_cast<std::uint64_t>(key) << 32) | i;
       }
     });
@@ -1652,25 +1670,18 @@ struct Cdt::Impl {
   void insertSegments(const std::vector<std::uint32_t>& which) {
     if (which.empty()) return;
     startTrackingVhe();
-    double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
     std::vector<Point2> mid(which.size());
+    Box box;
     for (std::size_t k = 0; k < which.size(); ++k) {
       const Segment& sg = segments[which[k]];
       const Point2 &p = xy[sg.a], &q = xy[sg.b];
       mid[k] = {0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
-      minX = std::min(minX, mid[k].x);
-      maxX = std::max(maxX, mid[k].x);
-      minY = std::min(minY, mid[k].y);
-      maxY = std::max(maxY, mid[k].y);
+      box.add(mid[k]);
     }
-    constexpr double kGrid = 8191.0;
-    const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
-    const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
+    const HilbertGrid hilbert(box);
     std::vector<std::uint64_t> keys(which.size());
     for (std::size_t k = 0; k < which.size(); ++k) {
-      const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (mid[k].x - minX) * sx));
-      const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (mid[k].y - minY) * sy));
-      keys[k] = (static_cast<std::uint64_t>(hilbertIndex13(gx, gy)) << 32) | which[k];
+      keys[k] = (static_cast<std::uint64_t>(hilbert(mid[k])) << 32) | which[k];
     }
     std::vector<Point2>().swap(mid);
     radixSortHigh32(keys, threadCount());
