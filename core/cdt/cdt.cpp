@@ -1662,37 +1662,47 @@ struct Cdt::Impl {
     segmentsDone = segments.size();
   }
 
-  /// Inserts segments[k] for every k in `which`, in the Hilbert order of
-  /// their midpoints, so that consecutive ones work on the same part of the
-  /// mesh (and of memory). Nothing but rounding depends on this order:
-  /// crossing ties are decided by feature (outranks()), not by which segment
-  /// came first.
+  /// Inserts segments[k] for every k in `which` (ascending), in runs of up to
+  /// 64 consecutive segments of one polyline (each starting where the last
+  /// ended), the runs in the Hilbert order of their first midpoints: each
+  /// segment starts next to the last one, and consecutive runs work on the
+  /// same part of the mesh (and of memory). Nothing but rounding depends on
+  /// this order: crossing ties are decided by feature (outranks()), not by
+  /// which segment came first.
   void insertSegments(const std::vector<std::uint32_t>& which) {
     if (which.empty()) return;
     startTrackingVhe();
-    std::vector<Point2> mid(which.size());
+    std::vector<std::uint32_t> runStart;  // positions in `which`
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      const bool continues = k > 0 && k - runStart.back() < 64 &&
+                             segments[which[k]].a == segments[which[k - 1]].b;
+      if (!continues) runStart.push_back(static_cast<std::uint32_t>(k));
+    }
+    auto midpoint = [&](std::uint32_t k) {
+      const Point2 &p = xy[segments[which[k]].a], &q = xy[segments[which[k]].b];
+      return Point2{0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
+    };
     Box box;
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      const Segment& sg = segments[which[k]];
-      const Point2 &p = xy[sg.a], &q = xy[sg.b];
-      mid[k] = {0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
-      box.add(mid[k]);
-    }
+    for (const std::uint32_t k : runStart) box.add(midpoint(k));
     const HilbertGrid hilbert(box);
-    std::vector<std::uint64_t> keys(which.size());
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      keys[k] = (static_cast<std::uint64_t>(hilbert(mid[k])) << 32) | which[k];
+    std::vector<std::uint64_t> keys(runStart.size());
+    for (std::size_t r = 0; r < runStart.size(); ++r) {
+      keys[r] = (static_cast<std::uint64_t>(hilbert(midpoint(runStart[r]))) << 32) | r;
     }
-    std::vector<Point2>().swap(mid);
     radixSortHigh32(keys, threadCount());
     for (const std::uint64_t key : keys) {
-      const Segment sg = segments[key & 0xffffffffu];
-      const std::uint32_t a = find(sg.a), b = find(sg.b);
-      if (a == b) {
-        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
-        continue;
+      const std::size_t r = key & 0xffffffffu;
+      const std::size_t end = r + 1 < runStart.size() ? runStart[r + 1] : which.size();
+      for (std::size_t k = runStart[r]; k < end; ++k) {
+        const Segment sg = segments[which[k]];
+        const std::uint32_t a = find(sg.a), b = find(sg.b);
+        if (a == b) {
+          report.dropped.push_back(
+              {CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
+          continue;
+        }
+        insertSegment(a, b, sg.feature);
       }
-      insertSegment(a, b, sg.feature);
     }
   }
 
