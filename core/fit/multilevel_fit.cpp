@@ -206,21 +206,49 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     throw inputError("there are " + std::to_string(options.weights.size()) + " weights for " +
                      std::to_string(input.size()) + " points", {}, "give one weight per point or none");
   }
-  double xmin = std::numeric_limits<double>::infinity(), ymin = xmin, zmin = xmin;
-  double xmax = -xmin, ymax = -xmin, zmax = -xmin;
-  for (std::size_t i = 0; i < input.size(); ++i) {
-    const auto& p = input[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      throw inputError("data point " + std::to_string(i) + " has a non-finite coordinate", {},
-                       "remove NaN or infinite values from the input");
+  const int threads = options.threads > 0 ? options.threads
+                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  // Extent and validity, per part (workers never throw: the first bad point
+  // is reported after they are done).
+  struct Extent {
+    double xmin = std::numeric_limits<double>::infinity(), ymin = xmin, zmin = xmin;
+    double xmax = -xmin, ymax = -xmin, zmax = -xmin;
+    std::size_t badPoint = std::numeric_limits<std::size_t>::max(), badWeight = badPoint;
+  };
+  std::vector<Extent> extents(kParts);
+  forEachPart(input.size(), threads, [&](std::size_t b, std::size_t e, int worker) {
+    Extent ex;
+    for (std::size_t i = b; i < e; ++i) {
+      const auto& p = input[i];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        ex.badPoint = std::min(ex.badPoint, i);
+        continue;
+      }
+      if (!options.weights.empty() && !(options.weights[i] > 0.0 && std::isfinite(options.weights[i]))) {
+        ex.badWeight = std::min(ex.badWeight, i);
+      }
+      ex.xmin = std::min(ex.xmin, p.x), ex.xmax = std::max(ex.xmax, p.x);
+      ex.ymin = std::min(ex.ymin, p.y), ex.ymax = std::max(ex.ymax, p.y);
+      ex.zmin = std::min(ex.zmin, p.z), ex.zmax = std::max(ex.zmax, p.z);
     }
-    if (!options.weights.empty() && !(options.weights[i] > 0.0 && std::isfinite(options.weights[i]))) {
-      throw inputError("data point " + std::to_string(i) + " has a weight that is not positive and finite");
-    }
-    xmin = std::min(xmin, p.x), xmax = std::max(xmax, p.x);
-    ymin = std::min(ymin, p.y), ymax = std::max(ymax, p.y);
-    zmin = std::min(zmin, p.z), zmax = std::max(zmax, p.z);
+    extents[static_cast<std::size_t>(worker)] = ex;
+  });
+  Extent all;
+  for (const auto& ex : extents) {
+    all.xmin = std::min(all.xmin, ex.xmin), all.xmax = std::max(all.xmax, ex.xmax);
+    all.ymin = std::min(all.ymin, ex.ymin), all.ymax = std::max(all.ymax, ex.ymax);
+    all.zmin = std::min(all.zmin, ex.zmin), all.zmax = std::max(all.zmax, ex.zmax);
+    all.badPoint = std::min(all.badPoint, ex.badPoint);
+    all.badWeight = std::min(all.badWeight, ex.badWeight);
   }
+  if (all.badPoint <= all.badWeight && all.badPoint != std::numeric_limits<std::size_t>::max()) {
+    throw inputError("data point " + std::to_string(all.badPoint) + " has a non-finite coordinate", {},
+                     "remove NaN or infinite values from the input");
+  }
+  if (all.badWeight != std::numeric_limits<std::size_t>::max()) {
+    throw inputError("data point " + std::to_string(all.badWeight) + " has a weight that is not positive and finite");
+  }
+  const double xmin = all.xmin, ymin = all.ymin, zmin = all.zmin, xmax = all.xmax, ymax = all.ymax, zmax = all.zmax;
   Point2 origin{xmin, ymin};
   double size = std::max(xmax - xmin, ymax - ymin);
   if (options.domainOrigin) origin = *options.domainOrigin;
@@ -231,8 +259,6 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   const int gridLevels = options.maxLevel + 1;
   BinaryTriangulation mesh(origin, size, gridLevels);
   const std::uint64_t side = mesh.side();
-  const int threads = options.threads > 0 ? options.threads
-                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 
   // Sort the data along the Morton curve of the finest grid.
   auto fineCell = [&](const Point2& g) {
@@ -250,13 +276,20 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
     const double sideD = static_cast<double>(side);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Point2 g = mesh.toGrid(input[i].xy());
-      if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
-        throw inputError("data point " + std::to_string(i) + " is outside the square domain", {},
-                         "choose a domain that covers every data point");
+    std::vector<std::size_t> outside(kParts, std::numeric_limits<std::size_t>::max());
+    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+      for (std::size_t i = b; i < e; ++i) {
+        const Point2 g = mesh.toGrid(input[i].xy());
+        if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
+          outside[static_cast<std::size_t>(worker)] = std::min(outside[static_cast<std::size_t>(worker)], i);
+        }
+        order[i] = {fineCell(g), static_cast<std::uint32_t>(i)};
       }
-      order[i] = {fineCell(g), static_cast<std::uint32_t>(i)};
+    });
+    const std::size_t firstOutside = *std::min_element(outside.begin(), outside.end());
+    if (firstOutside != std::numeric_limits<std::size_t>::max()) {
+      throw inputError("data point " + std::to_string(firstOutside) + " is outside the square domain", {},
+                       "choose a domain that covers every data point");
     }
     radixSortByCode(order, 2 * gridLevels);
     // Split the pairs before permuting the points (lower peak memory).
@@ -268,7 +301,9 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     }
     order = {};
     pts.resize(n);
-    for (std::size_t i = 0; i < n; ++i) pts[i] = input[permutation[i]];
+    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int) {
+      for (std::size_t i = b; i < e; ++i) pts[i] = input[permutation[i]];
+    });
     if (!options.weights.empty()) {
       weights.resize(n);
       for (std::size_t i = 0; i < n; ++i) weights[i] = options.weights[permutation[i]];
