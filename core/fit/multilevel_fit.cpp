@@ -319,11 +319,14 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
 
   // Constraints (8.9): snapped to the finest grid, active from the start.
   std::vector<std::pair<std::uint64_t, double>> fixedKeys;
-  for (const auto& f : options.fixed) {
+  for (std::size_t index = 0; index < options.fixed.size(); ++index) {
+    const Point3& f = options.fixed[index];
     const Point2 g = mesh.toGrid(f.xy());
     const double sideD = static_cast<double>(side);
-    if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
-      throw inputError("fixed vertex (" + std::to_string(f.x) + ", " + std::to_string(f.y) + ") is outside the domain");
+    if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD) || !std::isfinite(f.z)) {
+      throw inputError("fixed point " + std::to_string(index) + " (" + std::to_string(f.x) + ", " + std::to_string(f.y) +
+                           ", " + std::to_string(f.z) + ") is outside the square domain or not finite",
+                       {}, "fixed points must lie inside the data's bounding square (or the given domain)");
     }
     const std::uint64_t k = mesh.key(static_cast<std::uint64_t>(std::llround(g.x)), static_cast<std::uint64_t>(std::llround(g.y)));
     mesh.activate(k);
