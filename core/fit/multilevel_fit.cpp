@@ -299,7 +299,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       codes[i] = order[i].first;
       permutation[i] = order[i].second;
     }
-    order = {};
+    std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(order);  // frees (assigning {} keeps the capacity)
     pts.resize(n);
     forEachPart(n, threads, [&](std::size_t b, std::size_t e, int) {
       for (std::size_t i = b; i < e; ++i) pts[i] = input[permutation[i]];
@@ -414,6 +414,20 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
         fresh[remap[t]] = 0;
       }
     }
+    // Barycentric coordinates in triangle (v0, v1, v2) as an affine map of
+    // p − v0: b1 = m[0]·dx + m[1]·dy, b2 = m[2]·dx + m[3]·dy, b0 = 1 − b1 − b2.
+    struct Affine {
+      double x0, y0;
+      std::array<double, 4> m;
+    };
+    std::vector<Affine> affine(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const Triangle& tv = triVerts[t];
+      const Point2 &p0 = positions[tv[0]], &p1 = positions[tv[1]], &p2 = positions[tv[2]];
+      const double ax = p1.x - p0.x, ay = p1.y - p0.y, bx = p2.x - p0.x, by = p2.y - p0.y;
+      const double det = ax * by - bx * ay;
+      affine[t] = {p0.x, p0.y, {by / det, -bx / det, -ay / det, ax / det}};
+    }
     {
       std::vector<std::vector<TriangleMoments>> partMoments(kParts);
       forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
@@ -432,8 +446,10 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
           }
           const auto t = static_cast<std::uint32_t>(-1 - node);
           triOf[i] = t;
-          const Triangle& tv = triVerts[t];
-          const auto bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
+          const Affine& af = affine[t];
+          const double dx = pts[i].x - af.x0, dy = pts[i].y - af.y0;
+          const double b1 = af.m[0] * dx + af.m[1] * dy, b2 = af.m[2] * dx + af.m[3] * dy;
+          const std::array<double, 3> bc{1.0 - b1 - b2, b1, b2};
           if (mine.empty()) mine.assign(tris.size(), TriangleMoments{});
           mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
         }
@@ -464,7 +480,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       a = std::move(eq.btb);
       rhs = std::move(eq.btz);
     }
-    moments = {};
+    std::vector<TriangleMoments>().swap(moments);
     applyFixedVertices(a, rhs, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
     const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);
