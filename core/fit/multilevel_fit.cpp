@@ -346,7 +346,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   const bool useError = crit.errorAbsolute.has_value() || crit.errorPercent.has_value();
 
   // Per point: the index of its triangle in the current triangulation. Per
-  // triangle of the previous level: the triangle itself and its merged moments.
+  // triangle of the previous level (previousTris): its merged moments.
   std::vector<std::uint32_t> triOf(n, 0);
   std::vector<TriangleMoments> previousMoments;
   Vector coefficients;
