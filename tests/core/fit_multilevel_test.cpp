@@ -232,6 +232,53 @@ TEST(FitMultilevel, FixedVerticesAndWeightsCarryThroughAllLevels) {
   EXPECT_NEAR(weighted.evaluate({0.3, 0.3}), 5.0, 1e-3);
 }
 
+TEST(FitMultilevel, LastLevelEqualsAFitFromScratchOverTheFinalMesh) {
+  // The multilevel fitter keeps the moments of unsplit triangles and locates
+  // only the points of split ones; the last level's system must still be the
+  // one assembled from scratch over the final triangulation (brute-force
+  // location), with and without weights and fixed vertices.
+  auto pts = frankePoints(3000, 23);
+  pts.push_back({0.0, 0.0, frankeFunction(0, 0)});  // domain exactly [0, 1]²
+  pts.push_back({1.0, 1.0, frankeFunction(1, 1)});
+  for (int variant = 0; variant < 2; ++variant) {
+    MultilevelOptions opt = bookOptions();
+    opt.criteria.errorPercent = 0.5;
+    opt.criteria.countAbove = 2;
+    opt.directLevels = 100;
+    opt.maxLevel = 6;
+    if (variant == 1) {
+      opt.weights.resize(pts.size());
+      for (std::size_t i = 0; i < pts.size(); ++i) opt.weights[i] = 0.5 + static_cast<double>(i % 7) * 0.25;
+      opt.fixed = {{0.5, 0.5, 1.5}, {0.75, 0.25, 0.1}};
+    }
+    const MultilevelFit fit = fitMultilevel(pts, opt);
+    const TinData tin = fit.toTinData();
+    testing::SmallMesh mesh;
+    for (const auto& v : tin.vertices) mesh.vertices.push_back(v.xy());
+    mesh.triangles.assign(tin.triangles.begin(), tin.triangles.end());
+    std::vector<Sample> samples;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      samples.push_back(testing::locateBruteForce(mesh, pts[i], opt.weights.empty() ? 1.0 : opt.weights[i]));
+      ASSERT_NE(samples.back().triangle, 0xffffffffu) << "point " << i;
+    }
+    LeastSquaresOptions ls;
+    ls.smoothing = Smoothing::ThinPlate;
+    ls.lambdaAbsolute = fit.levels().back().lambda;
+    ls.solver = SolverKind::Direct;
+    for (const auto& f : opt.fixed) {
+      for (std::size_t v = 0; v < tin.vertices.size(); ++v) {
+        if (tin.vertices[v].x == f.x && tin.vertices[v].y == f.y) ls.fixed.push_back({static_cast<std::uint32_t>(v), f.z});
+      }
+    }
+    ASSERT_EQ(ls.fixed.size(), opt.fixed.size());
+    const LeastSquaresResult scratch = fitLeastSquares(mesh.vertices, mesh.triangles, samples, ls);
+    ASSERT_EQ(static_cast<std::size_t>(scratch.coefficients.size()), fit.vertexZ().size());
+    for (std::size_t v = 0; v < fit.vertexZ().size(); ++v) {
+      EXPECT_NEAR(fit.vertexZ()[v], scratch.coefficients[static_cast<Eigen::Index>(v)], 1e-9) << "vertex " << v;
+    }
+  }
+}
+
 TEST(FitMultilevel, CurvatureCriterionRefinesWhereTheSurfaceBends) {
   const auto pts = frankePoints(3000, 13);
   MultilevelOptions opt = bookOptions();
