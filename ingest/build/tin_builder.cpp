@@ -8,7 +8,9 @@
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
+#include "core/mesh/validate.hpp"
 #include "core/surface/surface.hpp"
+#include "ingest/base/memory.hpp"
 #include "ingest/build/flat_triangles.hpp"
 #include "ingest/build/line_profile.hpp"
 #include "ingest/tinfile/tin_file.hpp"
@@ -102,6 +104,14 @@ struct PendingLine {
 };
 
 }  // namespace
+
+BuildValidation defaultBuildValidation() {
+#ifdef NDEBUG
+  return BuildValidation::Structural;
+#else
+  return BuildValidation::Full;
+#endif
+}
 
 bool takesLines(FeatureKind kind) {
   switch (kind) {
@@ -213,6 +223,7 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
   if (droppedInLakes) report.cleaning.push_back({"input vertices inside lakes dropped", droppedInLakes});
   layers.clear();  // the Cdt and `later` hold everything from here on
   layers.shrink_to_fit();
+  releaseFreeMemory();  // the layers' and the cleaning's heap, before the CDT grows
   endStage("prepare");
 
   // 1. The base surface, when anything must be draped on it.
@@ -355,27 +366,26 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
                      "fix the contours, or run without --strict to keep going and have them reported");
   }
 
-  // 6. Flat triangles.
+  // 6. Flat triangles, found and repaired on the CDT's own mesh (no TinData
+  // copy of the whole TIN until the end).
   tick("flat triangles", 4, kSteps);
-  TinData tin = cdt.toTinData();
-  report.flatBefore = countFlatTriangles(tin);
+  report.flatBefore = countFlatTriangles(cdt.mesh());
   report.flatAfter = report.flatBefore;
   if (options.flatTriangleRepair && report.flatBefore > 0) {
     const double minSpacing = std::max(10 * options.snapTolerance, 1e-9);
     for (int pass = 0; pass < options.flatPasses; ++pass) {
-      const auto a = analyseFlatTriangles(tin, minSpacing);
+      FlatTriangleAnalysis a = analyseFlatTriangles(cdt.mesh(), minSpacing);
       if (pass == 0) {
         report.flatRegions = a.regions;
         report.flatClosedRegions = a.closedRegions;
       }
       if (a.proposals.empty()) break;
-      tin = TinData{};  // release the old copy before the triangulation grows
       cdt.insertPoints(a.proposals);
-      cdt.finalize();
-      tin = cdt.toTinData();
       report.flatVerticesAdded += a.proposals.size();
+      a = FlatTriangleAnalysis{};  // release it before the triangulation grows
+      cdt.finalize();
       ++report.flatIterations;
-      const std::size_t now = countFlatTriangles(tin);
+      const std::size_t now = countFlatTriangles(cdt.mesh());
       const bool progressMade = now < report.flatAfter;
       report.flatAfter = now;
       if (now == 0 || !progressMade) break;
@@ -385,15 +395,32 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
 
   // 7. Validation.
   tick("validation", 5, kSteps);
-  if (options.validate) {
-    const auto v = cdt.validate();
-    report.valid = v.ok;
+  {
+    ValidationReport v;
+    switch (options.validation) {
+      case BuildValidation::Off:
+        report.validation = "off";
+        break;
+      case BuildValidation::Structural:
+        report.validation = "structural";
+        v = validate(cdt.mesh(), {.checkDelaunay = false});
+        break;
+      case BuildValidation::Full:
+        report.validation = "full";
+        v = cdt.validate();
+        break;
+    }
+    report.valid = v.ok && options.validation != BuildValidation::Off;
     report.validationProblems = v.problems;
     if (!v.ok)
       throw internalError("the TIN built from this input fails validation: " + v.summary());
   }
   endStage("validate");
 
+  // The result: the TinData, made once. Its copy of the mesh is the last
+  // big allocation while the Cdt lives; the Cdt is freed on return.
+  releaseFreeMemory();
+  TinData tin = cdt.toTinData();
   const auto s = summariseTin(tin);
   report.vertices = s.vertices;
   report.triangles = s.triangles;

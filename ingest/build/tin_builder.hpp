@@ -21,9 +21,14 @@
 //      at different levels are data errors (fatal with `strict`);
 //   6. flat-triangle repair — flat_triangles.hpp, repeated until none is
 //      left or no proposal helps (at most `flatPasses` passes);
-//   7. validation — Cdt::validate(); a failure is an internalError.
+//   7. validation — BuildOptions::validation: the mesh's structure by default
+//      in release builds, the full validator (Cdt::validate()) in debug
+//      builds and on request; a failure is an internalError.
+// The flat-triangle repair and the validation work on the CDT's mesh; the
+// TinData is made once, at the end, so no copy of the TIN exists before.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -52,6 +57,25 @@ struct BuildLayer {
   std::vector<BuildLine> lines; ///< line and ring layers
 };
 
+/// How much of the validator runs on the result (stage 7).
+enum class BuildValidation : std::uint8_t {
+  Off,
+  /// validate(mesh) without the Delaunay check: finite coordinates, every
+  /// triangle strictly counter-clockwise (exact), twin symmetry, constraint
+  /// features equal on both sides and known, boundary loops and Euler
+  /// characteristic. Linear, a small share of the build.
+  Structural,
+  /// Cdt::validate(): the above, plus every unconstrained interior edge
+  /// locally Delaunay (exact incircle), every input point a vertex or reported
+  /// merged, every constraint segment a chain of edges carrying its feature.
+  /// About a quarter of the build time and memory for the whole mesh.
+  Full,
+};
+
+/// Full in debug builds (NDEBUG not defined when the library was built), as
+/// the design asks of the validator; Structural in release builds.
+BuildValidation defaultBuildValidation();
+
 struct BuildOptions {
   std::string crs;               ///< the project CRS, copied into the TIN
   double snapTolerance = 0.001;  ///< metres
@@ -62,7 +86,7 @@ struct BuildOptions {
   double roadWindow = 50.0;      ///< metres: road smoothing window
   double roadSpikeThreshold = 2.0;  ///< metres
   int flatPasses = 4;
-  bool validate = true;
+  BuildValidation validation = defaultBuildValidation();
 };
 
 struct BuildResult {
