@@ -127,11 +127,28 @@ bool takesLines(FeatureKind kind) {
   }
 }
 
-BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
-                     const Progress* progress) {
+namespace {
+
+void setSummary(BuildReport& report, const TinSummary& s) {
+  report.vertices = s.vertices;
+  report.triangles = s.triangles;
+  report.constrainedEdges = s.constrainedEdges;
+  report.features = s.features;
+  report.minX = s.minX;
+  report.minY = s.minY;
+  report.maxX = s.maxX;
+  report.maxY = s.maxY;
+  report.minZ = s.minZ;
+  report.maxZ = s.maxZ;
+}
+
+// The whole build. The result goes to `consume` (the CDT's mesh) when given,
+// else into `out` (a TinData copy).
+BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
+                  const Progress* progress, const std::function<void(const Mesh&)>* consume,
+                  TinData* out) {
   const auto start = Clock::now();
-  BuildResult result;
-  BuildReport& report = result.report;
+  BuildReport report;
   report.crs = options.crs;
   report.flatRepair = options.flatTriangleRepair;
   auto stageStart = Clock::now();
@@ -417,25 +434,37 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
   }
   endStage("validate");
 
-  // The result: the TinData, made once. Its copy of the mesh is the last
-  // big allocation while the Cdt lives; the Cdt is freed on return.
+  // The result, made once: either the mesh goes to the consumer, or a
+  // TinData copy of it — the last big allocation while the Cdt lives (the Cdt
+  // is freed on return).
   releaseFreeMemory();
-  TinData tin = cdt.toTinData();
-  const auto s = summariseTin(tin);
-  report.vertices = s.vertices;
-  report.triangles = s.triangles;
-  report.constrainedEdges = s.constrainedEdges;
-  report.features = s.features;
-  report.minX = s.minX;
-  report.minY = s.minY;
-  report.maxX = s.maxX;
-  report.maxY = s.maxY;
-  report.minZ = s.minZ;
-  report.maxZ = s.maxZ;
-  result.tin = std::move(tin);
-  report.totalSeconds = secondsSince(start);
-  tick("done", kSteps, kSteps);
+  if (consume) {
+    setSummary(report, summariseTin(cdt.mesh()));
+    report.totalSeconds = secondsSince(start);
+    tick("done", kSteps, kSteps);
+    (*consume)(cdt.mesh());
+  } else {
+    *out = cdt.toTinData();
+    setSummary(report, summariseTin(*out));
+    report.totalSeconds = secondsSince(start);
+    tick("done", kSteps, kSteps);
+  }
+  return report;
+}
+
+}  // namespace
+
+BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
+                     const Progress* progress) {
+  BuildResult result;
+  result.report = build(std::move(layers), options, progress, nullptr, &result.tin);
   return result;
+}
+
+BuildReport buildTinInto(std::vector<BuildLayer> layers, const BuildOptions& options,
+                         const std::function<void(const Mesh&)>& consume,
+                         const Progress* progress) {
+  return build(std::move(layers), options, progress, &consume, nullptr);
 }
 
 }  // namespace tinsmith::ingest

@@ -29,10 +29,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/mesh/mesh.hpp"
 #include "core/tin/tin_data.hpp"
 #include "ingest/base/progress.hpp"
 #include "ingest/build/build_report.hpp"
@@ -102,6 +104,16 @@ struct BuildResult {
 /// triangulation holds them: pass them with std::move for big inputs.
 BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
                      const Progress* progress = nullptr);
+
+/// The same build for callers that only write the TIN out (`tinsmith tin`):
+/// `consume` gets the CDT's mesh before the CDT is freed — e.g.
+/// writeTinFile(path, mesh), which writes the bytes writeTinFile(path,
+/// buildTin(…).tin) would — so the mesh and a TinData copy of it are never in
+/// memory together. Returns the report (complete before `consume` runs); what
+/// buildTin throws, and whatever `consume` throws, propagates.
+BuildReport buildTinInto(std::vector<BuildLayer> layers, const BuildOptions& options,
+                         const std::function<void(const Mesh&)>& consume,
+                         const Progress* progress = nullptr);
 
 /// Where each layer kind goes: true for kinds that take lines (contours,
 /// roads, rivers, lakes, boundary, holes).

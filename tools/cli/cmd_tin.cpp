@@ -180,7 +180,10 @@ void run(const TinOptions& o) {
   }
   const ingest::Progress* p = bar ? &progress : nullptr;
 
-  ingest::BuildResult result;
+  // The TIN is written straight from the triangulation's mesh, before the
+  // triangulation is freed: no TinData copy of it is ever made.
+  auto writeTin = [&o](const Mesh& mesh) { ingest::writeTinFile(o.output, mesh); };
+  ingest::BuildReport report;
   if (plain) {
     ingest::BuildOptions options;
     options.crs = o.crs;
@@ -192,9 +195,9 @@ void run(const TinOptions& o) {
     auto layers = plainLayers(o);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result = ingest::buildTin(std::move(layers), options, p);
-    result.report.times.insert(result.report.times.begin(), {"read", readSeconds});
-    result.report.totalSeconds += readSeconds;
+    report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    report.times.insert(report.times.begin(), {"read", readSeconds});
+    report.totalSeconds += readSeconds;
   } else {
     ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
     if (o.strict) config.tin.strict = true;
@@ -203,21 +206,20 @@ void run(const TinOptions& o) {
     auto layers = ingest::toBuildLayers(std::move(ingested.layers));
     ingest::BuildOptions options = ingest::buildOptionsFrom(config);
     if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
-    result = ingest::buildTin(std::move(layers), options, p);
-    ingest::addIngestReport(result.report, ingested);
+    report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    ingest::addIngestReport(report, ingested);
   }
   bar.reset();
-  ingest::writeTinFile(o.output, result.tin);
   if (!o.report.empty()) {
     try {
-      writeReport(o.report, result.report);
+      writeReport(o.report, report);
     } catch (...) {
       std::error_code ec;
       std::filesystem::remove(o.output, ec);  // both outputs or neither
       throw;
     }
   }
-  if (!o.quiet) std::cerr << result.report.summary() << "wrote " << o.output << "\n";
+  if (!o.quiet) std::cerr << report.summary() << "wrote " << o.output << "\n";
 }
 
 }  // namespace
