@@ -19,7 +19,7 @@ struct TinView {
   [[nodiscard]] std::size_t triangleCount() const { return tin.triangles.size(); }
   [[nodiscard]] const TinData::Triangle& triangle(std::uint32_t t) const { return tin.triangles[t]; }
   /// Calls f(a, b) for every edge that a Contour feature constrains (an edge
-  /// may come more than once).
+  /// may come more than once, in either direction).
   template <class F>
   void forEachContourEdge(F&& f) const {
     for (const auto& e : tin.constrainedEdges)
@@ -41,9 +41,7 @@ struct MeshView {
     const auto& features = mesh.features();
     for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
       const HalfedgeId he(h);
-      if (!mesh.isConstrained(he)) continue;
-      const HalfedgeId tw = mesh.twin(he);
-      if (tw.valid() && tw.value < h) continue;  // each edge once
+      if (!mesh.isConstrained(he)) continue;  // both half-edges of an edge come: harmless
       for (const std::uint32_t id : mesh.edgeFeatures(he)) {
         if (id < features.size() && features[id].kind == FeatureKind::Contour) {
           f(mesh.origin(he).value, mesh.target(he).value);
@@ -99,10 +97,13 @@ std::vector<std::uint32_t> neighbours(const View& tin, const std::vector<std::ui
   return across;
 }
 
+// The contour edges with both ends marked in `ends`, as sorted keys.
 template <class View>
-std::vector<std::uint64_t> contourEdgeKeys(const View& tin) {
+std::vector<std::uint64_t> contourEdgeKeys(const View& tin, const std::vector<char>& ends) {
   std::vector<std::uint64_t> keys;
-  tin.forEachContourEdge([&keys](std::uint32_t a, std::uint32_t b) { keys.push_back(edgeKey(a, b)); });
+  tin.forEachContourEdge([&](std::uint32_t a, std::uint32_t b) {
+    if (ends[a] && ends[b]) keys.push_back(edgeKey(a, b));
+  });
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   return keys;
@@ -137,48 +138,50 @@ FlatTriangleAnalysis analyse(const View& tin, double minSpacing) {
   FlatTriangleAnalysis out;
   const auto on = contourVerticesOf(tin);
   const std::size_t nt = tin.triangleCount();
-  std::vector<char> flat(nt, 0);
   for (std::uint32_t t = 0; t < nt; ++t)
-    if (isFlat(tin, on, t)) {
-      flat[t] = 1;
-      out.flatTriangles.push_back(t);
-    }
+    if (isFlat(tin, on, t)) out.flatTriangles.push_back(t);
   if (out.flatTriangles.empty()) return out;
+  // flatTriangles is ascending: a binary search tells whether t is flat.
+  auto flat = [&out](std::uint32_t t) {
+    return std::binary_search(out.flatTriangles.begin(), out.flatTriangles.end(), t);
+  };
 
   // Only flat triangles and the triangles next to them need adjacency: those
   // share at least two vertices with a flat triangle. Keeps the analysis of a
-  // million-triangle TIN with few flat triangles to one linear scan.
+  // million-triangle TIN with few flat triangles to linear scans, and its
+  // memory to the size of that subset (nothing per triangle of the TIN).
   std::vector<char> onFlat(tin.points().size(), 0);
   for (const std::uint32_t t : out.flatTriangles)
     for (auto v : tin.triangle(t)) onFlat[v] = 1;
-  std::vector<std::uint32_t> subset;
-  std::vector<std::uint32_t> local(nt, kNone);
+  std::vector<std::uint32_t> subset;  // ascending
   for (std::uint32_t t = 0; t < nt; ++t) {
     const auto tri = tin.triangle(t);
-    if (onFlat[tri[0]] + onFlat[tri[1]] + onFlat[tri[2]] >= 2) {
-      local[t] = static_cast<std::uint32_t>(subset.size());
-      subset.push_back(t);
-    }
+    if (onFlat[tri[0]] + onFlat[tri[1]] + onFlat[tri[2]] >= 2) subset.push_back(t);
   }
+  auto local = [&subset](std::uint32_t t) {
+    return static_cast<std::size_t>(std::lower_bound(subset.begin(), subset.end(), t) - subset.begin());
+  };
   const auto acrossSubset = neighbours(tin, subset);
-  auto acrossOf = [&](std::uint32_t t, std::uint32_t k) { return acrossSubset[3 * local[t] + k]; };
-  const auto contourKeys = contourEdgeKeys(tin);
+  auto acrossOf = [&](std::uint32_t t, std::uint32_t k) { return acrossSubset[3 * local(t) + k]; };
+  // Every edge asked about below is an edge of a flat triangle: both ends on onFlat.
+  const auto contourKeys = contourEdgeKeys(tin, onFlat);
   auto isContourEdge = [&](std::uint32_t a, std::uint32_t b) {
     return std::binary_search(contourKeys.begin(), contourKeys.end(), edgeKey(a, b));
   };
   const auto& V = tin.points();
 
-  std::vector<std::uint32_t> region(nt, kNone);
+  std::vector<std::uint32_t> regionOfLocal(subset.size(), kNone);
+  auto region = [&](std::uint32_t t) -> std::uint32_t& { return regionOfLocal[local(t)]; };
   std::unordered_set<std::uint64_t> usedMidpoints;
   std::vector<std::uint32_t> members, stack;
   for (const std::uint32_t seed : out.flatTriangles) {
-    if (region[seed] != kNone) continue;
+    if (region(seed) != kNone) continue;
     const auto id = static_cast<std::uint32_t>(out.regions++);
     const double z0 = V[tin.triangle(seed)[0]].z;
     // Flood the region: flat neighbours at the same level across non-contour edges.
     members.clear();
     stack.assign(1, seed);
-    region[seed] = id;
+    region(seed) = id;
     std::vector<std::pair<Point3, Point3>> ownContour;  // the region's z0 contour edges
     std::vector<Point3> exits;                          // vertices at another level next to it
     std::vector<double> outside;                        // levels across its contour edges
@@ -193,9 +196,9 @@ FlatTriangleAnalysis analyse(const View& tin, double minSpacing) {
         const bool contourEdge = isContourEdge(a, b);
         if (contourEdge) ownContour.push_back({V[a], V[b]});
         if (n == kNone) continue;
-        if (!contourEdge && flat[n] && V[tin.triangle(n)[0]].z == z0) {
-          if (region[n] == kNone) {
-            region[n] = id;
+        if (!contourEdge && flat(n) && V[tin.triangle(n)[0]].z == z0) {
+          if (region(n) == kNone) {
+            region(n) = id;
             stack.push_back(n);
           }
           continue;

@@ -329,6 +329,7 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   // 5. The triangulation.
   tick("triangulation", 3, kSteps);
   cdt.finalize();
+  (void)cdt.mesh();  // the output mesh is built on first use: part of the triangulation's time
   endStage("triangulate");
 
   const auto& features = cdt.features();
@@ -386,23 +387,30 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   // 6. Flat triangles, found and repaired on the CDT's own mesh (no TinData
   // copy of the whole TIN until the end).
   tick("flat triangles", 4, kSteps);
-  report.flatBefore = countFlatTriangles(cdt.mesh());
-  report.flatAfter = report.flatBefore;
-  if (options.flatTriangleRepair && report.flatBefore > 0) {
+  if (!options.flatTriangleRepair || options.flatPasses <= 0) {
+    report.flatBefore = countFlatTriangles(cdt.mesh());
+    report.flatAfter = report.flatBefore;
+  } else {
+    // Each analysis also counts: the one after a pass is the next pass's.
     const double minSpacing = std::max(10 * options.snapTolerance, 1e-9);
-    for (int pass = 0; pass < options.flatPasses; ++pass) {
-      FlatTriangleAnalysis a = analyseFlatTriangles(cdt.mesh(), minSpacing);
-      if (pass == 0) {
-        report.flatRegions = a.regions;
-        report.flatClosedRegions = a.closedRegions;
-      }
-      if (a.proposals.empty()) break;
+    FlatTriangleAnalysis a = analyseFlatTriangles(cdt.mesh(), minSpacing);
+    report.flatBefore = a.flatTriangles.size();
+    report.flatAfter = report.flatBefore;
+    report.flatRegions = a.regions;
+    report.flatClosedRegions = a.closedRegions;
+    for (int pass = 0; pass < options.flatPasses && !a.proposals.empty(); ++pass) {
       cdt.insertPoints(a.proposals);
       report.flatVerticesAdded += a.proposals.size();
       a = FlatTriangleAnalysis{};  // release it before the triangulation grows
       cdt.finalize();
       ++report.flatIterations;
-      const std::size_t now = countFlatTriangles(cdt.mesh());
+      std::size_t now = 0;
+      if (pass + 1 < options.flatPasses) {
+        a = analyseFlatTriangles(cdt.mesh(), minSpacing);
+        now = a.flatTriangles.size();
+      } else {
+        now = countFlatTriangles(cdt.mesh());
+      }
       const bool progressMade = now < report.flatAfter;
       report.flatAfter = now;
       if (now == 0 || !progressMade) break;
