@@ -26,6 +26,11 @@ struct TinView {
       if (e.feature < tin.features.size() && tin.features[e.feature].kind == FeatureKind::Contour)
         f(e.a, e.b);
   }
+  /// The same for (at least) the edges of `triangles`: here every contour edge.
+  template <class F>
+  void forEachContourEdgeOf(const std::vector<std::uint32_t>&, F&& f) const {
+    forEachContourEdge(f);
+  }
 };
 
 struct MeshView {
@@ -38,15 +43,32 @@ struct MeshView {
   }
   template <class F>
   void forEachContourEdge(F&& f) const {
-    const auto& features = mesh.features();
     for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
       const HalfedgeId he(h);
-      if (!mesh.isConstrained(he)) continue;  // both half-edges of an edge come: harmless
-      for (const std::uint32_t id : mesh.edgeFeatures(he)) {
-        if (id < features.size() && features[id].kind == FeatureKind::Contour) {
-          f(mesh.origin(he).value, mesh.target(he).value);
-          break;
-        }
+      if (!mesh.isConstrained(he)) continue;
+      const HalfedgeId tw = mesh.twin(he);
+      if (tw.valid() && tw.value < h) continue;  // each edge once
+      visitIfContour(he, f);
+    }
+  }
+  /// Only the edges of `triangles` (each edge once per triangle it borders).
+  template <class F>
+  void forEachContourEdgeOf(const std::vector<std::uint32_t>& triangles, F&& f) const {
+    for (const std::uint32_t t : triangles)
+      for (int k = 0; k < 3; ++k) {
+        const HalfedgeId he = Mesh::halfedge(TriangleId(t), k);
+        if (mesh.isConstrained(he)) visitIfContour(he, f);
+      }
+  }
+
+ private:
+  template <class F>
+  void visitIfContour(HalfedgeId he, F& f) const {
+    const auto& features = mesh.features();
+    for (const std::uint32_t id : mesh.edgeFeatures(he)) {
+      if (id < features.size() && features[id].kind == FeatureKind::Contour) {
+        f(mesh.origin(he).value, mesh.target(he).value);
+        return;
       }
     }
   }
@@ -97,11 +119,13 @@ std::vector<std::uint32_t> neighbours(const View& tin, const std::vector<std::ui
   return across;
 }
 
-// The contour edges with both ends marked in `ends`, as sorted keys.
+// The contour edges of `triangles` (and maybe others, but only edges with
+// both ends marked in `ends`), as sorted keys.
 template <class View>
-std::vector<std::uint64_t> contourEdgeKeys(const View& tin, const std::vector<char>& ends) {
+std::vector<std::uint64_t> contourEdgeKeys(const View& tin, const std::vector<std::uint32_t>& triangles,
+                                           const std::vector<char>& ends) {
   std::vector<std::uint64_t> keys;
-  tin.forEachContourEdge([&](std::uint32_t a, std::uint32_t b) {
+  tin.forEachContourEdgeOf(triangles, [&](std::uint32_t a, std::uint32_t b) {
     if (ends[a] && ends[b]) keys.push_back(edgeKey(a, b));
   });
   std::sort(keys.begin(), keys.end());
@@ -163,8 +187,8 @@ FlatTriangleAnalysis analyse(const View& tin, double minSpacing) {
   };
   const auto acrossSubset = neighbours(tin, subset);
   auto acrossOf = [&](std::uint32_t t, std::uint32_t k) { return acrossSubset[3 * local(t) + k]; };
-  // Every edge asked about below is an edge of a flat triangle: both ends on onFlat.
-  const auto contourKeys = contourEdgeKeys(tin, onFlat);
+  // Every edge asked about below is an edge of a flat triangle.
+  const auto contourKeys = contourEdgeKeys(tin, out.flatTriangles, onFlat);
   auto isContourEdge = [&](std::uint32_t a, std::uint32_t b) {
     return std::binary_search(contourKeys.begin(), contourKeys.end(), edgeKey(a, b));
   };
