@@ -76,8 +76,14 @@ struct BenchContext {
   BuildResult tin;  ///< the report only: the TIN goes to the file
   double writeSeconds = 0.0;
   RssSampler* sampler = nullptr;
-  /// Stage peaks inside the TIN build, one per progress tick: (tick, kB).
-  std::vector<std::pair<std::string, long>> buildPeaks;
+  /// The TIN build's own stages, one per progress tick of the builder (and
+  /// the write): name, CPU seconds, peak RSS kB (sampled).
+  struct Part {
+    std::string name;
+    double cpu = 0;
+    long peakKb = 0;
+  };
+  std::vector<Part> buildParts;
 };
 
 struct Stage {
@@ -329,22 +335,29 @@ int main(int argc, char** argv) {
          auto layers = toBuildLayers(std::move(c.layers));
          // Each progress tick of the builder starts one of its stages.
          std::string current;
-         Progress progress;
-         progress.callback = [&c, &current](std::string_view, std::string_view detail,
-                                            std::uint64_t, std::uint64_t) {
+         double cpuStart = cpuSeconds();
+         auto endPart = [&c, &cpuStart](const std::string& name) {
            const long peak = c.sampler->restartInner();
-           if (!current.empty()) c.buildPeaks.emplace_back(current, peak);
+           const double now = cpuSeconds();
+           if (!name.empty()) c.buildParts.push_back({name, now - cpuStart, peak});
+           cpuStart = now;
+         };
+         Progress progress;
+         progress.callback = [&current, &endPart](std::string_view, std::string_view detail,
+                                                  std::uint64_t, std::uint64_t) {
+           endPart(current);
            current = detail;
          };
          // As `tinsmith tin` does: the .tin file is written from the
          // triangulation's mesh before the triangulation is freed.
-         auto write = [&c](const Mesh& mesh) {
-           c.sampler->restartInner();
+         auto write = [&c, &current, &endPart](const Mesh& mesh) {
+           endPart(current);  // "done": the summary after validation
+           current.clear();
            const auto start = std::chrono::steady_clock::now();
            writeTinFile(c.dir / "bench.tin", mesh);
            c.writeSeconds =
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-           c.buildPeaks.emplace_back("write .tin", c.sampler->restartInner());
+           endPart("write .tin");
          };
          c.sampler->restartInner();
          c.tin.report = buildTinInto(std::move(layers), buildOptionsFrom(c.config), write, &progress);
@@ -396,8 +409,9 @@ int main(int argc, char** argv) {
     std::printf("TIN build stages:");
     for (const auto& t : ctx.tin.report.times) std::printf(" %s %.3f s;", t.stage.c_str(), t.seconds);
     std::printf(" write .tin %.3f s;", ctx.writeSeconds);
-    std::printf("\nTIN build stage peaks (sampled):");
-    for (const auto& [name, kb] : ctx.buildPeaks) std::printf(" %s %.1f MB;", name.c_str(), kb / 1024.0);
+    std::printf("\nTIN build stages by progress tick (CPU s, sampled peak RSS MB):");
+    for (const auto& part : ctx.buildParts)
+      std::printf(" %s %.3f s %.1f MB;", part.name.c_str(), part.cpu, part.peakKb / 1024.0);
     std::printf("\nTIN: %zu vertices, %zu triangles, %zu constrained edges; %zu crossings split, "
                 "%zu flat triangles before repair, %zu after\n",
                 ctx.tin.report.vertices, ctx.tin.report.triangles, ctx.tin.report.constrainedEdges,
