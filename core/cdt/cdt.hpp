@@ -13,6 +13,14 @@
 // (core/geometry/predicates.hpp); constructed points (constraint
 // intersections) are rounded to doubles.
 //
+// A first bulk of at least CdtOptions::splitMinPoints points is built as two
+// halves, left and right of the median x (on two threads when threads >= 2):
+// each half gets its points and the constraints with both ends on its side;
+// the triangles whose circumcircles certainly stay on their own side are
+// kept, the hole between them is filled by the constrained Delaunay
+// triangulation of the rest's corners, and the constraints that cross the
+// split go in last. The split never depends on the thread count.
+//
 // Degeneracies, decided deterministically (same input and options → same mesh):
 //   * cocircular quadruples: an edge is flipped only if the opposite vertex is
 //     strictly inside the circumcircle — the neutral case keeps the current edge;
@@ -22,8 +30,9 @@
 //   * a constraint through existing vertices is split at them; collinear
 //     overlapping constraints share edges (the edge records every feature);
 //   * crossing constraints are split at their intersection; the new vertex's z
-//     is interpolated along the higher-priority feature (ties: the earlier
-//     inserted one); the event is recorded;
+//     is interpolated along the higher-priority feature (ties: the feature
+//     registered first); the event is recorded. Segments go in in the Hilbert
+//     order of their midpoints, whatever their input order;
 //   * zero-length segments (after merging) are dropped and recorded.
 //
 // Usage:
@@ -64,10 +73,17 @@ struct CdtOptions {
   double snapTolerance = 0.0;
   /// Copied into TinData::crs.
   std::string crs;
-  /// Threads for the parallel stages (spatial sort keys and sort, output mesh
-  /// points); 0 = std::thread::hardware_concurrency(). The result is identical
-  /// for every value.
+  /// Threads for the parallel stages (spatial sort, the two halves of a
+  /// split build, copying, output mesh points); 0 =
+  /// std::thread::hardware_concurrency(). The result is identical for every
+  /// value.
   unsigned threads = 1;
+  /// The first bulk of at least this many points is triangulated as two
+  /// halves, left and right of a vertical line (concurrently when threads >=
+  /// 2), which are then merged along the seam; 0 = always in one go. With
+  /// cocircular input the mesh may depend on this value (any choice is
+  /// Delaunay); it never depends on `threads`.
+  std::size_t splitMinPoints = 50000;
 };
 
 /// What the CDT changed in its input, so callers can report it.
@@ -90,6 +106,10 @@ struct CdtReport {
     /// triangles beside it, farther than the snap tolerance: the constraints
     /// bend through `at`.
     bool forced = false;
+    /// How far the vertex used lies from the computed crossing (0 for a new
+    /// vertex; up to the snap tolerance when snapped; more when forced). Both
+    /// constraints bend by this much; bends add up along a constraint.
+    double moved = 0;
   };
   struct Dropped {
     enum class What { ZeroLengthSegment, PointOutsideDomain };
