@@ -42,6 +42,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/base/allocator.hpp"
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
 #include "ingest/base/progress.hpp"
@@ -285,6 +286,7 @@ std::size_t countVertices(const std::vector<IngestedLayer>& layers) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  returnLargeBlocksToSystem();  // as the tinsmith binary does
   BenchContext ctx;
   bool keep = false;
   for (int i = 1; i < argc; ++i) {
