@@ -24,8 +24,8 @@
 //   7. validation — BuildOptions::validation: the mesh's structure by default
 //      in release builds, the full validator (Cdt::validate()) in debug
 //      builds and on request; a failure is an internalError.
-// The flat-triangle repair and the validation work on the CDT's mesh; the
-// TinData is made once, at the end, so no copy of the TIN exists before.
+// The flat-triangle repair and the validation work on the CDT's mesh: buildTin
+// makes its TinData once, at the end, and buildTinInto makes none.
 #pragma once
 
 #include <cstdint>
@@ -70,7 +70,8 @@ enum class BuildValidation : std::uint8_t {
   /// Cdt::validate(): the above, plus every unconstrained interior edge
   /// locally Delaunay (exact incircle), every input point a vertex or reported
   /// merged, every constraint segment a chain of edges carrying its feature.
-  /// About a quarter of the build time and memory for the whole mesh.
+  /// Costly: 1.7 s CPU and per-vertex adjacency lists on top of a 6 s build of
+  /// 1.1 M vertices (the ingest benchmark), against 0.6 s for Structural.
   Full,
 };
 
