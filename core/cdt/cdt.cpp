@@ -825,11 +825,7 @@ struct Cdt::Impl {
     if (order.empty()) return;
 
     if (!triangulated()) {
-      // 2 triangles per point, plus room for 16 constraint intersections per
-      // pending segment (each adds 2 triangles) so that the arrays rarely
-      // grow: a doubling would briefly hold both copies, while capacity never
-      // used costs address space only (the pages are never touched).
-      reserveTriangles(order.size() * 2 + 4 + kTrianglesPerSegment * (segments.size() - segmentsDone));
+      reserveTriangles(trianglesFor(order.size(), segments.size() - segmentsDone));
       if (options.splitMinPoints > 0 && order.size() >= options.splitMinPoints &&
           insertAsTwoHalves(order)) {
         return;
@@ -838,7 +834,14 @@ struct Cdt::Impl {
     insertInOrder(order);
   }
 
-  static constexpr std::size_t kTrianglesPerSegment = 32;
+  /// Triangles to reserve for a first bulk: 2 per point, plus room for
+  /// constraint crossings (2 triangles each; up to 16 per segment, at most
+  /// one per point) so that the arrays rarely grow: a doubling would briefly
+  /// hold both copies, while capacity never used costs address space only
+  /// (its pages are never touched).
+  static std::size_t trianglesFor(std::size_t points, std::size_t segments) {
+    return 2 * points + 4 + std::min(32 * segments, points);
+  }
   void reserveTriangles(std::size_t triangles) {
     tv.reserve(3 * triangles);
     opp.reserve(3 * triangles);
@@ -1039,7 +1042,7 @@ struct Cdt::Impl {
     }
     right.rep.assign(rightGlobal.size(), kNone);
     right.insertedUpTo = rightGlobal.size();
-    right.reserveTriangles(rightOrder.size() * 2 + 4 + kTrianglesPerSegment * rightSegments.size());
+    right.reserveTriangles(trianglesFor(rightOrder.size(), rightSegments.size()));
 
     // Each half is triangulated and classified on its own thread.
     std::vector<std::uint8_t> unsafeLeft, unsafeRight;

@@ -176,7 +176,7 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
       for (const auto& l : layer.lines) lakeRings.emplace_back(l.vertices);
   }
 
-  Cdt cdt({.snapTolerance = options.snapTolerance, .crs = options.crs});
+  Cdt cdt({.snapTolerance = options.snapTolerance, .crs = options.crs, .threads = options.threads});
   std::vector<PendingLine> later;  // 2D lines to drape, or everything after the base
   std::size_t droppedInLakes = 0;
 
