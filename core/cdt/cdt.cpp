@@ -21,11 +21,13 @@
 #include <utility>
 
 #include "core/base/error.hpp"
+#include "core/geometry/hilbert.hpp"
 #include "core/geometry/predicates.hpp"
 
 namespace tinsmith {
 namespace {
 
+using geometry::hilbertIndex13;
 using geometry::incircle;
 using geometry::orient2d;
 
@@ -41,25 +43,6 @@ inline std::uint32_t prv(std::uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
 inline std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
   if (a > b) std::swap(a, b);
   return (static_cast<std::uint64_t>(a) << 32) | b;
-}
-
-// Hilbert index of (x, y) on a 2^13 grid (26 bits).
-std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
-  constexpr std::uint32_t n = 1u << 13;
-  std::uint32_t d = 0;
-  for (std::uint32_t s = n / 2; s > 0; s /= 2) {
-    const std::uint32_t rx = (x & s) ? 1 : 0;
-    const std::uint32_t ry = (y & s) ? 1 : 0;
-    d += s * s * ((3 * rx) ^ ry);
-    if (ry == 0) {
-      if (rx == 1) {
-        x = n - 1 - x;
-        y = n - 1 - y;
-      }
-      std::swap(x, y);
-    }
-  }
-  return d;
 }
 
 /// A bounding box that grows by points and boxes.
