@@ -1974,7 +1974,11 @@ void Cdt::buildMesh() const {
   mesh.outgoing_.assign(outV, HalfedgeId());
   m.removed.clear();
   m.removed.reserve(nt - outT);
-  std::vector<std::pair<std::uint32_t, FeatureId>> hf;
+  // Features of constrained half-edges go straight into the mesh's compact
+  // form (Mesh::setEdgeFeatures): output half-edges come in ascending order.
+  mesh.consBits_.assign(3 * static_cast<std::size_t>(outT) / 64 + 1, 0);
+  mesh.featureBegin_.assign(1, 0);
+  std::vector<FeatureId> fs;
   std::vector<std::uint32_t> boundary;  // output half-edges without twin, ascending
   for (std::uint32_t t = 0; t < nt; ++t) {
     const std::uint32_t b = 3 * t;
@@ -1991,11 +1995,16 @@ void Cdt::buildMesh() const {
     const std::uint8_t k[3] = {m.cons[b], m.cons[b + 1], m.cons[b + 2]};
     const std::uint32_t o = 3 * triMap[t];
     for (std::uint32_t i = 0; i < 3; ++i) {
-      if (k[i]) {
-        for (FeatureId f : m.edgeFeatures.find(edgeKey(c[i], c[(i + 1) % 3]))) {
-          if (f < m.features.size()) hf.emplace_back(o + i, f);
-        }
+      if (!k[i]) continue;
+      fs.clear();
+      for (FeatureId f : m.edgeFeatures.find(edgeKey(c[i], c[(i + 1) % 3]))) {
+        if (f < m.features.size()) fs.push_back(f);
       }
+      if (fs.empty()) continue;
+      std::sort(fs.begin(), fs.end());
+      mesh.consBits_[(o + i) / 64] |= std::uint64_t{1} << ((o + i) % 64);
+      mesh.featureIds_.insert(mesh.featureIds_.end(), fs.begin(), fs.end());
+      mesh.featureBegin_.push_back(static_cast<std::uint32_t>(mesh.featureIds_.size()));
     }
     for (std::uint32_t i = 0; i < 3; ++i) {
       const std::uint32_t n = triMap[g[i] / 3];
@@ -2033,9 +2042,7 @@ void Cdt::buildMesh() const {
       if (used[v] != kNone) mesh.points_[used[v]] = {m.xy[v].x, m.xy[v].y, m.z[v]};
     }
   });
-  std::sort(hf.begin(), hf.end());
-  mesh.setEdgeFeatures(hf);
-  std::vector<std::pair<std::uint32_t, FeatureId>>().swap(hf);
+  mesh.finishEdgeFeatures();
 
   // Input vertex → mesh vertex; live vertices outside the domain are dropped.
   m.report.dropped.erase(

@@ -154,7 +154,6 @@ void Mesh::setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint3
   if (hf.empty()) return;
   const std::size_t words = corners_.size() / 64 + 1;
   consBits_.assign(words, 0);
-  consRank_.assign(words + 1, 0);
   featureIds_.reserve(hf.size());
   featureBegin_.push_back(0);
   for (std::size_t i = 0; i < hf.size(); ++i) {
@@ -164,7 +163,18 @@ void Mesh::setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint3
     featureIds_.push_back(hf[i].second);
   }
   featureBegin_.push_back(static_cast<std::uint32_t>(hf.size()));
-  for (std::size_t w = 0; w < words; ++w) {
+  finishEdgeFeatures();
+}
+
+void Mesh::finishEdgeFeatures() {
+  if (featureIds_.empty()) {
+    consBits_.clear();
+    consRank_.clear();
+    featureBegin_.clear();
+    return;
+  }
+  consRank_.assign(consBits_.size() + 1, 0);
+  for (std::size_t w = 0; w < consBits_.size(); ++w) {
     consRank_[w + 1] = consRank_[w] + static_cast<std::uint32_t>(std::popcount(consBits_[w]));
   }
 }

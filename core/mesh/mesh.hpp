@@ -149,6 +149,9 @@ class Mesh {
   /// Sets the per-half-edge features from (half-edge, feature) pairs sorted
   /// and without duplicates.
   void setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hf);
+  /// After consBits_, featureBegin_ and featureIds_ were filled: the ranks,
+  /// or nothing at all when no half-edge carries a feature.
+  void finishEdgeFeatures();
   // Constrained half-edges as a bitset (empty: none) with per-word ranks; the
   // features of the r-th constrained half-edge are featureIds_[featureBegin_[r]
   // .. featureBegin_[r + 1]) (CSR over constrained half-edges only).
