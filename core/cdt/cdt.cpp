@@ -190,6 +190,12 @@ class EdgeFeatureMap {
     set(a, e);
     set(b, e);
   }
+  /// Room for n edges without growing (growing holds both tables at once).
+  void reserve(std::size_t n) {
+    std::size_t capacity = 64;
+    while (8 * n > 7 * capacity) capacity *= 2;
+    if (capacity > slots_.size()) rehash(capacity);
+  }
   /// Calls f(key, features) for every edge.
   template <class F>
   void forEach(const F& f) const {
@@ -243,9 +249,9 @@ class EdgeFeatureMap {
     slots_[i] = {key, e};
     ++size_;
   }
-  void grow() {
+  void grow() { rehash(slots_.empty() ? 64 : 2 * slots_.size()); }
+  void rehash(std::size_t capacity) {
     std::vector<Slot> old = std::move(slots_);
-    const std::size_t capacity = old.empty() ? 64 : 2 * old.size();
     slots_.assign(capacity, Slot{});
     shift_ = 64 - std::countr_zero(capacity);
     size_ = 0;
@@ -262,10 +268,11 @@ class EdgeFeatureMap {
 
 enum class Role : std::uint8_t { None, Boundary, Hole };
 
+/// An input constraint segment between input vertices (its role in the
+/// domain is its feature's, featureRole).
 struct Segment {
   std::uint32_t a, b;
   FeatureId feature;
-  Role role;
 };
 
 enum class LocKind { InTriangle, OnEdge, OnVertex, Outside };
@@ -875,6 +882,7 @@ struct Cdt::Impl {
 
     if (!triangulated()) {
       reserveTriangles(trianglesFor(order.size(), segments.size() - segmentsDone));
+      edgeFeatures.reserve(segments.size() - segmentsDone);
       if (options.splitMinPoints > 0 && order.size() >= options.splitMinPoints &&
           insertAsTwoHalves(order)) {
         return;
@@ -1092,6 +1100,7 @@ struct Cdt::Impl {
     right.rep.assign(rightGlobal.size(), kNone);
     right.insertedUpTo = rightGlobal.size();
     right.reserveTriangles(trianglesFor(rightOrder.size(), rightSegments.size()));
+    right.edgeFeatures.reserve(rightSegments.size());
 
     // Each half is triangulated and classified on its own thread.
     std::vector<std::uint8_t> unsafeLeft, unsafeRight;
@@ -1237,9 +1246,9 @@ struct Cdt::Impl {
     seam.vfeat.assign(seamGlobal.size(), kNoFeature);
     seam.rep.assign(seamGlobal.size(), kNone);
     for (const SeamBorder& b : borders) {
-      seam.segments.push_back({seamOf[b.u], seamOf[b.v], 0, Role::None});
+      seam.segments.push_back({seamOf[b.u], seamOf[b.v], 0});
     }
-    for (const auto& [u, w] : inner) seam.segments.push_back({seamOf[u], seamOf[w], 1, Role::None});
+    for (const auto& [u, w] : inner) seam.segments.push_back({seamOf[u], seamOf[w], 1});
     seam.insertPendingPoints();
     seam.insertPendingSegments();
     if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
@@ -1892,10 +1901,7 @@ void Cdt::insertConstraintSegment(VertexId a, VertexId b, FeatureId feature) {
   if (a.value >= m.xy.size() || b.value >= m.xy.size()) {
     throw usageError("constraint segment names a vertex that was not inserted");
   }
-  const Role role = feature != kNoFeature && feature < m.featureRole.size()
-                        ? m.featureRole[feature]
-                        : Role::None;
-  m.segments.push_back({a.value, b.value, feature, role});
+  m.segments.push_back({a.value, b.value, feature});
 }
 
 void Cdt::addBoundary(std::span<const Point3> ring, FeatureId feature) {
@@ -2216,7 +2222,7 @@ Cdt Cdt::fromTinData(const TinData& tin, CdtOptions options) {
   bool any = false;
   for (HalfedgeId h : mesh.boundaryHalfedges()) {
     cdt.impl_->segments.push_back(
-        {mesh.origin(h).value, mesh.target(h).value, kDomainFeature, Role::Boundary});
+        {mesh.origin(h).value, mesh.target(h).value, kDomainFeature});
     any = true;
   }
   // A convex TIN needs no domain; keep it simple and let parity decide.

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <sstream>
+#include <unordered_map>
+#include <vector>
 
 #include "core/geometry/predicates.hpp"
 
@@ -102,7 +104,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   r.constrainedEdges = constrained;
 
   // Boundary loops, their orientation, and pinched vertices.
-  std::vector<char> seen(nh, 0);
+  std::vector<bool> seen(nh, false);
   long long loopSum = 0;
   std::size_t loops = 0;
   for (std::uint32_t i = 0; i < nh; ++i) {
@@ -116,7 +118,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     Point2 minV;
     int turn = 0;
     for (std::size_t steps = 0; !seen[h.value]; ++steps) {
-      seen[h.value] = 1;
+      seen[h.value] = true;
       const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
       area += (a.x - o.x) * (b.y - o.y) - (b.x - o.x) * (a.y - o.y);
       // Next boundary half-edge leaving target(h): rotate clockwise from next(h).
@@ -146,18 +148,22 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   }
   r.boundaryLoops = loops;
 
-  std::vector<std::uint32_t> boundaryOut(m.vertexCount(), 0);
+  // Boundary half-edges leaving each boundary vertex (few: a map, not a
+  // vertex-sized array).
+  std::unordered_map<std::uint32_t, std::uint32_t> boundaryOutOf;
   for (std::uint32_t i = 0; i < nh; ++i) {
-    if (!m.twin(HalfedgeId(i)).valid()) ++boundaryOut[m.origin(HalfedgeId(i)).value];
+    if (!m.twin(HalfedgeId(i)).valid()) ++boundaryOutOf[m.origin(HalfedgeId(i)).value];
   }
   long long pinch = 0;
   std::size_t usedVertices = 0;
   for (std::uint32_t v = 0; v < m.vertexCount(); ++v) {
     if (cornersAt[v] == 0) continue;
     ++usedVertices;
-    if (boundaryOut[v] > 1) pinch += boundaryOut[v] - 1;
+    const auto out = boundaryOutOf.find(v);
+    const std::uint32_t boundaryOut = out == boundaryOutOf.end() ? 0 : out->second;
+    if (boundaryOut > 1) pinch += boundaryOut - 1;
     // An interior vertex's fan must wind exactly once around it.
-    if (boundaryOut[v] == 0) {
+    if (boundaryOut == 0) {
       // Winding number, exactly: each CCW step turns by less than π, so count
       // the steps from the lower half-plane [π, 2π) into the upper [0, π).
       std::size_t fan = 0, winding = 0;
