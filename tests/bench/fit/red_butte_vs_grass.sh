@@ -10,8 +10,10 @@
 #   bash tests/bench/fit/red_butte_vs_grass.sh BUILD_DIR/bin/tinsmith [RUNS]
 #
 # KEEP_SCRATCH=1 keeps the working folder (inputs, surfaces, logs).
-# RUNS (default 3): every timed step runs RUNS times and the median wall time
-# is reported (repeated runs give the same surface; the last is evaluated).
+# RUNS (default 3): every timed step runs RUNS times; the medians of its wall
+# time and of its CPU time (user + system, bash `time`) are reported (repeated
+# runs give the same surface; the last is evaluated). On a machine shared
+# with other jobs the wall times vary; the CPU times much less.
 # What the times include:
 #   v.surf.rst  the v.surf.rst command alone, inside a running GRASS session:
 #               reading the imported points from the GRASS database,
@@ -19,7 +21,7 @@
 #               writing the elevation raster. Not timed: GRASS start-up,
 #               v.in.ascii (import), r.out.gdal (export).
 #   tinsmith    the whole `tinsmith fit` process: reading the XYZ text,
-#               fitting, writing the .tin. In brackets: the fitting alone
+#               fitting, writing the .tin; "fitting": the fitting alone
 #               ("seconds" of --stats). Not timed: the choice of lambda (below)
 #               and `tinsmith query` (sampling the .tin at the DEM cells).
 # Threads: both tools run with 1 thread (v.surf.rst nprocs=1 is its default)
@@ -66,8 +68,6 @@ else
 fi
 cd "$scratch"
 
-now_ms() { date +%s%3N; }
-
 # ---------------------------------------------------------------- inputs
 # cells.xy: every valid DEM cell centre, row-major (where the surfaces are
 # evaluated); random7000.xyz and contours.xyz: what both tools get.
@@ -101,27 +101,25 @@ print(f"DEM {dem.RasterXSize} x {dem.RasterYSize} cells, {len(xs)} valid; "
 PY
 
 # One line per timed configuration (tab-separated): input, tool, threads,
-# settings, times in ms, stats file, surface file.
+# settings, the file of times (bash `time`: "wall user sys" a line), stats
+# file, surface file.
 : >results.tsv
 
 # ---------------------------------------------------------------- GRASS
 cat >grass_side.sh <<'SH'
 set -euo pipefail
-now_ms() { date +%s%3N; }
+TIMEFORMAT='%3R %3U %3S'
 r.external -o --quiet input="$DEM" output=dem
 g.region --quiet raster=dem
 for input in random7000 contours; do
   v.in.ascii --quiet -z -t input="$input.xyz" output="$input" separator=space x=1 y=2 z=3
   for nprocs in 1 2; do
-    times=()
+    out="grass_${input}_np$nprocs"
     for ((run = 1; run <= RUNS; run++)); do
-      start=$(now_ms)
-      v.surf.rst --quiet --overwrite input="$input" elevation="${input}_np$nprocs" nprocs="$nprocs"
-      times+=($(($(now_ms) - start)))
+      { time v.surf.rst --quiet --overwrite input="$input" elevation="$out" nprocs="$nprocs" 2>>v.surf.rst.log; } 2>>"$out.times"
     done
-    r.out.gdal --quiet -c input="${input}_np$nprocs" output="grass_${input}_np$nprocs.tif" format=GTiff type=Float64
-    printf '%s\tv.surf.rst\t%s\tdefaults\t%s\t-\t%s\n' \
-      "$input" "$nprocs" "${times[*]}" "grass_${input}_np$nprocs.tif" >>results.tsv
+    r.out.gdal --quiet -c input="$out" output="$out.tif" format=GTiff type=Float64
+    printf '%s\tv.surf.rst\t%s\tdefaults\t%s\t-\t%s\n' "$input" "$nprocs" "$out.times" "$out.tif" >>results.tsv
   done
 done
 SH
@@ -130,6 +128,7 @@ DEM="$data/dem.tif" RUNS="$runs" grass --tmp-location EPSG:26912 --exec bash gra
   { cat grass.log >&2; exit 1; }
 
 # ---------------------------------------------------------------- tinsmith
+TIMEFORMAT='%3R %3U %3S'
 echo "tinsmith fit: lambda by 5-fold cross-validation over the input points ..."
 declare -A cv_lambda
 for input in random7000 contours; do
@@ -177,16 +176,13 @@ for input in random7000 contours; do
     [ "$lambda" != 1 ] && choice="lambda by cross-validation"
     for threads in 1 2; do
       out="tinsmith_${input}_l${lambda}_t$threads"
-      times=()
       for ((run = 1; run <= runs; run++)); do
-        start=$(now_ms)
-        "$tinsmith" fit "$input.xyz" "${FIT[@]}" --lambda "$lambda" --threads "$threads" --crs EPSG:26912 -q \
-          -o "$out.tin" --stats "$out.json" 2>>tinsmith.log
-        times+=($(($(now_ms) - start)))
+        { time "$tinsmith" fit "$input.xyz" "${FIT[@]}" --lambda "$lambda" --threads "$threads" --crs EPSG:26912 -q \
+          -o "$out.tin" --stats "$out.json" 2>>tinsmith.log; } 2>>"$out.times"
       done
       "$tinsmith" query "$out.tin" --points cells.xy >"$out.query"
       printf '%s\ttinsmith\t%s\t%s\t%s\t%s\t%s\n' "$input" "$threads" \
-        "\`${FIT[*]} --lambda $lambda\` ($choice)" "${times[*]}" "$out.json" "$out.query" >>results.tsv
+        "\`${FIT[*]} --lambda $lambda\` ($choice)" "$out.times" "$out.json" "$out.query" >>results.tsv
     done
   done
 done
@@ -230,13 +226,15 @@ runs = []
 for line in open("results.tsv"):
     input_, tool, threads, settings, times, stats, surface = line.rstrip("\n").split("\t")
     stats = json.load(open(stats)) if tool == "tinsmith" else None
+    wall_user_sys = np.loadtxt(times, ndmin=2)
     runs.append(dict(input=input_, tool=tool, threads=int(threads), settings=settings,
-                     seconds=float(np.median([int(t) for t in times.split()])) / 1000, stats=stats,
+                     seconds=np.median(wall_user_sys[:, 0]), cpu=np.median(wall_user_sys[:, 1] + wall_user_sys[:, 2]),
+                     stats=stats,
                      surface=grass_surface(surface) if tool == "v.surf.rst" else tinsmith_surface(surface)))
 
 names = {"random7000": "7 000 random DEM cells", "contours": "20 m contours"}
 print()
-print("| input | tool, settings | threads | RMSE | max error | time | speed vs v.surf.rst (same threads) |")
+print("| input | tool, settings | threads | RMSE | max error | time: wall (CPU) | speed vs v.surf.rst, same threads: wall (CPU) |")
 print("|---|---|---|---|---|---|---|")
 notes = []
 for input_, name in names.items():
@@ -257,18 +255,19 @@ for input_, name in names.items():
                  f"{common.sum()}. Over all {valid.sum()}, v.surf.rst (nprocs=1) has RMSE "
                  f"{np.sqrt(np.mean(full ** 2)):.3f} m, max error {np.abs(full).max():.2f} m.")
     notes.append(note)
-    grass_seconds = {r["threads"]: r["seconds"] for r in group if r["tool"] == "v.surf.rst"}
+    grass_time = {r["threads"]: r for r in group if r["tool"] == "v.surf.rst"}
     for r in group:
         err = r["surface"][common] - ref[common]
         rmse, emax = np.sqrt(np.mean(err ** 2)), np.abs(err).max()
         if r["tool"] == "v.surf.rst":
             tool = "GRASS `v.surf.rst`, defaults"
-            time = f"{r['seconds']:.2f} s"
+            time = f"{r['seconds']:.2f} s ({r['cpu']:.2f} s)"
             ratio = "reference"
         else:
             tool = f"tinsmith fit {r['settings']}, {r['stats']['final']['vertices']} vertices"
-            time = f"{r['seconds']:.2f} s ({r['stats']['seconds']:.2f} s fitting)"
-            ratio = f"{grass_seconds[r['threads']] / r['seconds']:.1f}×"
+            time = f"{r['seconds']:.2f} s ({r['cpu']:.2f} s); fitting {r['stats']['seconds']:.2f} s"
+            g = grass_time[r["threads"]]
+            ratio = f"{g['seconds'] / r['seconds']:.0f}× ({g['cpu'] / r['cpu']:.0f}×)"
         print(f"| {name} | {tool} | {r['threads']} | {rmse:.3f} m | {emax:.2f} m | {time} | {ratio} |")
 print()
 for n in notes:
