@@ -30,7 +30,7 @@ if command -v clang++ >/dev/null 2>&1; then
   cmake --build build/fuzz -j "$jobs" --target cdt_fuzz
   mkdir -p build/fuzz/corpus
   build/fuzz/tests/fuzz/cdt_fuzz -max_total_time=25 -max_len=2048 -print_final_stats=0 \
-    -artifact_prefix=build/fuzz/ build/fuzz/corpus 2>&1 | tail -n 3
+    -artifact_prefix=build/fuzz/ build/fuzz/corpus tests/fuzz/seeds 2>&1 | tail -n 3
 else
   echo "clang++ not found: fuzz run skipped"
 fi

@@ -13,6 +13,8 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <exception>
+#include <limits>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -59,6 +61,42 @@ std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
   }
   return d;
 }
+
+/// A bounding box that grows by points and boxes.
+struct Box {
+  double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+  void add(const Point2& p) {
+    minX = std::min(minX, p.x);
+    maxX = std::max(maxX, p.x);
+    minY = std::min(minY, p.y);
+    maxY = std::max(maxY, p.y);
+  }
+  void add(const Box& b) {
+    minX = std::min(minX, b.minX);
+    maxX = std::max(maxX, b.maxX);
+    minY = std::min(minY, b.minY);
+    maxY = std::max(maxY, b.maxY);
+  }
+};
+
+/// Hilbert index (hilbertIndex13) of points on a 2^13 grid over a box.
+class HilbertGrid {
+ public:
+  explicit HilbertGrid(const Box& box)
+      : box_(box),
+        sx_(box.maxX > box.minX ? kGrid / (box.maxX - box.minX) : 0.0),
+        sy_(box.maxY > box.minY ? kGrid / (box.maxY - box.minY) : 0.0) {}
+  [[nodiscard]] std::uint32_t operator()(const Point2& p) const {
+    const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (p.x - box_.minX) * sx_));
+    const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (p.y - box_.minY) * sy_));
+    return hilbertIndex13(gx, gy);
+  }
+
+ private:
+  static constexpr double kGrid = 8191.0;
+  Box box_;
+  double sx_, sy_;
+};
 
 /// Runs f(chunk, begin, end) over [0, n) split into `threads` contiguous
 /// chunks (chunk k on its own thread; chunk 0 on the caller's). Chunk bounds
@@ -143,6 +181,17 @@ class EdgeFeatureMap {
     e.list = static_cast<std::uint32_t>(lists_.size() - 1);
   }
   void erase(std::uint64_t key) { map_.erase(key); }
+  /// Calls f(key, features) for every edge.
+  template <class F>
+  void forEach(const F& f) const {
+    for (const auto& [key, e] : map_) {
+      if (e.list == kNoList) {
+        f(key, View{&e.single, 1});
+      } else {
+        f(key, View{lists_[e.list].data(), lists_[e.list].size()});
+      }
+    }
+  }
   /// The edge `from` was split into `a` and `b`: both inherit its features.
   void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
     auto it = map_.find(from);
@@ -658,27 +707,37 @@ struct Cdt::Impl {
     }
   }
 
-  /// Builds the first triangle from pending vertices in `order`; returns the
-  /// three used, or throws when all pending points are collinear.
-  void initialTriangle(const std::vector<std::uint32_t>& order, std::size_t& usedA,
-                       std::size_t& usedB, std::size_t& usedC) {
+  /// Positions ib, ic in `order` such that order[0], order[ib], order[ic] are
+  /// distinct and not collinear; false when every point of `order` lies on
+  /// one line.
+  bool findFirstTriangle(const std::vector<std::uint32_t>& order, std::size_t& ib,
+                         std::size_t& ic) const {
     const std::uint32_t a = order[0];
-    std::size_t ib = kNone, ic = kNone;
+    ib = kNone;
+    ic = kNone;
     for (std::size_t i = 1; i < order.size(); ++i) {
       if (!(xy[order[i]] == xy[a])) {
         ib = i;
         break;
       }
     }
-    if (ib != kNone) {
-      for (std::size_t i = ib + 1; i < order.size(); ++i) {
-        if (orient(a, order[ib], order[i]) != 0) {
-          ic = i;
-          break;
-        }
+    if (ib == kNone) return false;
+    for (std::size_t i = ib + 1; i < order.size(); ++i) {
+      if (orient(a, order[ib], order[i]) != 0) {
+        ic = i;
+        return true;
       }
     }
-    if (ic == kNone) {
+    return false;
+  }
+
+  /// Builds the first triangle from pending vertices in `order`; returns the
+  /// three used, or throws when all pending points are collinear.
+  void initialTriangle(const std::vector<std::uint32_t>& order, std::size_t& usedA,
+                       std::size_t& usedB, std::size_t& usedC) {
+    const std::uint32_t a = order[0];
+    std::size_t ib = kNone, ic = kNone;
+    if (!findFirstTriangle(order, ib, ic)) {
       throw geometryError(
           "the input has fewer than 3 non-collinear distinct points (" +
               std::to_string(order.size()) + " points given)",
@@ -715,37 +774,21 @@ struct Cdt::Impl {
     if (insertedUpTo >= n) return;
     const unsigned threads = threadCount();
     const std::size_t count = n - insertedUpTo;
-    struct Box {
-      double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    };
     std::vector<Box> boxes(threads);
     parallelChunks(threads, count, [&](unsigned k, std::size_t b, std::size_t e) {
-      Box bx;
       for (std::size_t i = insertedUpTo + b; i < insertedUpTo + e; ++i) {
-        if (rep[i] != kNone) continue;
-        bx.minX = std::min(bx.minX, xy[i].x);
-        bx.maxX = std::max(bx.maxX, xy[i].x);
-        bx.minY = std::min(bx.minY, xy[i].y);
-        bx.maxY = std::max(bx.maxY, xy[i].y);
+        if (rep[i] == kNone) boxes[k].add(xy[i]);
       }
-      boxes[k] = bx;
     });
-    double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
-    for (const Box& bx : boxes) {
-      minX = std::min(minX, bx.minX);
-      maxX = std::max(maxX, bx.maxX);
-      minY = std::min(minY, bx.minY);
-      maxY = std::max(maxY, bx.maxY);
-    }
+    Box box;
+    for (const Box& bx : boxes) box.add(bx);
     // BRIO (biased randomized insertion order): point i goes to round k with
     // probability 2^-(k+1) (from a fixed hash of i, so deterministic); rounds
     // go in from the smallest, each in Hilbert order on a 2^13 grid over the
     // bounding box (ties keep input order). Random rounds keep the number of
     // flips per insertion near the random-order expectation; the Hilbert order
     // keeps walks short.
-    constexpr double kGrid = 8191.0;
-    const double sx = maxX > minX ? kGrid / (maxX - minX) : 0.0;
-    const double sy = maxY > minY ? kGrid / (maxY - minY) : 0.0;
+    const HilbertGrid hilbert(box);
     std::uint32_t rounds = 0;
     while (rounds < 20 && (std::size_t{1000} << rounds) < count) ++rounds;
     // Points already placed (merged during an earlier finalize) get the key
@@ -759,15 +802,13 @@ struct Cdt::Impl {
           keys[j] = kSkip | i;
           continue;
         }
-        const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].x - minX) * sx));
-        const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (xy[i].y - minY) * sy));
         std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
         h ^= h >> 31;
         h *= 0xBF58476D1CE4E5B9ull;
         h ^= h >> 29;
         const auto round = static_cast<std::uint32_t>(std::min<int>(
             std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
-        const std::uint32_t key = ((rounds - round) << 26) | hilbertIndex13(gx, gy);
+        const std::uint32_t key = ((rounds - round) << 26) | hilbert(xy[i]);
         keys[j] = (static_cast<std::uint64_t>(key) << 32) | i;
       }
     });
@@ -783,18 +824,32 @@ struct Cdt::Impl {
     insertedUpTo = n;
     if (order.empty()) return;
 
-    std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
     if (!triangulated()) {
-      // 2 triangles per point, plus room for a few constraint intersections
-      // per pending segment (each adds 2 triangles) so that the arrays rarely
-      // grow (a doubling would briefly hold both copies).
-      const std::size_t cap =
-          order.size() * 6 + 12 + 24 * (segments.size() - segmentsDone);
-      tv.reserve(cap);
-      opp.reserve(cap);
-      cons.reserve(cap);
-      initialTriangle(order, skipA, skipB, skipC);
+      // 2 triangles per point, plus room for 16 constraint intersections per
+      // pending segment (each adds 2 triangles) so that the arrays rarely
+      // grow: a doubling would briefly hold both copies, while capacity never
+      // used costs address space only (the pages are never touched).
+      reserveTriangles(order.size() * 2 + 4 + kTrianglesPerSegment * (segments.size() - segmentsDone));
+      if (options.splitMinPoints > 0 && order.size() >= options.splitMinPoints &&
+          insertAsTwoHalves(order)) {
+        return;
+      }
     }
+    insertInOrder(order);
+  }
+
+  static constexpr std::size_t kTrianglesPerSegment = 32;
+  void reserveTriangles(std::size_t triangles) {
+    tv.reserve(3 * triangles);
+    opp.reserve(3 * triangles);
+    cons.reserve(3 * triangles);
+  }
+
+  /// Inserts the pending vertices `order` in that order (starting the
+  /// triangulation with its first non-degenerate triple if there is none).
+  void insertInOrder(const std::vector<std::uint32_t>& order) {
+    std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
+    if (!triangulated()) initialTriangle(order, skipA, skipB, skipC);
     // The insertion order jumps around the input arrays: fetch ahead.
     constexpr std::size_t kAhead = 8;
     for (std::size_t i = 0; i < order.size(); ++i) {
@@ -805,6 +860,471 @@ struct Cdt::Impl {
       if (i == skipA || i == skipB || i == skipC) continue;
       insertVertex(order[i]);
     }
+  }
+
+  // ------------------------------------------------- two-half bulk build
+  // The first bulk of points may be triangulated as two halves on either side
+  // of a vertical line x = xr, each on its own thread, and then merged by
+  // repairing the seam between them:
+  //   * a triangle of DT(left) whose circumcircle lies strictly left of every
+  //     right point is a triangle of DT(all) — "safe" (likewise on the right);
+  //   * every other triangle of DT(all) has its corners among the corners of
+  //     the unsafe triangles (ghosts count as unsafe): the seam set S;
+  //   * so DT(all) = safe left ∪ safe right ∪ the triangles of DT(S) in the
+  //     hole the safe ones leave. DT(S) is built with the hole's border edges
+  //     as constraints (they are Delaunay edges of all the points), which
+  //     keeps the two sides consistent on cocircular input.
+  // The split depends on the points only, never on the thread count, so
+  // neither does the mesh.
+
+  /// x-extent [lo, hi] of the circumcircle of (a, b, c), CCW, widened by a
+  /// bound on its rounding error; false when the triangle is too flat for the
+  /// bound to hold (callers then treat it as unsafe).
+  static bool circleXRange(const Point2& a, const Point2& b, const Point2& c, double& lo,
+                           double& hi) {
+    constexpr double eps = 0x1p-52;
+    const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+    const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+    const double d = 2 * (bx * cy - by * cx);
+    const double dErr = 16 * eps * (std::abs(bx * cy) + std::abs(by * cx));
+    if (!(d > 4 * dErr)) return false;
+    const double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
+    // |error| of each centre coordinate: numerator rounding plus the relative
+    // error of d (at most a third here), with a factor 2 to spare.
+    const double uxErr = 2 * (16 * eps * (std::abs(cy) * b2 + std::abs(by) * c2) / d +
+                              std::abs(ux) * dErr / (d - dErr));
+    const double uyErr = 2 * (16 * eps * (std::abs(bx) * c2 + std::abs(cx) * b2) / d +
+                              std::abs(uy) * dErr / (d - dErr));
+    const double r = std::sqrt(ux * ux + uy * uy);
+    const double slack = uxErr + uxErr + uyErr + 8 * eps * (std::abs(a.x) + std::abs(ux) + r);
+    lo = a.x + ux - r - slack;
+    hi = a.x + ux + r + slack;
+    return std::isfinite(lo) && std::isfinite(hi);
+  }
+
+  /// Per triangle: 1 unless it is certainly Delaunay in the union of the two
+  /// halves, the left one's points having x <= leftMax and the right one's
+  /// x >= rightMin; `leftHalf` says which half this is. Ghosts are unsafe.
+  /// Only triangles connected to a ghost through unsafe ones are tested: the
+  /// triangles in conflict with any one point of the other half (outside this
+  /// half's hull) form a connected set holding a ghost, so the unsafe set is
+  /// connected too, and a triangle never reached is safe.
+  [[nodiscard]] std::vector<std::uint8_t> unsafeTriangles(bool leftHalf, double leftMax,
+                                                          double rightMin) const {
+    std::vector<std::uint8_t> unsafe(triCount(), 0);
+    std::vector<std::uint8_t> tested(triCount(), 0);
+    std::vector<std::uint32_t> todo;
+    for (std::uint32_t t = 0; t < triCount(); ++t) {
+      if (isGhost(t)) {
+        unsafe[t] = tested[t] = 1;
+        todo.push_back(t);
+      }
+    }
+    while (!todo.empty()) {
+      const std::uint32_t t = todo.back();
+      todo.pop_back();
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t n = opp[3 * t + i] / 3;
+        if (tested[n]) continue;
+        tested[n] = 1;
+        double lo = 0, hi = 0;
+        const bool known = circleXRange(xy[tv[3 * n]], xy[tv[3 * n + 1]], xy[tv[3 * n + 2]], lo, hi);
+        if (!known || (leftHalf ? !(hi < rightMin) : !(lo > leftMax))) {
+          unsafe[n] = 1;
+          todo.push_back(n);
+        }
+      }
+    }
+    return unsafe;
+  }
+
+  /// The x value that splits the pending points `order` into a left part
+  /// (x < split) and a right part (x >= split) of comparable size, with every
+  /// left–right pair farther apart than the snap tolerance (so no merge can
+  /// span the seam). NaN when there is none.
+  [[nodiscard]] double splitValue(const std::vector<std::uint32_t>& order) const {
+    std::vector<double> xs(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) xs[i] = xy[order[i]].x;
+    const std::size_t mid = xs.size() / 2;
+    std::nth_element(xs.begin(), xs.begin() + static_cast<std::ptrdiff_t>(mid), xs.end());
+    const double median = xs[mid];
+    const double tol = options.snapTolerance;
+    if (!(tol > 0)) return median;
+    // The gap wider than tol in x nearest to the median, from the sorted
+    // values around it.
+    for (double window = 64 * tol; window <= 1e6 * tol; window *= 64) {
+      std::vector<double> near;
+      for (double x : xs) {
+        if (std::abs(x - median) <= window) near.push_back(x);
+      }
+      if (near.size() > xs.size() / 4) break;  // too dense around the median
+      std::sort(near.begin(), near.end());
+      double best = std::numeric_limits<double>::quiet_NaN();
+      for (std::size_t i = 0; i + 1 < near.size(); ++i) {
+        if (near[i + 1] - near[i] > tol &&
+            !(std::abs(near[i + 1] - median) >= std::abs(best - median))) {
+          best = near[i + 1];
+        }
+      }
+      if (!std::isnan(best)) return best;
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+
+  /// Triangulates the pending points `order` (first bulk, nothing triangulated
+  /// yet) as two halves and merges them, emptying `order`; false, with
+  /// nothing changed, when the points do not split well (then the caller
+  /// inserts them in one go).
+  bool insertAsTwoHalves(std::vector<std::uint32_t>& order) {
+    const double split = splitValue(order);
+    if (std::isnan(split)) return false;
+    std::vector<std::uint32_t> leftOrder, rightOrder;
+    leftOrder.reserve(order.size() / 2 + 1);
+    rightOrder.reserve(order.size() / 2 + 1);
+    double leftMax = -INFINITY, rightMin = INFINITY;
+    for (std::uint32_t v : order) {
+      const double x = xy[v].x;
+      if (x < split) {
+        leftOrder.push_back(v);
+        leftMax = std::max(leftMax, x);
+      } else {
+        rightOrder.push_back(v);
+        rightMin = std::min(rightMin, x);
+      }
+    }
+    std::size_t ib = 0, ic = 0;
+    if (leftOrder.size() < order.size() / 8 || rightOrder.size() < order.size() / 8 ||
+        !findFirstTriangle(leftOrder, ib, ic) || !findFirstTriangle(rightOrder, ib, ic)) {
+      return false;
+    }
+    std::vector<std::uint32_t>().swap(order);
+
+    // The right half in an Impl of its own, its vertices numbered in input
+    // order (so that merge ties still go to the earlier input).
+    std::vector<std::uint32_t> localOf(xy.size(), kNone);
+    for (std::uint32_t v : rightOrder) localOf[v] = 0;
+    std::vector<std::uint32_t> rightGlobal;
+    rightGlobal.reserve(rightOrder.size());
+    for (std::uint32_t g = 0; g < localOf.size(); ++g) {
+      if (localOf[g] == kNone) continue;
+      localOf[g] = static_cast<std::uint32_t>(rightGlobal.size());
+      rightGlobal.push_back(g);
+    }
+    for (std::uint32_t& v : rightOrder) v = localOf[v];
+    // Segments with both ends on one side go in with that half (a segment
+    // lies on the side of its ends); the rest after the merge.
+    std::vector<std::uint32_t> leftSegments, rightSegments, seamSegments;
+    for (auto k = static_cast<std::uint32_t>(segmentsDone); k < segments.size(); ++k) {
+      const bool leftA = xy[segments[k].a].x < split, leftB = xy[segments[k].b].x < split;
+      (leftA && leftB ? leftSegments : !leftA && !leftB ? rightSegments : seamSegments).push_back(k);
+    }
+    Impl right;
+    for (std::uint32_t k : rightSegments) {
+      Segment sg = segments[k];
+      sg.a = localOf[sg.a];
+      sg.b = localOf[sg.b];
+      right.segments.push_back(sg);
+    }
+    std::vector<std::uint32_t>().swap(localOf);
+    right.options.snapTolerance = options.snapTolerance;
+    right.options.splitMinPoints = 0;
+    right.features = features;
+    right.xy.resize(rightGlobal.size());
+    right.z.resize(rightGlobal.size());
+    right.vfeat.resize(rightGlobal.size());
+    for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
+      right.xy[j] = xy[rightGlobal[j]];
+      right.z[j] = z[rightGlobal[j]];
+      right.vfeat[j] = vfeat[rightGlobal[j]];
+    }
+    right.rep.assign(rightGlobal.size(), kNone);
+    right.insertedUpTo = rightGlobal.size();
+    right.reserveTriangles(rightOrder.size() * 2 + 4 + kTrianglesPerSegment * rightSegments.size());
+
+    // Each half is triangulated and classified on its own thread.
+    std::vector<std::uint8_t> unsafeLeft, unsafeRight;
+    std::exception_ptr rightError;
+    auto buildRight = [&] {
+      try {
+        right.insertInOrder(rightOrder);
+        right.insertPendingSegments();
+        unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
+      } catch (...) {
+        rightError = std::current_exception();
+      }
+    };
+    auto buildLeft = [&] {
+      insertInOrder(leftOrder);
+      insertSegments(leftSegments);
+      unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
+    };
+    if (threadCount() >= 2) {
+      std::thread worker(buildRight);
+      try {
+        buildLeft();
+      } catch (...) {
+        worker.join();
+        throw;
+      }
+      worker.join();
+    } else {
+      buildLeft();
+      buildRight();
+    }
+    if (rightError) std::rethrow_exception(rightError);
+    std::vector<std::uint32_t>().swap(leftOrder);
+    std::vector<std::uint32_t>().swap(rightOrder);
+
+    // The right half's vertices (its crossings get new global ids), merges,
+    // crossings and constrained edges, in global ids.
+    for (std::size_t j = rightGlobal.size(); j < right.xy.size(); ++j) {
+      rightGlobal.push_back(static_cast<std::uint32_t>(xy.size()));
+      xy.push_back(right.xy[j]);
+      z.push_back(0);
+      vfeat.push_back(kNoFeature);
+      rep.push_back(kNone);
+    }
+    insertedUpTo = xy.size();
+    for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
+      const std::uint32_t g = rightGlobal[j];
+      rep[g] = rightGlobal[right.rep[j]];
+      z[g] = right.z[j];
+      vfeat[g] = right.vfeat[j];
+    }
+    for (const auto& [keep, from] : right.zSource) zSource[rightGlobal[keep]] = rightGlobal[from];
+    for (CdtReport::Merge mg : right.report.merges) {
+      mg.kept = VertexId(rightGlobal[mg.kept.value]);
+      mg.merged = VertexId(rightGlobal[mg.merged.value]);
+      report.merges.push_back(mg);
+    }
+    for (CdtReport::Intersection ev : right.report.intersections) {
+      ev.vertex = VertexId(rightGlobal[ev.vertex.value]);
+      report.intersections.push_back(ev);
+    }
+    report.dropped.insert(report.dropped.end(), right.report.dropped.begin(),
+                          right.report.dropped.end());
+    right.edgeFeatures.forEach([&](std::uint64_t key, EdgeFeatureMap::View fs) {
+      const std::uint64_t global = edgeKey(rightGlobal[key >> 32], rightGlobal[key & 0xffffffffu]);
+      for (FeatureId f : fs) edgeFeatures.add(global, f);
+    });
+    // Only the right half's triangles are needed from here on.
+    std::vector<Point2>().swap(right.xy);
+    std::vector<double>().swap(right.z);
+    std::vector<FeatureId>().swap(right.vfeat);
+    std::vector<std::uint32_t>().swap(right.rep);
+    std::vector<std::uint32_t>().swap(right.vhe);
+    right.edgeFeatures = EdgeFeatureMap();
+    right.report = CdtReport();
+
+    mergeHalves(right, rightGlobal, unsafeLeft, unsafeRight);
+    // Vertex half-edges are recomputed when next needed.
+    trackVhe = false;
+    insertSegments(seamSegments);
+    segmentsDone = segments.size();
+    return true;
+  }
+
+  /// A border edge between a safe triangle and the hole: u→v (global ids) has
+  /// the hole on its left; `safe` is the twin half-edge in the safe triangle
+  /// (in this Impl for the left half, in `right` for the right half).
+  struct SeamBorder {
+    std::uint32_t u, v, safe;
+    bool rightHalf;
+  };
+
+  /// Replaces this Impl's triangles (the left half, global ids) by the union
+  /// of the safe triangles of both halves and the triangles of DT(S) that
+  /// fill the hole between them. `right` has the right half in local ids
+  /// (rightGlobal maps them); unsafeLeft/unsafeRight flag each half's
+  /// triangles (unsafeTriangles()). Frees right's triangle arrays as it
+  /// copies them.
+  void mergeHalves(Impl& right, const std::vector<std::uint32_t>& rightGlobal,
+                   const std::vector<std::uint8_t>& unsafeLeft,
+                   const std::vector<std::uint8_t>& unsafeRight) {
+    // The seam set S (corners of unsafe triangles), numbered in input order,
+    // and the border edges of the hole.
+    std::unordered_map<std::uint32_t, std::uint32_t> seamOf;
+    std::vector<std::uint32_t> seamGlobal;
+    std::vector<SeamBorder> borders;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> inner;  // constrained edges in the hole
+    auto collect = [&](const std::vector<std::uint32_t>& corners,
+                       const std::vector<std::uint32_t>& twins,
+                       const std::vector<std::uint8_t>& constrained,
+                       const std::vector<std::uint8_t>& unsafe, bool rightHalf) {
+      for (std::uint32_t t = 0; t < unsafe.size(); ++t) {
+        if (!unsafe[t]) continue;
+        for (std::uint32_t i = 0; i < 3; ++i) {
+          std::uint32_t v = corners[3 * t + i];
+          if (v == kInf) continue;
+          if (rightHalf) v = rightGlobal[v];
+          if (seamOf.try_emplace(v, 0).second) seamGlobal.push_back(v);
+          const std::uint32_t h = 3 * t + i, g = twins[h];
+          std::uint32_t w = corners[nxt(h)];
+          if (rightHalf && w != kInf) w = rightGlobal[w];
+          if (!unsafe[g / 3]) {
+            borders.push_back({v, w, g, rightHalf});
+          } else if (constrained[h] && h < g) {
+            inner.emplace_back(v, w);
+          }
+        }
+      }
+    };
+    collect(tv, opp, cons, unsafeLeft, false);
+    collect(right.tv, right.opp, right.cons, unsafeRight, true);
+    std::sort(seamGlobal.begin(), seamGlobal.end());
+    for (std::uint32_t j = 0; j < seamGlobal.size(); ++j) seamOf[seamGlobal[j]] = j;
+
+    // DT(S) with the border edges (feature 0) and the constrained edges in the
+    // hole (feature 1) as constraints.
+    Impl seam;
+    seam.options.splitMinPoints = 0;
+    seam.features = {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}};
+    seam.xy.reserve(seamGlobal.size());
+    for (std::uint32_t g : seamGlobal) seam.xy.push_back(xy[g]);
+    seam.z.assign(seamGlobal.size(), 0.0);
+    seam.vfeat.assign(seamGlobal.size(), kNoFeature);
+    seam.rep.assign(seamGlobal.size(), kNone);
+    for (const SeamBorder& b : borders) {
+      seam.segments.push_back({seamOf[b.u], seamOf[b.v], 0, Role::None});
+    }
+    for (const auto& [u, w] : inner) seam.segments.push_back({seamOf[u], seamOf[w], 1, Role::None});
+    seam.insertPendingPoints();
+    seam.insertPendingSegments();
+    if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
+        !seam.report.dropped.empty()) {
+      throw internalError("the seam between the two halves changed its input");
+    }
+
+    // The hole: DT(S) triangles reachable from the border without crossing it.
+    // (With no safe triangle at all, DT(S) is the whole triangulation.)
+    std::vector<std::uint8_t> inHole(seam.triCount(), borders.empty() ? 1 : 0);
+    std::vector<std::uint32_t> seamHalfedge(borders.size());
+    std::vector<std::uint32_t> todo;
+    for (std::size_t k = 0; k < borders.size(); ++k) {
+      const std::uint32_t h = seam.findHalfedge(seamOf[borders[k].u], seamOf[borders[k].v]);
+      if (h == kNone) throw internalError("a seam border edge is missing");
+      seamHalfedge[k] = h;
+      if (!inHole[h / 3]) {
+        inHole[h / 3] = 1;
+        todo.push_back(h / 3);
+      }
+    }
+    while (!todo.empty()) {
+      const std::uint32_t t = todo.back();
+      todo.pop_back();
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t h = 3 * t + i;
+        if (seam.cons[h]) {
+          const auto fs = seam.edgeFeatures.find(edgeKey(seam.tv[h], seam.tv[nxt(h)]));
+          if (std::find(fs.begin(), fs.end(), FeatureId{0}) != fs.end()) continue;  // border
+        }
+        const std::uint32_t n = seam.opp[h] / 3;
+        if (!inHole[n]) {
+          inHole[n] = 1;
+          todo.push_back(n);
+        }
+      }
+    }
+    for (std::uint32_t h : seamHalfedge) {
+      if (inHole[seam.opp[h] / 3]) throw internalError("the seam hole is not closed");
+    }
+
+    // New slots: freed left slots first, then appended.
+    std::vector<std::uint32_t> freeSlots;
+    for (std::uint32_t t = 0; t < unsafeLeft.size(); ++t) {
+      if (unsafeLeft[t]) {
+        freeSlots.push_back(t);
+        tv[3 * t] = kNone;
+      }
+    }
+    std::size_t used = 0;
+    std::uint32_t appended = triCount();
+    auto takeSlot = [&] { return used < freeSlots.size() ? freeSlots[used++] : appended++; };
+    std::vector<std::uint32_t> rightSlot(right.triCount(), kNone);
+    for (std::uint32_t t = 0; t < right.triCount(); ++t) {
+      if (!unsafeRight[t]) rightSlot[t] = takeSlot();
+    }
+    std::vector<std::uint32_t> seamSlot(seam.triCount(), kNone);
+    for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
+      if (inHole[t]) seamSlot[t] = takeSlot();
+    }
+    // Copies the kept triangles of another Impl array by array, freeing each
+    // source array once copied (two full copies of the right half's arrays
+    // never coexist); twins outside the kept set are linked through the
+    // borders below.
+    const std::size_t size = 3 * static_cast<std::size_t>(appended);
+    auto copyKept = [&](Impl& from, const std::vector<std::uint32_t>& slot,
+                        const std::vector<std::uint32_t>& global) {
+      auto each = [&](const auto& f) {
+        parallelChunks(threadCount(), slot.size(), [&](unsigned, std::size_t b, std::size_t e) {
+          for (std::size_t t = b; t < e; ++t) {
+            if (slot[t] == kNone) continue;
+            for (std::uint32_t i = 0; i < 3; ++i) f(3 * t + i, 3 * std::size_t{slot[t]} + i);
+          }
+        });
+      };
+      tv.resize(size);
+      each([&](std::size_t h, std::size_t out) {
+        const std::uint32_t v = from.tv[h];
+        tv[out] = v == kInf ? kInf : global[v];
+      });
+      std::vector<std::uint32_t>().swap(from.tv);
+      opp.resize(size);
+      each([&](std::size_t h, std::size_t out) {
+        const std::uint32_t g = from.opp[h];
+        opp[out] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+      });
+      std::vector<std::uint32_t>().swap(from.opp);
+      cons.resize(size);
+      each([&](std::size_t h, std::size_t out) { cons[out] = from.cons[h]; });
+      std::vector<std::uint8_t>().swap(from.cons);
+    };
+    copyKept(right, rightSlot, rightGlobal);
+    copyKept(seam, seamSlot, seamGlobal);
+    // The seam's constraints include the hole's border: take the flags from
+    // the real constrained edges instead.
+    for (const std::uint32_t t : seamSlot) {
+      if (t == kNone) continue;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t u = tv[3 * t + i], w = tv[3 * t + (i + 1) % 3];
+        cons[3 * t + i] = u != kInf && w != kInf && !edgeFeatures.find(edgeKey(u, w)).empty();
+      }
+    }
+    for (std::size_t k = 0; k < borders.size(); ++k) {
+      const SeamBorder& b = borders[k];
+      const std::uint32_t h = seamHalfedge[k];
+      const std::uint32_t safe = b.rightHalf ? 3 * rightSlot[b.safe / 3] + b.safe % 3 : b.safe;
+      link(safe, 3 * seamSlot[h / 3] + h % 3);
+    }
+    for (const std::uint32_t t : seamSlot) {
+      if (t == kNone) continue;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        const std::uint32_t h = 3 * t + i;
+        if (opp[h] >= opp.size() || opp[opp[h]] != h) {
+          throw internalError("merging the two halves left a broken triangle");
+        }
+      }
+    }
+
+    // Close the gaps the unused freed slots left: the last triangles move in.
+    std::uint32_t end = triCount();
+    for (std::size_t k = used; k < freeSlots.size(); ++k) {
+      const std::uint32_t f = freeSlots[k];
+      while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
+      if (f >= end) break;
+      const std::uint32_t t = --end;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        tv[3 * f + i] = tv[3 * t + i];
+        cons[3 * f + i] = cons[3 * t + i];
+        link(3 * f + i, opp[3 * t + i]);
+      }
+      tv[3 * t] = kNone;
+    }
+    while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
+    tv.resize(3 * static_cast<std::size_t>(end));
+    opp.resize(3 * static_cast<std::size_t>(end));
+    cons.resize(3 * static_cast<std::size_t>(end));
+    lastTriangle = 0;
   }
 
   // --------------------------------------------------------- constraints
@@ -842,17 +1362,20 @@ struct Cdt::Impl {
     return z[u] + t * (z[w] - z[u]);
   }
 
-  int edgePriority(std::uint32_t u, std::uint32_t w, FeatureId* best) const {
-    int pr = -1;
-    *best = kNoFeature;
+  /// Does feature f win a crossing or an edge against g? Higher
+  /// constraintPriority() first, then the earlier registered feature.
+  bool outranks(FeatureId f, FeatureId g) const {
+    const int pf = priorityOf(features, f), pg = priorityOf(features, g);
+    return pf > pg || (pf == pg && f < g);
+  }
+
+  /// The highest-ranking (outranks()) feature of the constrained edge u–w.
+  FeatureId edgeWinner(std::uint32_t u, std::uint32_t w) const {
+    FeatureId best = kNoFeature;
     for (FeatureId f : edgeFeatures.find(edgeKey(u, w))) {
-      const int p = priorityOf(features, f);
-      if (p > pr || *best == kNoFeature) {
-        pr = std::max(pr, p);
-        *best = f;
-      }
+      if (best == kNoFeature || outranks(f, best)) best = f;
     }
-    return pr;
+    return best;
   }
 
   /// Radius within which a constructed (rounded) point is taken to be an
@@ -871,9 +1394,8 @@ struct Cdt::Impl {
                                FeatureId f) {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     const Point2 X = geometry::intersectionPoint(xy[cur], xy[tgt], xy[R], xy[L]);
-    FeatureId existing;
-    const int pe = edgePriority(R, L, &existing);
-    const int pi = priorityOf(features, f);
+    const FeatureId existing = edgeWinner(R, L);
+    const bool insertedWins = outranks(f, existing);
     const double zE = zAlong(R, L, X), zI = zAlong(cur, tgt, X);
 
     auto dist2 = [&](std::uint32_t v) {
@@ -909,12 +1431,13 @@ struct Cdt::Impl {
     std::uint32_t v;
     if (useExisting) {
       v = nearest;
+      ev.moved = std::sqrt(dist2(v));
       if (v == c || v == d) detourConstraint(e, v);
     } else {
       v = static_cast<std::uint32_t>(xy.size());
       xy.push_back(X);
-      z.push_back(pi > pe ? zI : zE);
-      vfeat.push_back(pi > pe ? f : existing);
+      z.push_back(insertedWins ? zI : zE);
+      vfeat.push_back(insertedWins ? f : existing);
       rep.push_back(v);
       vhe.push_back(kNone);
       insertedUpTo = xy.size();
@@ -1130,15 +1653,46 @@ struct Cdt::Impl {
   }
 
   void insertPendingSegments() {
-    if (segmentsDone < segments.size()) startTrackingVhe();
-    for (; segmentsDone < segments.size(); ++segmentsDone) {
-      const Segment s = segments[segmentsDone];
-      const std::uint32_t a = find(s.a), b = find(s.b);
+    if (segmentsDone >= segments.size()) return;
+    std::vector<std::uint32_t> pending(segments.size() - segmentsDone);
+    for (std::size_t k = 0; k < pending.size(); ++k) {
+      pending[k] = static_cast<std::uint32_t>(segmentsDone + k);
+    }
+    insertSegments(pending);
+    segmentsDone = segments.size();
+  }
+
+  /// Inserts segments[k] for every k in `which`, in the Hilbert order of
+  /// their midpoints, so that consecutive ones work on the same part of the
+  /// mesh (and of memory). Nothing but rounding depends on this order:
+  /// crossing ties are decided by feature (outranks()), not by which segment
+  /// came first.
+  void insertSegments(const std::vector<std::uint32_t>& which) {
+    if (which.empty()) return;
+    startTrackingVhe();
+    std::vector<Point2> mid(which.size());
+    Box box;
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      const Segment& sg = segments[which[k]];
+      const Point2 &p = xy[sg.a], &q = xy[sg.b];
+      mid[k] = {0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
+      box.add(mid[k]);
+    }
+    const HilbertGrid hilbert(box);
+    std::vector<std::uint64_t> keys(which.size());
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      keys[k] = (static_cast<std::uint64_t>(hilbert(mid[k])) << 32) | which[k];
+    }
+    std::vector<Point2>().swap(mid);
+    radixSortHigh32(keys, threadCount());
+    for (const std::uint64_t key : keys) {
+      const Segment sg = segments[key & 0xffffffffu];
+      const std::uint32_t a = find(sg.a), b = find(sg.b);
       if (a == b) {
-        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, s.feature, xy[a]});
+        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
         continue;
       }
-      insertSegment(a, b, s.feature);
+      insertSegment(a, b, sg.feature);
     }
   }
 
@@ -1510,11 +2064,16 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
     // A crossing moved to a vertex beyond the tolerance is reported (forced);
     // it bends both features' constraints, and later crossings may split the
     // bent edges, so their segments are checked for connectivity only.
+    // Crossings snapped to a vertex bend both constraints by the distance
+    // moved, and a later crossing on the bent piece may snap again: a
+    // feature's chain may stray by the sum of its crossings' moves.
     std::vector<std::uint8_t> bent(m.features.size(), 0);
+    std::vector<double> moved(m.features.size(), 0.0);
     for (const auto& ev : m.report.intersections) {
-      if (!ev.forced) continue;
       for (const FeatureId g : {ev.existing, ev.inserted}) {
-        if (g < bent.size()) bent[g] = 1;
+        if (g >= bent.size()) continue;
+        if (ev.forced) bent[g] = 1;
+        moved[g] += ev.moved;
       }
     }
     for (const Segment& s : m.segments) {
@@ -1530,7 +2089,8 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       const double dx = Q.x - P.x, dy = Q.y - P.y, len2 = dx * dx + dy * dy;
       const double len = std::sqrt(len2);
       const double tol = std::max({2 * m.options.snapTolerance, 16 * Impl::constructionTolerance(P),
-                                   16 * Impl::constructionTolerance(Q), 1e-6 * len});
+                                   16 * Impl::constructionTolerance(Q), 1e-6 * len}) +
+                         moved[s.feature];
       auto near = [&](std::uint32_t v) {
         const Point2 w = me.xy(VertexId(v));
         const double along = ((w.x - P.x) * dx + (w.y - P.y) * dy) / len;

@@ -22,8 +22,9 @@
 //   * a constraint through existing vertices is split at them; collinear
 //     overlapping constraints share edges (the edge records every feature);
 //   * crossing constraints are split at their intersection; the new vertex's z
-//     is interpolated along the higher-priority feature (ties: the earlier
-//     inserted one); the event is recorded;
+//     is interpolated along the higher-priority feature (ties: the feature
+//     registered first); the event is recorded. Segments go in in the Hilbert
+//     order of their midpoints, whatever their input order;
 //   * zero-length segments (after merging) are dropped and recorded.
 //
 // Usage:
@@ -68,6 +69,12 @@ struct CdtOptions {
   /// points); 0 = std::thread::hardware_concurrency(). The result is identical
   /// for every value.
   unsigned threads = 1;
+  /// The first bulk of at least this many points is triangulated as two
+  /// halves, left and right of a vertical line (concurrently when threads >=
+  /// 2), which are then merged along the seam; 0 = always in one go. With
+  /// cocircular input the mesh may depend on this value (any choice is
+  /// Delaunay); it never depends on `threads`.
+  std::size_t splitMinPoints = 50000;
 };
 
 /// What the CDT changed in its input, so callers can report it.
@@ -90,6 +97,10 @@ struct CdtReport {
     /// triangles beside it, farther than the snap tolerance: the constraints
     /// bend through `at`.
     bool forced = false;
+    /// How far the vertex used lies from the computed crossing (0 for a new
+    /// vertex; up to the snap tolerance when snapped; more when forced). Both
+    /// constraints bend by this much; bends add up along a constraint.
+    double moved = 0;
   };
   struct Dropped {
     enum class What { ZeroLengthSegment, PointOutsideDomain };

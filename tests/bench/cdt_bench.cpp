@@ -6,11 +6,14 @@
 // (ru_maxrss, input included — the same input for both; tinsmith's includes
 // the output Mesh).
 //
+// tinsmith runs with 1 and with 2 threads (CdtOptions::threads), CGAL on one;
+// the three alternate within each repetition so that load changes on a shared
+// machine hit all alike.
+//
 //   cdt_bench                 all cases, 3 repetitions, best time reported
 //   cdt_bench --reps 5        more repetitions
 //   cdt_bench --case uniform  one case (uniform, grid, crossing, contours, scaling)
-//   cdt_bench --threads 2     tinsmith with 2 threads (CdtOptions::threads); CGAL
-//                             always runs on one
+//   cdt_bench --split-min N   CdtOptions::splitMinPoints (0: no two-half build)
 //   cdt_bench --smoke         10k points, every case once, checks validity (ctest)
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -27,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/allocator.hpp"
 #include "core/cdt/cdt.hpp"
 
 #ifdef TINSMITH_BENCH_CGAL
@@ -102,12 +106,13 @@ double now() {
 
 /// Builds with tinsmith; returns seconds, or −1 if the result fails validation.
 /// `withMesh` gets the time including the compact output Mesh (mesh()).
-unsigned gThreads = 1;
+std::size_t gSplitMin = tinsmith::CdtOptions{}.splitMinPoints;
 
-double runTinsmith(const Input& in, bool check, double& withMesh) {
+double runTinsmith(const Input& in, unsigned threads, bool check, double& withMesh) {
   const double t0 = now();
   tinsmith::CdtOptions options;
-  options.threads = gThreads;
+  options.threads = threads;
+  options.splitMinPoints = gSplitMin;
   tinsmith::Cdt cdt(options);
   const auto f = cdt.addFeature(tinsmith::FeatureKind::Contour, "bench");
   cdt.insertPoints(in.points);
@@ -158,8 +163,10 @@ struct Result {
   double peakMb = 0;
 };
 
+enum class Run { Tinsmith1, Tinsmith2, Cgal };
+
 /// Runs one (case, library) in a child process.
-Result measure(const std::string& kind, std::size_t n, bool cgal, bool check) {
+Result measure(const std::string& kind, std::size_t n, Run run, bool check) {
   int fds[2];
   if (pipe(fds) != 0) return {};
   const pid_t pid = fork();
@@ -172,10 +179,9 @@ Result measure(const std::string& kind, std::size_t n, bool cgal, bool check) {
     if (kind == "contours") in = contours(n);
     double t[2] = {-2, -1};
 #ifdef TINSMITH_BENCH_CGAL
-    t[0] = cgal ? runCgal(in, check) : runTinsmith(in, check, t[1]);
-#else
-    if (!cgal) t[0] = runTinsmith(in, check, t[1]);
+    if (run == Run::Cgal) t[0] = runCgal(in, check);
 #endif
+    if (run != Run::Cgal) t[0] = runTinsmith(in, run == Run::Tinsmith1 ? 1 : 2, check, t[1]);
     if (write(fds[1], t, sizeof t) != sizeof t) _exit(2);
     _exit(0);
   }
@@ -200,6 +206,7 @@ Result measure(const std::string& kind, std::size_t n, bool cgal, bool check) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tinsmith::returnLargeBlocksToSystem();  // as the tinsmith binary does; CGAL runs with it too
   int reps = 3;
   bool smoke = false;
   std::string only;
@@ -207,8 +214,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--smoke")) smoke = true;
     if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--case") && i + 1 < argc) only = argv[++i];
-    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
-      gThreads = static_cast<unsigned>(std::atoi(argv[++i]));
+    if (!std::strcmp(argv[i], "--split-min") && i + 1 < argc) {
+      gSplitMin = static_cast<std::size_t>(std::atoll(argv[++i]));
     }
   }
   struct Case {
@@ -219,6 +226,7 @@ int main(int argc, char** argv) {
   std::vector<Case> cases;
   if (smoke) {
     reps = 1;
+    gSplitMin = std::min<std::size_t>(gSplitMin, 2000);  // check the two-half build too
     cases = {{"uniform", 10000, "10k uniform"},
              {"grid", 10000, "10k perturbed grid"},
              {"crossing", 10000, "10k + 100 crossing segments"},
@@ -239,39 +247,45 @@ int main(int argc, char** argv) {
 #else
   const bool haveCgal = false;
 #endif
-  std::printf("tinsmith threads: %u (CGAL: 1)\n\n", gThreads);
-  std::printf("| case | tinsmith s | tinsmith + mesh() s | CGAL s | ratio | ratio incl. mesh() | "
-              "tinsmith peak MB | CGAL peak MB |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::printf("tinsmith with 1 and 2 threads (splitMinPoints %zu), CGAL on 1; best of %d\n\n",
+              gSplitMin, reps);
+  std::printf("| case | tinsmith 1T s | tinsmith 2T s | CGAL s | ratio 1T | ratio 2T | "
+              "ratio incl. mesh() 1T / 2T | peak MB 1T / 2T | CGAL peak MB |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  const std::vector<Run> runs =
+      haveCgal ? std::vector<Run>{Run::Tinsmith1, Run::Tinsmith2, Run::Cgal}
+               : std::vector<Run>{Run::Tinsmith1, Run::Tinsmith2};
+  const char* names[] = {"tinsmith 1T", "tinsmith 2T", "CGAL"};
   int failures = 0;
   for (const Case& c : cases) {
     if (!only.empty() && c.kind != only) continue;
-    Result best[2];
-    // Repetitions alternate between the libraries so that load changes on a
-    // shared machine hit both alike.
+    Result best[3];
     for (int r = 0; r < reps; ++r) {
-      for (int lib = 0; lib < (haveCgal ? 2 : 1); ++lib) {
-        const Result x = measure(c.kind, c.n, lib == 1, smoke);
+      for (const Run run : runs) {
+        const auto k = static_cast<std::size_t>(run);
+        const Result x = measure(c.kind, c.n, run, smoke);
         if (x.seconds < 0) {
           ++failures;
-          std::fprintf(stderr, "%s: %s failed\n", c.label.c_str(), lib ? "CGAL" : "tinsmith");
+          std::fprintf(stderr, "%s: %s failed\n", c.label.c_str(), names[k]);
           continue;
         }
-        if (best[lib].seconds < 0 || x.seconds < best[lib].seconds) {
-          best[lib].seconds = x.seconds;
-          best[lib].withMesh = x.withMesh;
+        if (best[k].seconds < 0 || x.seconds < best[k].seconds) {
+          best[k].seconds = x.seconds;
+          best[k].withMesh = x.withMesh;
         }
-        best[lib].peakMb = std::max(best[lib].peakMb, x.peakMb);
+        best[k].peakMb = std::max(best[k].peakMb, x.peakMb);
       }
     }
+    const Result &one = best[0], &two = best[1], &cgal = best[2];
     if (haveCgal) {
-      std::printf("| %s | %.3f | %.3f | %.3f | %.2f | %.2f | %.0f | %.0f |\n", c.label.c_str(),
-                  best[0].seconds, best[0].withMesh, best[1].seconds,
-                  best[0].seconds / best[1].seconds, best[0].withMesh / best[1].seconds,
-                  best[0].peakMb, best[1].peakMb);
+      std::printf("| %s | %.3f | %.3f | %.3f | %.2f | %.2f | %.2f / %.2f | %.0f / %.0f | %.0f |\n",
+                  c.label.c_str(), one.seconds, two.seconds, cgal.seconds,
+                  one.seconds / cgal.seconds, two.seconds / cgal.seconds,
+                  one.withMesh / cgal.seconds, two.withMesh / cgal.seconds, one.peakMb,
+                  two.peakMb, cgal.peakMb);
     } else {
-      std::printf("| %s | %.3f | %.3f | – | – | – | %.0f | – |\n", c.label.c_str(),
-                  best[0].seconds, best[0].withMesh, best[0].peakMb);
+      std::printf("| %s | %.3f | %.3f | – | – | – | – | %.0f / %.0f | – |\n", c.label.c_str(),
+                  one.seconds, two.seconds, one.peakMb, two.peakMb);
     }
     std::fflush(stdout);
   }

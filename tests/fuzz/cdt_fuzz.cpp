@@ -1,6 +1,9 @@
 // Fuzz target: bytes → a PSLG. Coordinates come from a small integer lattice
 // (so collinear, cocircular, duplicate and overlapping input is common), scaled
 // and offset to UTM-sized values, some nudged by a few ulps.
+// tests/fuzz/seeds keeps inputs that once failed (named for what they showed);
+// tools/test.sh runs them before the fuzzing proper. CDT_FUZZ_VERBOSE=1
+// prints a run's operations.
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <cmath>
@@ -46,6 +49,8 @@ int runOne(const std::uint8_t* data, std::size_t size) {
   const double offset = in.PickValueInArray({0.0, 7000000.0, 500000.25});
   tinsmith::CdtOptions options;
   options.snapTolerance = in.PickValueInArray({0.0, 0.0, 0.0005 * scale, 1.5 * scale});
+  // Small thresholds send the first bulk through the two-half build.
+  options.splitMinPoints = in.PickValueInArray<std::size_t>({0, 6, 24, 50000});
   tinsmith::Cdt cdt(options);
   std::vector<tinsmith::FeatureId> features;
   for (int k = 0; k < 6; ++k) {

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <string>
 
+#include "core/base/allocator.hpp"
 #include "core/base/error.hpp"
 #include "core/base/version.hpp"
 #include "ingest/base/gdal_runtime.hpp"
@@ -27,6 +28,7 @@ std::string versionText() {
 int main(int argc, char** argv) {
   using namespace tinsmith;
   using namespace tinsmith::cli;
+  returnLargeBlocksToSystem();
 
   CLI::App app{"tinsmith — constrained Delaunay terrain TINs, multilevel least-squares\n"
                "level-of-detail tiles and a 3D Tiles 1.1 server.",
