@@ -146,7 +146,9 @@ void radixSortHigh32(std::vector<std::uint64_t>& v, unsigned threads) {
 
 /// Features of constrained edges, keyed by edgeKey. Most edges carry one
 /// feature, stored inline; edges shared by several features point to an
-/// immutable list (copy on write, so split halves may share one).
+/// immutable list (copy on write, so split halves may share one). An open
+/// addressing table (linear probing, 16 bytes a slot, at most 7/8 full):
+/// terrain inputs constrain about one edge per vertex.
 class EdgeFeatureMap {
  public:
   struct View {
@@ -158,16 +160,17 @@ class EdgeFeatureMap {
   };
 
   [[nodiscard]] View find(std::uint64_t key) const {
-    auto it = map_.find(key);
-    if (it == map_.end()) return {};
-    if (it->second.list == kNoList) return {&it->second.single, 1};
-    const auto& l = lists_[it->second.list];
-    return {l.data(), l.size()};
+    const std::size_t i = slotOf(key);
+    if (i == kMissing) return {};
+    return view(slots_[i].entry);
   }
   void add(std::uint64_t key, FeatureId f) {
-    auto [it, fresh] = map_.try_emplace(key, Entry{f, kNoList});
-    if (fresh) return;
-    Entry& e = it->second;
+    std::size_t i = slotOf(key);
+    if (i == kMissing) {
+      insertNew(key, {f, kNoList});
+      return;
+    }
+    Entry& e = slots_[i].entry;
     if (e.list == kNoList) {
       if (e.single == f) return;
       lists_.push_back({e.single, f});
@@ -180,35 +183,97 @@ class EdgeFeatureMap {
     }
     e.list = static_cast<std::uint32_t>(lists_.size() - 1);
   }
-  void erase(std::uint64_t key) { map_.erase(key); }
-  /// Calls f(key, features) for every edge.
-  template <class F>
-  void forEach(const F& f) const {
-    for (const auto& [key, e] : map_) {
-      if (e.list == kNoList) {
-        f(key, View{&e.single, 1});
-      } else {
-        f(key, View{lists_[e.list].data(), lists_[e.list].size()});
+  void erase(std::uint64_t key) {
+    std::size_t i = slotOf(key);
+    if (i == kMissing) return;
+    // Backward-shift deletion: pull later entries of the probe run forward.
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t j = (i + 1) & mask; slots_[j].key != kEmpty; j = (j + 1) & mask) {
+      const std::size_t home = hash(slots_[j].key);
+      if (((j - home) & mask) >= ((j - i) & mask)) {
+        slots_[i] = slots_[j];
+        i = j;
       }
     }
+    slots_[i].key = kEmpty;
+    --size_;
   }
   /// The edge `from` was split into `a` and `b`: both inherit its features.
   void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
-    auto it = map_.find(from);
-    if (it == map_.end()) return;
-    const Entry e = it->second;
-    map_.erase(it);
-    map_[a] = e;
-    map_[b] = e;
+    const std::size_t i = slotOf(from);
+    if (i == kMissing) return;
+    const Entry e = slots_[i].entry;
+    erase(from);
+    set(a, e);
+    set(b, e);
+  }
+  /// Calls f(key, features) for every edge.
+  template <class F>
+  void forEach(const F& f) const {
+    for (const Slot& sl : slots_) {
+      if (sl.key != kEmpty) f(sl.key, view(sl.entry));
+    }
   }
 
  private:
   static constexpr std::uint32_t kNoList = 0xffffffffu;
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no edgeKey is this
+  static constexpr std::size_t kMissing = ~std::size_t{0};
   struct Entry {
     FeatureId single;
     std::uint32_t list;
   };
-  std::unordered_map<std::uint64_t, Entry> map_;
+  struct Slot {
+    std::uint64_t key = kEmpty;
+    Entry entry{};
+  };
+
+  [[nodiscard]] View view(const Entry& e) const {
+    if (e.list == kNoList) return {&e.single, 1};
+    const auto& l = lists_[e.list];
+    return {l.data(), l.size()};
+  }
+  [[nodiscard]] std::size_t hash(std::uint64_t key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
+  [[nodiscard]] std::size_t slotOf(std::uint64_t key) const {
+    if (slots_.empty()) return kMissing;
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = hash(key);; i = (i + 1) & mask) {
+      if (slots_[i].key == key) return i;
+      if (slots_[i].key == kEmpty) return kMissing;
+    }
+  }
+  void set(std::uint64_t key, const Entry& e) {
+    const std::size_t i = slotOf(key);
+    if (i == kMissing) {
+      insertNew(key, e);
+    } else {
+      slots_[i].entry = e;
+    }
+  }
+  void insertNew(std::uint64_t key, const Entry& e) {
+    if (8 * (size_ + 1) > 7 * slots_.size()) grow();
+    const std::size_t mask = slots_.size() - 1;
+    std::size_t i = hash(key);
+    while (slots_[i].key != kEmpty) i = (i + 1) & mask;
+    slots_[i] = {key, e};
+    ++size_;
+  }
+  void grow() {
+    std::vector<Slot> old = std::move(slots_);
+    const std::size_t capacity = old.empty() ? 64 : 2 * old.size();
+    slots_.assign(capacity, Slot{});
+    shift_ = 64 - std::countr_zero(capacity);
+    size_ = 0;
+    for (const Slot& sl : old) {
+      if (sl.key != kEmpty) insertNew(sl.key, sl.entry);
+    }
+  }
+
+  std::vector<Slot> slots_;
+  std::size_t size_ = 0;
+  int shift_ = 64;
   std::vector<std::vector<FeatureId>> lists_;
 };
 
@@ -277,8 +342,10 @@ struct Cdt::Impl {
   bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
-  std::vector<std::uint32_t> visitStamp;
-  std::uint32_t stamp = 0;
+  // Scratch of nearVertex(): triangles to visit, and those visited (marked
+  // meanwhile by bit 1 of cons[3t], which nearVertex() clears again).
+  std::vector<std::uint32_t> nearTodo, nearSeen;
+  static constexpr std::uint8_t kSeen = 2;
 
   /// Takes the triangles back from the output mesh (inverse of the
   /// compaction in buildMesh): the working arrays become exactly what they
@@ -651,19 +718,17 @@ struct Cdt::Impl {
   std::uint32_t nearVertex(const Point2& p, const Location& loc) {
     const double tol = options.snapTolerance;
     if (!(tol > 0)) return kNone;
-    if (visitStamp.size() < triCount()) visitStamp.resize(triCount(), 0);
-    ++stamp;
-    std::vector<std::uint32_t> todo{loc.t};
-    if (loc.kind == LocKind::OnEdge) todo.push_back(opp[loc.h] / 3);
+    nearTodo.assign({loc.t});
+    if (loc.kind == LocKind::OnEdge) nearTodo.push_back(opp[loc.h] / 3);
+    nearSeen.clear();
     std::uint32_t best = kNone;
     double bestD = tol * tol;
-    std::size_t visited = 0;
-    while (!todo.empty() && visited < 4096) {
-      const std::uint32_t t = todo.back();
-      todo.pop_back();
-      if (visitStamp[t] == stamp) continue;
-      visitStamp[t] = stamp;
-      ++visited;
+    while (!nearTodo.empty() && nearSeen.size() < 4096) {
+      const std::uint32_t t = nearTodo.back();
+      nearTodo.pop_back();
+      if (cons[3 * t] & kSeen) continue;
+      cons[3 * t] |= kSeen;
+      nearSeen.push_back(t);
       for (std::uint32_t i = 0; i < 3; ++i) {
         const std::uint32_t v = tv[3 * t + i];
         if (v == kInf) continue;
@@ -674,9 +739,10 @@ struct Cdt::Impl {
           bestD = d;
         }
         const std::uint32_t n = opp[3 * t + i] / 3;
-        if (visitStamp[n] != stamp && inConflict(n, p)) todo.push_back(n);
+        if (!(cons[3 * n] & kSeen) && inConflict(n, p)) nearTodo.push_back(n);
       }
     }
+    for (const std::uint32_t t : nearSeen) cons[3 * t] &= ~kSeen;
     return best;
   }
 
@@ -825,11 +891,7 @@ struct Cdt::Impl {
     if (order.empty()) return;
 
     if (!triangulated()) {
-      // 2 triangles per point, plus room for 16 constraint intersections per
-      // pending segment (each adds 2 triangles) so that the arrays rarely
-      // grow: a doubling would briefly hold both copies, while capacity never
-      // used costs address space only (the pages are never touched).
-      reserveTriangles(order.size() * 2 + 4 + kTrianglesPerSegment * (segments.size() - segmentsDone));
+      reserveTriangles(trianglesFor(order.size(), segments.size() - segmentsDone));
       if (options.splitMinPoints > 0 && order.size() >= options.splitMinPoints &&
           insertAsTwoHalves(order)) {
         return;
@@ -838,7 +900,14 @@ struct Cdt::Impl {
     insertInOrder(order);
   }
 
-  static constexpr std::size_t kTrianglesPerSegment = 32;
+  /// Triangles to reserve for a first bulk: 2 per point, plus room for
+  /// constraint crossings (2 triangles each; up to 16 per segment, at most
+  /// one per point) so that the arrays rarely grow: a doubling would briefly
+  /// hold both copies, while capacity never used costs address space only
+  /// (its pages are never touched).
+  static std::size_t trianglesFor(std::size_t points, std::size_t segments) {
+    return 2 * points + 4 + std::min(32 * segments, points);
+  }
   void reserveTriangles(std::size_t triangles) {
     tv.reserve(3 * triangles);
     opp.reserve(3 * triangles);
@@ -1039,7 +1108,7 @@ struct Cdt::Impl {
     }
     right.rep.assign(rightGlobal.size(), kNone);
     right.insertedUpTo = rightGlobal.size();
-    right.reserveTriangles(rightOrder.size() * 2 + 4 + kTrianglesPerSegment * rightSegments.size());
+    right.reserveTriangles(trianglesFor(rightOrder.size(), rightSegments.size()));
 
     // Each half is triangulated and classified on its own thread.
     std::vector<std::uint8_t> unsafeLeft, unsafeRight;
@@ -1662,37 +1731,47 @@ struct Cdt::Impl {
     segmentsDone = segments.size();
   }
 
-  /// Inserts segments[k] for every k in `which`, in the Hilbert order of
-  /// their midpoints, so that consecutive ones work on the same part of the
-  /// mesh (and of memory). Nothing but rounding depends on this order:
-  /// crossing ties are decided by feature (outranks()), not by which segment
-  /// came first.
+  /// Inserts segments[k] for every k in `which` (ascending), in runs of up to
+  /// 64 consecutive segments of one polyline (each starting where the last
+  /// ended), the runs in the Hilbert order of their first midpoints: each
+  /// segment starts next to the last one, and consecutive runs work on the
+  /// same part of the mesh (and of memory). Nothing but rounding depends on
+  /// this order: crossing ties are decided by feature (outranks()), not by
+  /// which segment came first.
   void insertSegments(const std::vector<std::uint32_t>& which) {
     if (which.empty()) return;
     startTrackingVhe();
-    std::vector<Point2> mid(which.size());
+    std::vector<std::uint32_t> runStart;  // positions in `which`
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      const bool continues = k > 0 && k - runStart.back() < 64 &&
+                             segments[which[k]].a == segments[which[k - 1]].b;
+      if (!continues) runStart.push_back(static_cast<std::uint32_t>(k));
+    }
+    auto midpoint = [&](std::uint32_t k) {
+      const Point2 &p = xy[segments[which[k]].a], &q = xy[segments[which[k]].b];
+      return Point2{0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
+    };
     Box box;
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      const Segment& sg = segments[which[k]];
-      const Point2 &p = xy[sg.a], &q = xy[sg.b];
-      mid[k] = {0.5 * p.x + 0.5 * q.x, 0.5 * p.y + 0.5 * q.y};
-      box.add(mid[k]);
-    }
+    for (const std::uint32_t k : runStart) box.add(midpoint(k));
     const HilbertGrid hilbert(box);
-    std::vector<std::uint64_t> keys(which.size());
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      keys[k] = (static_cast<std::uint64_t>(hilbert(mid[k])) << 32) | which[k];
+    std::vector<std::uint64_t> keys(runStart.size());
+    for (std::size_t r = 0; r < runStart.size(); ++r) {
+      keys[r] = (static_cast<std::uint64_t>(hilbert(midpoint(runStart[r]))) << 32) | r;
     }
-    std::vector<Point2>().swap(mid);
     radixSortHigh32(keys, threadCount());
     for (const std::uint64_t key : keys) {
-      const Segment sg = segments[key & 0xffffffffu];
-      const std::uint32_t a = find(sg.a), b = find(sg.b);
-      if (a == b) {
-        report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
-        continue;
+      const std::size_t r = key & 0xffffffffu;
+      const std::size_t end = r + 1 < runStart.size() ? runStart[r + 1] : which.size();
+      for (std::size_t k = runStart[r]; k < end; ++k) {
+        const Segment sg = segments[which[k]];
+        const std::uint32_t a = find(sg.a), b = find(sg.b);
+        if (a == b) {
+          report.dropped.push_back(
+              {CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
+          continue;
+        }
+        insertSegment(a, b, sg.feature);
       }
-      insertSegment(a, b, sg.feature);
     }
   }
 
@@ -1868,6 +1947,10 @@ void Cdt::finalize() {
   }
   m.insertPendingPoints();
   m.insertPendingSegments();
+  // Vertex half-edges serve constraint insertion only: recomputed when more
+  // constraints come.
+  m.trackVhe = false;
+  std::vector<std::uint32_t>().swap(m.vhe);
   m.finalized = true;
   m.meshBuilt = false;
 }

@@ -13,6 +13,14 @@
 // (core/geometry/predicates.hpp); constructed points (constraint
 // intersections) are rounded to doubles.
 //
+// A first bulk of at least CdtOptions::splitMinPoints points is built as two
+// halves, left and right of the median x (on two threads when threads >= 2):
+// each half gets its points and the constraints with both ends on its side;
+// the triangles whose circumcircles certainly stay on their own side are
+// kept, the hole between them is filled by the constrained Delaunay
+// triangulation of the rest's corners, and the constraints that cross the
+// split go in last. The split never depends on the thread count.
+//
 // Degeneracies, decided deterministically (same input and options → same mesh):
 //   * cocircular quadruples: an edge is flipped only if the opposite vertex is
 //     strictly inside the circumcircle — the neutral case keeps the current edge;
@@ -65,9 +73,10 @@ struct CdtOptions {
   double snapTolerance = 0.0;
   /// Copied into TinData::crs.
   std::string crs;
-  /// Threads for the parallel stages (spatial sort keys and sort, output mesh
-  /// points); 0 = std::thread::hardware_concurrency(). The result is identical
-  /// for every value.
+  /// Threads for the parallel stages (spatial sort, the two halves of a
+  /// split build, copying, output mesh points); 0 =
+  /// std::thread::hardware_concurrency(). The result is identical for every
+  /// value.
   unsigned threads = 1;
   /// The first bulk of at least this many points is triangulated as two
   /// halves, left and right of a vertical line (concurrently when threads >=

@@ -267,14 +267,15 @@ BinaryLocation BinaryTriangulation::locate(Point2 p) const {
                          ") is outside the square domain of the binary triangulation",
                      {}, "choose a domain that covers every data point");
   }
+  return descend(g, roots()[static_cast<std::size_t>(rootIndex(p))]);
+}
+
+int BinaryTriangulation::rootIndex(Point2 p) const {
+  const Point2 g = toGrid(p);
+  const double n = static_cast<double>(side_);
   const double dx = g.x - n / 2, dy = g.y - n / 2;
-  int root = 0;
-  if (std::abs(dy) >= std::abs(dx)) {
-    root = dy < 0 ? 0 : 2;
-  } else {
-    root = dx > 0 ? 1 : 3;
-  }
-  return descend(g, roots()[static_cast<std::size_t>(root)]);
+  if (std::abs(dy) >= std::abs(dx)) return dy < 0 ? 0 : 2;
+  return dx > 0 ? 1 : 3;
 }
 
 BinaryLocation BinaryTriangulation::locateFrom(Point2 p, std::uint64_t path) const {

@@ -142,6 +142,21 @@ class BinaryTriangulation {
   /// The same, continuing downward from a triangle that is known to contain p
   /// (a coarser one, from an earlier location: nested refinement).
   [[nodiscard]] BinaryLocation locateFrom(Point2 p, std::uint64_t path) const;
+  /// The same from the triangle itself (no rebuilding from the path).
+  [[nodiscard]] BinaryLocation locateIn(Point2 p, const BinaryTriangle& start) const { return descend(toGrid(p), start); }
+
+  /// The four triangles around the centre (depth 0), and which of them holds
+  /// p (the one locate() starts from; p inside the square).
+  [[nodiscard]] std::array<BinaryTriangle, 4> rootTriangles() const { return roots(); }
+  [[nodiscard]] int rootIndex(Point2 p) const;
+  /// Whether `t` is split in the current triangulation (its split vertex is active).
+  [[nodiscard]] bool isSplit(const BinaryTriangle& t) const {
+    return t.depth <= 2 * gridLevels_ - 2 && isActive((t.l + t.r) / 2);
+  }
+  /// Grid coordinates (units of the finest cell) of a vertex.
+  [[nodiscard]] Point2 gridPosition(std::uint64_t key) const {
+    return {static_cast<double>(column(key)), static_cast<double>(row(key))};
+  }
 
   /// Rebuilds the triangle (l, a, r, depth) from its path.
   [[nodiscard]] BinaryTriangle triangleFromPath(std::uint64_t path) const;

@@ -42,19 +42,6 @@ void checkTriangles(std::size_t vertexCount, std::span<const Triangle> triangles
 
 }  // namespace
 
-void TriangleMoments::add(const std::array<double, 3>& b, double z, double w) {
-  const double w0 = w * b[0], w1 = w * b[1], w2 = w * b[2];
-  bb[0] += w0 * b[0];
-  bb[1] += w0 * b[1];
-  bb[2] += w0 * b[2];
-  bb[3] += w1 * b[1];
-  bb[4] += w1 * b[2];
-  bb[5] += w2 * b[2];
-  bz[0] += w0 * z;
-  bz[1] += w1 * z;
-  bz[2] += w2 * z;
-}
-
 void TriangleMoments::merge(const TriangleMoments& other) {
   for (int i = 0; i < 6; ++i) bb[i] += other.bb[i];
   for (int i = 0; i < 3; ++i) bz[i] += other.bz[i];
@@ -211,7 +198,7 @@ SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Tr
   }
   SparseMatrix g(static_cast<Eigen::Index>(2 * triangles.size()), static_cast<Eigen::Index>(vertices.size()));
   g.setFromTriplets(triplets.begin(), triplets.end());
-  triplets = {};
+  std::vector<Triplet>().swap(triplets);  // frees (assigning {} keeps the capacity)
   SparseMatrix e = SparseMatrix(g.transpose()) * g;
   e.makeCompressed();
   return e;

@@ -51,7 +51,18 @@ struct Sample {
 struct TriangleMoments {
   std::array<double, 6> bb{};
   std::array<double, 3> bz{};
-  void add(const std::array<double, 3>& b, double z, double w);
+  void add(const std::array<double, 3>& b, double z, double w) {
+    const double w0 = w * b[0], w1 = w * b[1], w2 = w * b[2];
+    bb[0] += w0 * b[0];
+    bb[1] += w0 * b[1];
+    bb[2] += w0 * b[2];
+    bb[3] += w1 * b[1];
+    bb[4] += w1 * b[2];
+    bb[5] += w2 * b[2];
+    bz[0] += w0 * z;
+    bz[1] += w1 * z;
+    bz[2] += w2 * z;
+  }
   void merge(const TriangleMoments& other);
 };
 

@@ -69,6 +69,62 @@ void forEachPart(std::size_t n, int threads, F&& f) {
   for (auto& th : pool) th.join();
 }
 
+/// Sorts (code, index) pairs by code with a stable LSD radix sort over the
+/// low `bits` bits of the codes (11 bits a pass): linear in the points.
+void radixSortByCode(std::vector<std::pair<std::uint64_t, std::uint32_t>>& v, int bits) {
+  constexpr int kDigit = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> tmp(v.size());
+  std::vector<std::size_t> offset(kBuckets);
+  for (int sh = 0; sh < bits; sh += kDigit) {
+    std::fill(offset.begin(), offset.end(), 0);
+    for (const auto& e : v) ++offset[(e.first >> sh) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (auto& o : offset) {
+      const std::size_t c = o;
+      o = sum;
+      sum += c;
+    }
+    for (const auto& e : v) tmp[offset[(e.first >> sh) & (kBuckets - 1)]++] = e;
+    v.swap(tmp);
+  }
+}
+
+/// Point location below the triangles of the previous level (the
+/// triangulations are nested, 8.10). The bisection subtree of Δ_k under each
+/// split triangle of Δ_{k−1} is laid out once as nodes holding the splitting
+/// line; a point walks it with one orientation test a step and no hash
+/// lookups, taking the decisions of BinaryTriangulation::descend.
+struct LocatorNode {
+  Point2 a, j;             ///< the splitting line a–j, grid coordinates
+  double lSide = 0.0;      ///< orient(a, j, l): the side of the l child
+  std::int32_t child[2]{};  ///< l child, r child: ≥ 0 a node, < 0 the leaf −1 − triangle index
+};
+
+double orient(const Point2& a, const Point2& b, const Point2& c) {
+  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+}
+
+std::int32_t buildLocator(const BinaryTriangulation& mesh, const KeyIndexMap& triIndex, const BinaryTriangle& t,
+                          std::vector<LocatorNode>& nodes) {
+  if (!mesh.isSplit(t)) {
+    const std::uint32_t id = triIndex.find(t.path);
+    if (id == KeyIndexMap::kNone) throw internalError("multilevel fit: a leaf triangle is not in the triangulation");
+    return -1 - static_cast<std::int32_t>(id);
+  }
+  const std::uint64_t j = (t.l + t.r) / 2;
+  const Point2 pl = mesh.gridPosition(t.l), pa = mesh.gridPosition(t.a), pr = mesh.gridPosition(t.r);
+  const Point2 pj{0.5 * (pl.x + pr.x), 0.5 * (pl.y + pr.y)};
+  const auto index = static_cast<std::int32_t>(nodes.size());
+  nodes.push_back({pa, pj, orient(pa, pj, pl), {0, 0}});
+  const std::int32_t first = buildLocator(mesh, triIndex, BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1}, nodes);
+  const std::int32_t second =
+      buildLocator(mesh, triIndex, BinaryTriangle{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1}, nodes);
+  nodes[static_cast<std::size_t>(index)].child[0] = first;
+  nodes[static_cast<std::size_t>(index)].child[1] = second;
+  return index;
+}
+
 struct CellRecord {
   std::uint64_t cell = 0;  ///< Morton code of the cell at the current level
   std::size_t count = 0;
@@ -150,21 +206,49 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     throw inputError("there are " + std::to_string(options.weights.size()) + " weights for " +
                      std::to_string(input.size()) + " points", {}, "give one weight per point or none");
   }
-  double xmin = std::numeric_limits<double>::infinity(), ymin = xmin, zmin = xmin;
-  double xmax = -xmin, ymax = -xmin, zmax = -xmin;
-  for (std::size_t i = 0; i < input.size(); ++i) {
-    const auto& p = input[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      throw inputError("data point " + std::to_string(i) + " has a non-finite coordinate", {},
-                       "remove NaN or infinite values from the input");
+  const int threads = options.threads > 0 ? options.threads
+                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  // Extent and validity, per part (workers never throw: the first bad point
+  // is reported after they are done).
+  struct Extent {
+    double xmin = std::numeric_limits<double>::infinity(), ymin = xmin, zmin = xmin;
+    double xmax = -xmin, ymax = -xmin, zmax = -xmin;
+    std::size_t badPoint = std::numeric_limits<std::size_t>::max(), badWeight = badPoint;
+  };
+  std::vector<Extent> extents(kParts);
+  forEachPart(input.size(), threads, [&](std::size_t b, std::size_t e, int worker) {
+    Extent ex;
+    for (std::size_t i = b; i < e; ++i) {
+      const auto& p = input[i];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        ex.badPoint = std::min(ex.badPoint, i);
+        continue;
+      }
+      if (!options.weights.empty() && !(options.weights[i] > 0.0 && std::isfinite(options.weights[i]))) {
+        ex.badWeight = std::min(ex.badWeight, i);
+      }
+      ex.xmin = std::min(ex.xmin, p.x), ex.xmax = std::max(ex.xmax, p.x);
+      ex.ymin = std::min(ex.ymin, p.y), ex.ymax = std::max(ex.ymax, p.y);
+      ex.zmin = std::min(ex.zmin, p.z), ex.zmax = std::max(ex.zmax, p.z);
     }
-    if (!options.weights.empty() && !(options.weights[i] > 0.0 && std::isfinite(options.weights[i]))) {
-      throw inputError("data point " + std::to_string(i) + " has a weight that is not positive and finite");
-    }
-    xmin = std::min(xmin, p.x), xmax = std::max(xmax, p.x);
-    ymin = std::min(ymin, p.y), ymax = std::max(ymax, p.y);
-    zmin = std::min(zmin, p.z), zmax = std::max(zmax, p.z);
+    extents[static_cast<std::size_t>(worker)] = ex;
+  });
+  Extent all;
+  for (const auto& ex : extents) {
+    all.xmin = std::min(all.xmin, ex.xmin), all.xmax = std::max(all.xmax, ex.xmax);
+    all.ymin = std::min(all.ymin, ex.ymin), all.ymax = std::max(all.ymax, ex.ymax);
+    all.zmin = std::min(all.zmin, ex.zmin), all.zmax = std::max(all.zmax, ex.zmax);
+    all.badPoint = std::min(all.badPoint, ex.badPoint);
+    all.badWeight = std::min(all.badWeight, ex.badWeight);
   }
+  if (all.badPoint <= all.badWeight && all.badPoint != std::numeric_limits<std::size_t>::max()) {
+    throw inputError("data point " + std::to_string(all.badPoint) + " has a non-finite coordinate", {},
+                     "remove NaN or infinite values from the input");
+  }
+  if (all.badWeight != std::numeric_limits<std::size_t>::max()) {
+    throw inputError("data point " + std::to_string(all.badWeight) + " has a weight that is not positive and finite");
+  }
+  const double xmin = all.xmin, ymin = all.ymin, zmin = all.zmin, xmax = all.xmax, ymax = all.ymax, zmax = all.zmax;
   Point2 origin{xmin, ymin};
   double size = std::max(xmax - xmin, ymax - ymin);
   if (options.domainOrigin) origin = *options.domainOrigin;
@@ -175,8 +259,6 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   const int gridLevels = options.maxLevel + 1;
   BinaryTriangulation mesh(origin, size, gridLevels);
   const std::uint64_t side = mesh.side();
-  const int threads = options.threads > 0 ? options.threads
-                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 
   // Sort the data along the Morton curve of the finest grid.
   auto fineCell = [&](const Point2& g) {
@@ -186,34 +268,65 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     return spreadBits(ci) | (spreadBits(cj) << 1);
   };
   const std::size_t n = input.size();
-  std::vector<Point3> pts(n);
+  std::vector<Point3> pts;
   std::vector<double> weights;
+  // Morton code of each point's cell of the finest grid, in sorted order: the
+  // cell of Ψ_k holding point i is codes[i] >> 2(K − k).
+  std::vector<std::uint64_t> codes;
   {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
     const double sideD = static_cast<double>(side);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Point2 g = mesh.toGrid(input[i].xy());
-      if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
-        throw inputError("data point " + std::to_string(i) + " is outside the square domain", {},
-                         "choose a domain that covers every data point");
+    std::vector<std::size_t> outside(kParts, std::numeric_limits<std::size_t>::max());
+    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+      for (std::size_t i = b; i < e; ++i) {
+        const Point2 g = mesh.toGrid(input[i].xy());
+        if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
+          outside[static_cast<std::size_t>(worker)] = std::min(outside[static_cast<std::size_t>(worker)], i);
+        }
+        order[i] = {fineCell(g), static_cast<std::uint32_t>(i)};
       }
-      order[i] = {fineCell(g), static_cast<std::uint32_t>(i)};
+    });
+    const std::size_t firstOutside = *std::min_element(outside.begin(), outside.end());
+    if (firstOutside != std::numeric_limits<std::size_t>::max()) {
+      throw inputError("data point " + std::to_string(firstOutside) + " is outside the square domain", {},
+                       "choose a domain that covers every data point");
     }
-    std::sort(order.begin(), order.end());
-    for (std::size_t i = 0; i < n; ++i) pts[i] = input[order[i].second];
+    radixSortByCode(order, 2 * gridLevels);
+    // Split the pairs before permuting the points (lower peak memory).
+    std::vector<std::uint32_t> permutation(n);
+    codes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      codes[i] = order[i].first;
+      permutation[i] = order[i].second;
+    }
+    std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(order);  // frees (assigning {} keeps the capacity)
+    pts.resize(n);
+    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int) {
+      for (std::size_t i = b; i < e; ++i) pts[i] = input[permutation[i]];
+    });
     if (!options.weights.empty()) {
       weights.resize(n);
-      for (std::size_t i = 0; i < n; ++i) weights[i] = options.weights[order[i].second];
+      for (std::size_t i = 0; i < n; ++i) weights[i] = options.weights[permutation[i]];
     }
+  }
+
+  // Level 1 locates every point below the four triangles around the centre.
+  std::vector<BinaryTriangle> previousTris;
+  {
+    const auto roots = mesh.rootTriangles();
+    previousTris.assign(roots.begin(), roots.end());
   }
 
   // Constraints (8.9): snapped to the finest grid, active from the start.
   std::vector<std::pair<std::uint64_t, double>> fixedKeys;
-  for (const auto& f : options.fixed) {
+  for (std::size_t index = 0; index < options.fixed.size(); ++index) {
+    const Point3& f = options.fixed[index];
     const Point2 g = mesh.toGrid(f.xy());
     const double sideD = static_cast<double>(side);
-    if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD)) {
-      throw inputError("fixed vertex (" + std::to_string(f.x) + ", " + std::to_string(f.y) + ") is outside the domain");
+    if (!(g.x >= 0.0 && g.y >= 0.0 && g.x <= sideD && g.y <= sideD) || !std::isfinite(f.z)) {
+      throw inputError("fixed point " + std::to_string(index) + " (" + std::to_string(f.x) + ", " + std::to_string(f.y) +
+                           ", " + std::to_string(f.z) + ") is outside the square domain or not finite",
+                       {}, "fixed points must lie inside the data's bounding square (or the given domain)");
     }
     const std::uint64_t k = mesh.key(static_cast<std::uint64_t>(std::llround(g.x)), static_cast<std::uint64_t>(std::llround(g.y)));
     mesh.activate(k);
@@ -232,9 +345,10 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
                                              : 0.0;
   const bool useError = crit.errorAbsolute.has_value() || crit.errorPercent.has_value();
 
-  std::vector<std::uint64_t> paths(n, 0);
-  std::vector<std::uint64_t> previousPaths;
+  // Per point: the index of its triangle in the current triangulation. Per
+  // triangle of the previous level (previousTris): its merged moments.
   std::vector<std::uint32_t> triOf(n, 0);
+  std::vector<TriangleMoments> previousMoments;
   Vector coefficients;
   std::vector<LevelStats> stats;
 
@@ -245,9 +359,9 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     const std::size_t nv = mesh.activeCount();
     st.vertices = nv;
 
-    // Nested iteration: old coefficients carry over (dense ids are stable);
-    // a new vertex gets f_{k−1} at its position = the mean of its split edge's
-    // ends (the edge lies inside one triangle of Δ_{k−1}).
+    // Nested iteration (8.10): old coefficients carry over (dense ids are
+    // stable); a new vertex gets f_{k−1} at its position = the mean of its
+    // split edge's ends (the edge lies inside one triangle of Δ_{k−1}).
     const auto oldCount = static_cast<std::size_t>(coefficients.size());
     coefficients.conservativeResize(static_cast<Eigen::Index>(nv));
     const auto keys = mesh.activeKeys();
@@ -279,54 +393,94 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     SparseMatrix energy;
     if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
 
-    // Triangles of Δ_{k−1} that were not split keep their path: their points
-    // stay put. The others' points continue their descent from there.
-    std::vector<std::uint32_t> remap(previousPaths.size());
-    for (std::size_t t = 0; t < previousPaths.size(); ++t) remap[t] = triIndex.find(previousPaths[t]);
-
-    // Locate the points and accumulate per-triangle moments, one copy per worker.
-    std::vector<std::vector<TriangleMoments>> moments(kParts);
-    forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
-      auto& mine = moments[static_cast<std::size_t>(worker)];
-      mine.assign(tris.size(), TriangleMoments{});
-      for (std::size_t i = b; i < e; ++i) {
-        const std::uint32_t kept = level == 1 ? KeyIndexMap::kNone : remap[triOf[i]];
-        std::uint32_t t = kept;
-        std::array<double, 3> bc;
-        if (kept != KeyIndexMap::kNone) {
-          const Triangle& tv = triVerts[t];
-          bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
-        } else {
-          const BinaryLocation loc = level == 1 ? mesh.locate(pts[i].xy()) : mesh.locateFrom(pts[i].xy(), paths[i]);
-          paths[i] = loc.triangle.path;
-          t = triIndex.find(paths[i]);
-          bc = loc.barycentric;
-        }
-        triOf[i] = t;
-        mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
-      }
-    });
-    previousPaths.resize(tris.size());
-    for (std::size_t t = 0; t < tris.size(); ++t) previousPaths[t] = tris[t].path;
-    for (std::size_t w = 1; w < moments.size(); ++w) {
-      if (moments[w].empty()) continue;
-      for (std::size_t t = 0; t < tris.size(); ++t) moments[0][t].merge(moments[w][t]);
+    // Triangles of Δ_{k−1} that were not split keep their path, their points
+    // and so their moments: only the points of split triangles are located
+    // again (continuing downward from their old triangle) and accumulated.
+    // Per-triangle sums over a fixed split of the points into parts, merged
+    // in part order, are the same whichever level computed them.
+    std::vector<std::uint32_t> remap(previousTris.size());
+    for (std::size_t t = 0; t < previousTris.size(); ++t) {
+      remap[t] = level == 1 ? KeyIndexMap::kNone : triIndex.find(previousTris[t].path);
     }
-    for (std::size_t w = 1; w < moments.size(); ++w) moments[w] = {};
+    std::vector<TriangleMoments> moments(tris.size());
+    std::vector<char> fresh(tris.size(), 1);
+    std::vector<LocatorNode> nodes;
+    std::vector<std::int32_t> locatorRoot(previousTris.size(), 0);
+    for (std::size_t t = 0; t < previousTris.size(); ++t) {
+      if (remap[t] == KeyIndexMap::kNone) {
+        locatorRoot[t] = buildLocator(mesh, triIndex, previousTris[t], nodes);
+      } else {
+        moments[remap[t]] = previousMoments[t];
+        fresh[remap[t]] = 0;
+      }
+    }
+    // Barycentric coordinates in triangle (v0, v1, v2) as an affine map of
+    // p − v0: b1 = m[0]·dx + m[1]·dy, b2 = m[2]·dx + m[3]·dy, b0 = 1 − b1 − b2.
+    struct Affine {
+      double x0, y0;
+      std::array<double, 4> m;
+    };
+    std::vector<Affine> affine(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const Triangle& tv = triVerts[t];
+      const Point2 &p0 = positions[tv[0]], &p1 = positions[tv[1]], &p2 = positions[tv[2]];
+      const double ax = p1.x - p0.x, ay = p1.y - p0.y, bx = p2.x - p0.x, by = p2.y - p0.y;
+      const double det = ax * by - bx * ay;
+      affine[t] = {p0.x, p0.y, {by / det, -bx / det, -ay / det, ax / det}};
+    }
+    {
+      std::vector<std::vector<TriangleMoments>> partMoments(kParts);
+      forEachPart(n, threads, [&](std::size_t b, std::size_t e, int worker) {
+        auto& mine = partMoments[static_cast<std::size_t>(worker)];
+        for (std::size_t i = b; i < e; ++i) {
+          const std::uint32_t old = level == 1 ? static_cast<std::uint32_t>(mesh.rootIndex(pts[i].xy())) : triOf[i];
+          if (remap[old] != KeyIndexMap::kNone) {
+            triOf[i] = remap[old];
+            continue;
+          }
+          std::int32_t node = locatorRoot[old];
+          const Point2 g = mesh.toGrid(pts[i].xy());
+          while (node >= 0) {
+            const LocatorNode& nd = nodes[static_cast<std::size_t>(node)];
+            node = nd.child[orient(nd.a, nd.j, g) * nd.lSide >= 0.0 ? 0 : 1];
+          }
+          const auto t = static_cast<std::uint32_t>(-1 - node);
+          triOf[i] = t;
+          const Affine& af = affine[t];
+          const double dx = pts[i].x - af.x0, dy = pts[i].y - af.y0;
+          const double b1 = af.m[0] * dx + af.m[1] * dy, b2 = af.m[2] * dx + af.m[3] * dy;
+          const std::array<double, 3> bc{1.0 - b1 - b2, b1, b2};
+          if (mine.empty()) mine.assign(tris.size(), TriangleMoments{});
+          mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
+        }
+      });
+      for (std::size_t t = 0; t < tris.size(); ++t) {
+        if (!fresh[t]) continue;
+        bool first = true;
+        for (const auto& part : partMoments) {
+          if (part.empty()) continue;
+          if (first) moments[t] = part[t];
+          else moments[t].merge(part[t]);
+          first = false;
+        }
+      }
+    }
+    previousTris = tris;
+    previousMoments = moments;
     SparseMatrix a;
     Vector rhs;
     if (options.smoothing != Smoothing::None) {
-      PenalizedSystem sys = assemblePenalized(triVerts, moments[0], energy, options.lambdaFactor, options.lambdaAbsolute);
+      PenalizedSystem sys = assemblePenalized(triVerts, moments, energy, options.lambdaFactor, options.lambdaAbsolute);
       st.lambda = sys.lambda;
       energy = SparseMatrix();
       a = std::move(sys.a);
       rhs = std::move(sys.b);
     } else {
-      NormalEquations eq = scatterMoments(nv, triVerts, moments[0]);
+      NormalEquations eq = scatterMoments(nv, triVerts, moments);
       a = std::move(eq.btb);
       rhs = std::move(eq.btz);
     }
-    moments = {};
+    std::vector<TriangleMoments>().swap(moments);
     applyFixedVertices(a, rhs, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
     const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);
@@ -334,6 +488,21 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     st.relativeResidual = report.relativeResidual;
 
     // Errors at the data and per-cell records of Ψ_level (contiguous runs).
+    // f on each triangle as a plane through its vertex l:
+    // f(p) = c_l + g_x (x − x_l) + g_y (y − y_l) with the gradient of 8.1.
+    struct Plane {
+      double x0, y0, z0, gx, gy;
+    };
+    std::vector<Plane> planes(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const Triangle& tv = triVerts[t];
+      const Point2 &pa = positions[tv[0]], &pb = positions[tv[1]], &pc = positions[tv[2]];
+      const double ca = coefficients[tv[0]], cb = coefficients[tv[1]], cc = coefficients[tv[2]];
+      const double area2 = (pb.x - pa.x) * (pc.y - pa.y) - (pc.x - pa.x) * (pb.y - pa.y);
+      const double gx = ((pb.y - pc.y) * ca + (pc.y - pa.y) * cb + (pa.y - pb.y) * cc) / area2;
+      const double gy = ((pc.x - pb.x) * ca + (pa.x - pc.x) * cb + (pb.x - pa.x) * cc) / area2;
+      planes[t] = {pa.x, pa.y, ca, gx, gy};
+    }
     const int shift = 2 * (gridLevels - level);
     std::vector<std::vector<CellRecord>> records(kParts);
     std::vector<double> maxErr(kParts, 0.0), sumSq(kParts, 0.0);
@@ -341,13 +510,12 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       auto& rec = records[static_cast<std::size_t>(worker)];
       double mx = 0.0, ss = 0.0;
       for (std::size_t i = b; i < e; ++i) {
-        const Triangle& tv = triVerts[triOf[i]];
-        const auto bc = barycentric(pts[i].xy(), positions[tv[0]], positions[tv[1]], positions[tv[2]]);
-        const double f = bc[0] * coefficients[tv[0]] + bc[1] * coefficients[tv[1]] + bc[2] * coefficients[tv[2]];
+        const Plane& pl = planes[triOf[i]];
+        const double f = pl.z0 + pl.gx * (pts[i].x - pl.x0) + pl.gy * (pts[i].y - pl.y0);
         const double err = std::abs(f - pts[i].z);
         mx = std::max(mx, err);
         ss += err * err;
-        const std::uint64_t cell = fineCell(mesh.toGrid(pts[i].xy())) >> shift;
+        const std::uint64_t cell = codes[i] >> shift;
         if (rec.empty() || rec.back().cell != cell) rec.push_back({cell, 0, 0.0});
         rec.back().count += 1;
         rec.back().maxError = std::max(rec.back().maxError, err);

@@ -77,6 +77,7 @@ std::string BuildReport::toJson() const {
                  {"extent", {minX, minY, maxX, maxY}},
                  {"z_range", {minZ, maxZ}},
                  {"valid", valid},
+                 {"validation", validation},
                  {"validation_problems", validationProblems}};
   J timesJ = J::array();
   for (const auto& t : times) timesJ.push_back({{"stage", t.stage}, {"seconds", t.seconds}});
@@ -141,7 +142,11 @@ std::string BuildReport::summary() const {
     << " constrained edges, " << features << " features\n";
   s << "  extent: x " << fixed(minX, 3) << " .. " << fixed(maxX, 3) << ", y " << fixed(minY, 3)
     << " .. " << fixed(maxY, 3) << "; z " << fixed(minZ, 3) << " .. " << fixed(maxZ, 3) << " m\n";
-  s << "  validation: " << (valid ? "ok" : "FAILED") << "\n";
+  if (validation == "off" || validation.empty())
+    s << "  validation: off\n";
+  else
+    s << "  validation: " << (valid ? "ok" : "FAILED") << " (" << validation
+      << (validation == "structural" ? "; --validate runs the full check" : "") << ")\n";
   for (const auto& p : validationProblems) s << "    " << p << "\n";
   s << "  time:";
   for (const auto& t : times) s << " " << t.stage << " " << fixed(t.seconds, 3) << " s;";

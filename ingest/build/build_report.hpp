@@ -69,6 +69,7 @@ struct BuildReport {
   std::size_t vertices = 0, triangles = 0, constrainedEdges = 0, features = 0;
   double minX = 0, minY = 0, maxX = 0, maxY = 0, minZ = 0, maxZ = 0;
   bool valid = false;
+  std::string validation;  ///< what was checked: "structural", "full" or "off"
   std::vector<std::string> validationProblems;
 
   std::vector<StageTime> times;

@@ -9,6 +9,71 @@ namespace tinsmith::ingest {
 
 namespace {
 
+// The analysis reads a TIN through one of two views with the same interface:
+// TinData (tests, loaded files) or the CDT's Mesh (the builder, so that no
+// TinData copy exists while it repairs). Same vertex and triangle numbering in
+// both (Mesh::toTinData keeps them), so the results are identical.
+struct TinView {
+  const TinData& tin;
+  [[nodiscard]] const std::vector<Point3>& points() const { return tin.vertices; }
+  [[nodiscard]] std::size_t triangleCount() const { return tin.triangles.size(); }
+  [[nodiscard]] const TinData::Triangle& triangle(std::uint32_t t) const { return tin.triangles[t]; }
+  /// Calls f(a, b) for every edge that a Contour feature constrains (an edge
+  /// may come more than once, in either direction).
+  template <class F>
+  void forEachContourEdge(F&& f) const {
+    for (const auto& e : tin.constrainedEdges)
+      if (e.feature < tin.features.size() && tin.features[e.feature].kind == FeatureKind::Contour)
+        f(e.a, e.b);
+  }
+  /// The same for (at least) the edges of `triangles`: here every contour edge.
+  template <class F>
+  void forEachContourEdgeOf(const std::vector<std::uint32_t>&, F&& f) const {
+    forEachContourEdge(f);
+  }
+};
+
+struct MeshView {
+  const Mesh& mesh;
+  [[nodiscard]] const std::vector<Point3>& points() const { return mesh.points(); }
+  [[nodiscard]] std::size_t triangleCount() const { return mesh.triangleCount(); }
+  [[nodiscard]] TinData::Triangle triangle(std::uint32_t t) const {
+    const auto v = mesh.vertices(TriangleId(t));
+    return {v[0].value, v[1].value, v[2].value};
+  }
+  template <class F>
+  void forEachContourEdge(F&& f) const {
+    for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
+      const HalfedgeId he(h);
+      if (!mesh.isConstrained(he)) continue;
+      const HalfedgeId tw = mesh.twin(he);
+      if (tw.valid() && tw.value < h) continue;  // each edge once
+      visitIfContour(he, f);
+    }
+  }
+  /// Only the edges of `triangles` (each edge once per triangle it borders).
+  template <class F>
+  void forEachContourEdgeOf(const std::vector<std::uint32_t>& triangles, F&& f) const {
+    for (const std::uint32_t t : triangles)
+      for (int k = 0; k < 3; ++k) {
+        const HalfedgeId he = Mesh::halfedge(TriangleId(t), k);
+        if (mesh.isConstrained(he)) visitIfContour(he, f);
+      }
+  }
+
+ private:
+  template <class F>
+  void visitIfContour(HalfedgeId he, F& f) const {
+    const auto& features = mesh.features();
+    for (const std::uint32_t id : mesh.edgeFeatures(he)) {
+      if (id < features.size() && features[id].kind == FeatureKind::Contour) {
+        f(mesh.origin(he).value, mesh.target(he).value);
+        return;
+      }
+    }
+  }
+};
+
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
@@ -28,7 +93,8 @@ double segmentDistance(const Point3& p, const Point3& a, const Point3& b) {
 // across the edge from corner k to corner k+1 of subset[i], or kNone when
 // that neighbour is not in the subset (or there is none). The subset must
 // hold both triangles of every edge wanted.
-std::vector<std::uint32_t> neighbours(const TinData& tin, const std::vector<std::uint32_t>& subset) {
+template <class View>
+std::vector<std::uint32_t> neighbours(const View& tin, const std::vector<std::uint32_t>& subset) {
   struct Half {
     std::uint64_t key;
     std::uint32_t half;  // 3 × (index into subset) + corner
@@ -36,7 +102,7 @@ std::vector<std::uint32_t> neighbours(const TinData& tin, const std::vector<std:
   std::vector<Half> halves;
   halves.reserve(subset.size() * 3);
   for (std::uint32_t i = 0; i < subset.size(); ++i) {
-    const auto& tri = tin.triangles[subset[i]];
+    const auto tri = tin.triangle(subset[i]);
     for (std::uint32_t k = 0; k < 3; ++k) halves.push_back({edgeKey(tri[k], tri[(k + 1) % 3]), 3 * i + k});
   }
   std::sort(halves.begin(), halves.end(), [](const Half& a, const Half& b) {
@@ -53,86 +119,93 @@ std::vector<std::uint32_t> neighbours(const TinData& tin, const std::vector<std:
   return across;
 }
 
-std::vector<std::uint64_t> contourEdgeKeys(const TinData& tin) {
+// The contour edges of `triangles` (and maybe others, but only edges with
+// both ends marked in `ends`), as sorted keys.
+template <class View>
+std::vector<std::uint64_t> contourEdgeKeys(const View& tin, const std::vector<std::uint32_t>& triangles,
+                                           const std::vector<char>& ends) {
   std::vector<std::uint64_t> keys;
-  for (const auto& e : tin.constrainedEdges)
-    if (e.feature < tin.features.size() && tin.features[e.feature].kind == FeatureKind::Contour)
-      keys.push_back(edgeKey(e.a, e.b));
+  tin.forEachContourEdgeOf(triangles, [&](std::uint32_t a, std::uint32_t b) {
+    if (ends[a] && ends[b]) keys.push_back(edgeKey(a, b));
+  });
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   return keys;
 }
 
-bool isFlat(const TinData& tin, const std::vector<char>& onContour, std::uint32_t t) {
-  const auto& tri = tin.triangles[t];
+template <class View>
+bool isFlat(const View& tin, const std::vector<char>& onContour, std::uint32_t t) {
+  const auto tri = tin.triangle(t);
   if (!onContour[tri[0]] || !onContour[tri[1]] || !onContour[tri[2]]) return false;
-  const double z = tin.vertices[tri[0]].z;
-  return tin.vertices[tri[1]].z == z && tin.vertices[tri[2]].z == z;
+  const auto& V = tin.points();
+  const double z = V[tri[0]].z;
+  return V[tri[1]].z == z && V[tri[2]].z == z;
 }
 
-}  // namespace
-
-std::vector<char> contourVertices(const TinData& tin) {
-  std::vector<char> on(tin.vertices.size(), 0);
-  for (const auto& e : tin.constrainedEdges)
-    if (e.feature < tin.features.size() && tin.features[e.feature].kind == FeatureKind::Contour)
-      on[e.a] = on[e.b] = 1;
+template <class View>
+std::vector<char> contourVerticesOf(const View& tin) {
+  std::vector<char> on(tin.points().size(), 0);
+  tin.forEachContourEdge([&on](std::uint32_t a, std::uint32_t b) { on[a] = on[b] = 1; });
   return on;
 }
 
-std::size_t countFlatTriangles(const TinData& tin) {
-  const auto on = contourVertices(tin);
+template <class View>
+std::size_t countFlat(const View& tin) {
+  const auto on = contourVerticesOf(tin);
   std::size_t n = 0;
-  for (std::uint32_t t = 0; t < tin.triangles.size(); ++t) n += isFlat(tin, on, t) ? 1 : 0;
+  for (std::uint32_t t = 0; t < tin.triangleCount(); ++t) n += isFlat(tin, on, t) ? 1 : 0;
   return n;
 }
 
-FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing) {
+template <class View>
+FlatTriangleAnalysis analyse(const View& tin, double minSpacing) {
   FlatTriangleAnalysis out;
-  const auto on = contourVertices(tin);
-  const std::size_t nt = tin.triangles.size();
-  std::vector<char> flat(nt, 0);
+  const auto on = contourVerticesOf(tin);
+  const std::size_t nt = tin.triangleCount();
   for (std::uint32_t t = 0; t < nt; ++t)
-    if (isFlat(tin, on, t)) {
-      flat[t] = 1;
-      out.flatTriangles.push_back(t);
-    }
+    if (isFlat(tin, on, t)) out.flatTriangles.push_back(t);
   if (out.flatTriangles.empty()) return out;
+  // flatTriangles is ascending: a binary search tells whether t is flat.
+  auto flat = [&out](std::uint32_t t) {
+    return std::binary_search(out.flatTriangles.begin(), out.flatTriangles.end(), t);
+  };
 
   // Only flat triangles and the triangles next to them need adjacency: those
   // share at least two vertices with a flat triangle. Keeps the analysis of a
-  // million-triangle TIN with few flat triangles to one linear scan.
-  std::vector<char> onFlat(tin.vertices.size(), 0);
+  // million-triangle TIN with few flat triangles to linear scans, and its
+  // memory to the size of that subset (nothing per triangle of the TIN).
+  std::vector<char> onFlat(tin.points().size(), 0);
   for (const std::uint32_t t : out.flatTriangles)
-    for (auto v : tin.triangles[t]) onFlat[v] = 1;
-  std::vector<std::uint32_t> subset;
-  std::vector<std::uint32_t> local(nt, kNone);
+    for (auto v : tin.triangle(t)) onFlat[v] = 1;
+  std::vector<std::uint32_t> subset;  // ascending
   for (std::uint32_t t = 0; t < nt; ++t) {
-    const auto& tri = tin.triangles[t];
-    if (onFlat[tri[0]] + onFlat[tri[1]] + onFlat[tri[2]] >= 2) {
-      local[t] = static_cast<std::uint32_t>(subset.size());
-      subset.push_back(t);
-    }
+    const auto tri = tin.triangle(t);
+    if (onFlat[tri[0]] + onFlat[tri[1]] + onFlat[tri[2]] >= 2) subset.push_back(t);
   }
+  auto local = [&subset](std::uint32_t t) {
+    return static_cast<std::size_t>(std::lower_bound(subset.begin(), subset.end(), t) - subset.begin());
+  };
   const auto acrossSubset = neighbours(tin, subset);
-  auto acrossOf = [&](std::uint32_t t, std::uint32_t k) { return acrossSubset[3 * local[t] + k]; };
-  const auto contourKeys = contourEdgeKeys(tin);
+  auto acrossOf = [&](std::uint32_t t, std::uint32_t k) { return acrossSubset[3 * local(t) + k]; };
+  // Every edge asked about below is an edge of a flat triangle.
+  const auto contourKeys = contourEdgeKeys(tin, out.flatTriangles, onFlat);
   auto isContourEdge = [&](std::uint32_t a, std::uint32_t b) {
     return std::binary_search(contourKeys.begin(), contourKeys.end(), edgeKey(a, b));
   };
-  const auto& V = tin.vertices;
+  const auto& V = tin.points();
 
-  std::vector<std::uint32_t> region(nt, kNone);
+  std::vector<std::uint32_t> regionOfLocal(subset.size(), kNone);
+  auto region = [&](std::uint32_t t) -> std::uint32_t& { return regionOfLocal[local(t)]; };
   std::unordered_set<std::uint64_t> usedMidpoints;
   std::vector<std::uint32_t> members, stack;
   for (const std::uint32_t seed : out.flatTriangles) {
-    if (region[seed] != kNone) continue;
+    if (region(seed) != kNone) continue;
     const auto id = static_cast<std::uint32_t>(out.regions++);
-    const double z0 = V[tin.triangles[seed][0]].z;
+    const double z0 = V[tin.triangle(seed)[0]].z;
     // Flood the region: flat neighbours at the same level across non-contour edges.
     members.clear();
     stack.assign(1, seed);
-    region[seed] = id;
+    region(seed) = id;
     std::vector<std::pair<Point3, Point3>> ownContour;  // the region's z0 contour edges
     std::vector<Point3> exits;                          // vertices at another level next to it
     std::vector<double> outside;                        // levels across its contour edges
@@ -140,22 +213,23 @@ FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing)
       const std::uint32_t t = stack.back();
       stack.pop_back();
       members.push_back(t);
+      const auto tri = tin.triangle(t);
       for (std::uint32_t k = 0; k < 3; ++k) {
-        const std::uint32_t a = tin.triangles[t][k], b = tin.triangles[t][(k + 1) % 3];
+        const std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
         const std::uint32_t n = acrossOf(t, k);
         const bool contourEdge = isContourEdge(a, b);
         if (contourEdge) ownContour.push_back({V[a], V[b]});
         if (n == kNone) continue;
-        if (!contourEdge && flat[n] && V[tin.triangles[n][0]].z == z0) {
-          if (region[n] == kNone) {
-            region[n] = id;
+        if (!contourEdge && flat(n) && V[tin.triangle(n)[0]].z == z0) {
+          if (region(n) == kNone) {
+            region(n) = id;
             stack.push_back(n);
           }
           continue;
         }
         // The neighbour's vertex opposite the shared edge.
         std::uint32_t opposite = kNone;
-        for (auto v : tin.triangles[n])
+        for (auto v : tin.triangle(n))
           if (v != a && v != b) opposite = v;
         if (opposite == kNone || V[opposite].z == z0) continue;
         if (contourEdge)
@@ -169,7 +243,7 @@ FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing)
     // Candidate positions, one per flat triangle.
     std::vector<Point3> candidates;
     for (const std::uint32_t t : members) {
-      const auto& tri = tin.triangles[t];
+      const auto tri = tin.triangle(t);
       int longest = 0;
       double best = -1;
       for (int k = 0; k < 3; ++k) {
@@ -202,7 +276,7 @@ FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing)
       for (const auto& [a, b] : ownContour) d = std::min(d, segmentDistance(p, a, b));
       if (!std::isfinite(d))  // no contour edge on the region: its vertices are on the level
         for (const std::uint32_t t : members)
-          for (auto v : tin.triangles[t]) d = std::min(d, std::hypot(p.x - V[v].x, p.y - V[v].y));
+          for (auto v : tin.triangle(t)) d = std::min(d, std::hypot(p.x - V[v].x, p.y - V[v].y));
       return d;
     };
 
@@ -247,6 +321,21 @@ FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing)
     }
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<char> contourVertices(const TinData& tin) { return contourVerticesOf(TinView{tin}); }
+std::vector<char> contourVertices(const Mesh& mesh) { return contourVerticesOf(MeshView{mesh}); }
+
+std::size_t countFlatTriangles(const TinData& tin) { return countFlat(TinView{tin}); }
+std::size_t countFlatTriangles(const Mesh& mesh) { return countFlat(MeshView{mesh}); }
+
+FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing) {
+  return analyse(TinView{tin}, minSpacing);
+}
+FlatTriangleAnalysis analyseFlatTriangles(const Mesh& mesh, double minSpacing) {
+  return analyse(MeshView{mesh}, minSpacing);
 }
 
 }  // namespace tinsmith::ingest

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/mesh/mesh.hpp"
 #include "core/tin/tin_data.hpp"
 
 namespace tinsmith::ingest {
@@ -41,15 +42,22 @@ struct FlatTriangleAnalysis {
   std::vector<Point3> proposals;
 };
 
+// Each function takes the TIN as TinData or as a Mesh (the CDT's output, so
+// the builder needs no TinData copy while it repairs); a Mesh and its
+// toTinData() give identical results (same vertex and triangle numbering).
+
 /// Which vertices lie on a contour: ends of edges constrained by a Contour feature.
 std::vector<char> contourVertices(const TinData& tin);
+std::vector<char> contourVertices(const Mesh& mesh);
 
 /// Counts and locates flat triangles and proposes the vertices that repair them.
 /// `minSpacing` (metres): proposals closer than this to an existing vertex of
 /// their triangle are skipped (they would merge into it).
 FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing = 0.0);
+FlatTriangleAnalysis analyseFlatTriangles(const Mesh& mesh, double minSpacing = 0.0);
 
 /// Just the count (for reports): flat triangles in `tin`.
 std::size_t countFlatTriangles(const TinData& tin);
+std::size_t countFlatTriangles(const Mesh& mesh);
 
 }  // namespace tinsmith::ingest

@@ -8,7 +8,9 @@
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
+#include "core/mesh/validate.hpp"
 #include "core/surface/surface.hpp"
+#include "ingest/base/memory.hpp"
 #include "ingest/build/flat_triangles.hpp"
 #include "ingest/build/line_profile.hpp"
 #include "ingest/tinfile/tin_file.hpp"
@@ -103,6 +105,14 @@ struct PendingLine {
 
 }  // namespace
 
+BuildValidation defaultBuildValidation() {
+#ifdef NDEBUG
+  return BuildValidation::Structural;
+#else
+  return BuildValidation::Full;
+#endif
+}
+
 bool takesLines(FeatureKind kind) {
   switch (kind) {
     case FeatureKind::Contour:
@@ -117,11 +127,28 @@ bool takesLines(FeatureKind kind) {
   }
 }
 
-BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
-                     const Progress* progress) {
+namespace {
+
+void setSummary(BuildReport& report, const TinSummary& s) {
+  report.vertices = s.vertices;
+  report.triangles = s.triangles;
+  report.constrainedEdges = s.constrainedEdges;
+  report.features = s.features;
+  report.minX = s.minX;
+  report.minY = s.minY;
+  report.maxX = s.maxX;
+  report.maxY = s.maxY;
+  report.minZ = s.minZ;
+  report.maxZ = s.maxZ;
+}
+
+// The whole build. The result goes to `consume` (the CDT's mesh) when given,
+// else into `out` (a TinData copy).
+BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
+                  const Progress* progress, const std::function<void(const Mesh&)>* consume,
+                  TinData* out) {
   const auto start = Clock::now();
-  BuildResult result;
-  BuildReport& report = result.report;
+  BuildReport report;
   report.crs = options.crs;
   report.flatRepair = options.flatTriangleRepair;
   auto stageStart = Clock::now();
@@ -149,7 +176,7 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
       for (const auto& l : layer.lines) lakeRings.emplace_back(l.vertices);
   }
 
-  Cdt cdt({.snapTolerance = options.snapTolerance, .crs = options.crs});
+  Cdt cdt({.snapTolerance = options.snapTolerance, .crs = options.crs, .threads = options.threads});
   std::vector<PendingLine> later;  // 2D lines to drape, or everything after the base
   std::size_t droppedInLakes = 0;
 
@@ -213,6 +240,7 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
   if (droppedInLakes) report.cleaning.push_back({"input vertices inside lakes dropped", droppedInLakes});
   layers.clear();  // the Cdt and `later` hold everything from here on
   layers.shrink_to_fit();
+  releaseFreeMemory();  // the layers' and the cleaning's heap, before the CDT grows
   endStage("prepare");
 
   // 1. The base surface, when anything must be draped on it.
@@ -301,6 +329,7 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
   // 5. The triangulation.
   tick("triangulation", 3, kSteps);
   cdt.finalize();
+  (void)cdt.mesh();  // the output mesh is built on first use: part of the triangulation's time
   endStage("triangulate");
 
   const auto& features = cdt.features();
@@ -355,27 +384,33 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
                      "fix the contours, or run without --strict to keep going and have them reported");
   }
 
-  // 6. Flat triangles.
+  // 6. Flat triangles, found and repaired on the CDT's own mesh (no TinData
+  // copy of the whole TIN until the end).
   tick("flat triangles", 4, kSteps);
-  TinData tin = cdt.toTinData();
-  report.flatBefore = countFlatTriangles(tin);
-  report.flatAfter = report.flatBefore;
-  if (options.flatTriangleRepair && report.flatBefore > 0) {
+  if (!options.flatTriangleRepair || options.flatPasses <= 0) {
+    report.flatBefore = countFlatTriangles(cdt.mesh());
+    report.flatAfter = report.flatBefore;
+  } else {
+    // Each analysis also counts: the one after a pass is the next pass's.
     const double minSpacing = std::max(10 * options.snapTolerance, 1e-9);
-    for (int pass = 0; pass < options.flatPasses; ++pass) {
-      const auto a = analyseFlatTriangles(tin, minSpacing);
-      if (pass == 0) {
-        report.flatRegions = a.regions;
-        report.flatClosedRegions = a.closedRegions;
-      }
-      if (a.proposals.empty()) break;
-      tin = TinData{};  // release the old copy before the triangulation grows
+    FlatTriangleAnalysis a = analyseFlatTriangles(cdt.mesh(), minSpacing);
+    report.flatBefore = a.flatTriangles.size();
+    report.flatAfter = report.flatBefore;
+    report.flatRegions = a.regions;
+    report.flatClosedRegions = a.closedRegions;
+    for (int pass = 0; pass < options.flatPasses && !a.proposals.empty(); ++pass) {
       cdt.insertPoints(a.proposals);
-      cdt.finalize();
-      tin = cdt.toTinData();
       report.flatVerticesAdded += a.proposals.size();
+      a = FlatTriangleAnalysis{};  // release it before the triangulation grows
+      cdt.finalize();
       ++report.flatIterations;
-      const std::size_t now = countFlatTriangles(tin);
+      std::size_t now = 0;
+      if (pass + 1 < options.flatPasses) {
+        a = analyseFlatTriangles(cdt.mesh(), minSpacing);
+        now = a.flatTriangles.size();
+      } else {
+        now = countFlatTriangles(cdt.mesh());
+      }
       const bool progressMade = now < report.flatAfter;
       report.flatAfter = now;
       if (now == 0 || !progressMade) break;
@@ -385,30 +420,59 @@ BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options
 
   // 7. Validation.
   tick("validation", 5, kSteps);
-  if (options.validate) {
-    const auto v = cdt.validate();
-    report.valid = v.ok;
+  {
+    ValidationReport v;
+    switch (options.validation) {
+      case BuildValidation::Off:
+        report.validation = "off";
+        break;
+      case BuildValidation::Structural:
+        report.validation = "structural";
+        v = validate(cdt.mesh(), {.checkDelaunay = false});
+        break;
+      case BuildValidation::Full:
+        report.validation = "full";
+        v = cdt.validate();
+        break;
+    }
+    report.valid = v.ok && options.validation != BuildValidation::Off;
     report.validationProblems = v.problems;
     if (!v.ok)
       throw internalError("the TIN built from this input fails validation: " + v.summary());
   }
   endStage("validate");
 
-  const auto s = summariseTin(tin);
-  report.vertices = s.vertices;
-  report.triangles = s.triangles;
-  report.constrainedEdges = s.constrainedEdges;
-  report.features = s.features;
-  report.minX = s.minX;
-  report.minY = s.minY;
-  report.maxX = s.maxX;
-  report.maxY = s.maxY;
-  report.minZ = s.minZ;
-  report.maxZ = s.maxZ;
-  result.tin = std::move(tin);
-  report.totalSeconds = secondsSince(start);
-  tick("done", kSteps, kSteps);
+  // The result, made once: either the mesh goes to the consumer, or a
+  // TinData copy of it — the last big allocation while the Cdt lives (the Cdt
+  // is freed on return).
+  releaseFreeMemory();
+  if (consume) {
+    setSummary(report, summariseTin(cdt.mesh()));
+    report.totalSeconds = secondsSince(start);
+    tick("done", kSteps, kSteps);
+    (*consume)(cdt.mesh());
+  } else {
+    *out = cdt.toTinData();
+    setSummary(report, summariseTin(*out));
+    report.totalSeconds = secondsSince(start);
+    tick("done", kSteps, kSteps);
+  }
+  return report;
+}
+
+}  // namespace
+
+BuildResult buildTin(std::vector<BuildLayer> layers, const BuildOptions& options,
+                     const Progress* progress) {
+  BuildResult result;
+  result.report = build(std::move(layers), options, progress, nullptr, &result.tin);
   return result;
+}
+
+BuildReport buildTinInto(std::vector<BuildLayer> layers, const BuildOptions& options,
+                         const std::function<void(const Mesh&)>& consume,
+                         const Progress* progress) {
+  return build(std::move(layers), options, progress, &consume, nullptr);
 }
 
 }  // namespace tinsmith::ingest

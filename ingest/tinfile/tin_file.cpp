@@ -1,10 +1,12 @@
 #include "ingest/tinfile/tin_file.hpp"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <tuple>
 #include <vector>
 
 #include "core/base/error.hpp"
@@ -17,16 +19,20 @@ namespace {
 constexpr std::array<std::uint8_t, 8> kMagic = {0x89, 'T', 'I', 'N', 0x0D, 0x0A, 0x1A, 0x0A};
 constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(FeatureKind::Raster);
 
-constexpr std::array<std::uint32_t, 256> makeCrcTable() {
-  std::array<std::uint32_t, 256> table{};
+// CRC-32 tables for slicing by 8 (eight bytes per step; table 0 is the
+// classic byte-wise table, table k advances a byte by k more zero bytes).
+constexpr std::array<std::array<std::uint32_t, 256>, 8> makeCrcTables() {
+  std::array<std::array<std::uint32_t, 256>, 8> t{};
   for (std::uint32_t i = 0; i < 256; ++i) {
     std::uint32_t c = i;
     for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    table[i] = c;
+    t[0][i] = c;
   }
-  return table;
+  for (std::size_t k = 1; k < 8; ++k)
+    for (std::uint32_t i = 0; i < 256; ++i) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFFu];
+  return t;
 }
-constexpr auto kCrcTable = makeCrcTable();
+constexpr auto kCrcTables = makeCrcTables();
 
 SourceLocation at(const std::string& name) { return {name, {}, {}, {}}; }
 
@@ -48,13 +54,57 @@ T getLe(const std::uint8_t* in) {
   return std::bit_cast<T>(bits);
 }
 
-std::uint64_t payloadSize(const TinData& tin) {
-  std::uint64_t size = 4 + tin.crs.size();
-  size += 8 + 24ull * tin.vertices.size();
-  size += 8 + 12ull * tin.triangles.size();
+// What the writer reads, from a TinData or from a Mesh (without copying its
+// vertices and triangles: only the constrained-edge records are made, in the
+// order Mesh::toTinData gives them, so both write the same bytes).
+struct TinSource {
+  const TinData& tin;
+  [[nodiscard]] const std::string& crs() const { return tin.crs; }
+  [[nodiscard]] const std::vector<Point3>& vertices() const { return tin.vertices; }
+  [[nodiscard]] std::size_t triangleCount() const { return tin.triangles.size(); }
+  [[nodiscard]] const TinData::Triangle& triangle(std::size_t t) const { return tin.triangles[t]; }
+  [[nodiscard]] const std::vector<TinFeature>& features() const { return tin.features; }
+  [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const {
+    return tin.constrainedEdges;
+  }
+};
+
+struct MeshSource {
+  explicit MeshSource(const Mesh& m) : mesh(m) {
+    for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
+      const HalfedgeId he(h);
+      if (!mesh.isConstrained(he)) continue;
+      const HalfedgeId tw = mesh.twin(he);
+      if (tw.valid() && tw.value < h) continue;
+      std::uint32_t a = mesh.origin(he).value, b = mesh.target(he).value;
+      if (a > b) std::swap(a, b);
+      for (const std::uint32_t f : mesh.edgeFeatures(he)) edges.push_back({a, b, f});
+    }
+    std::sort(edges.begin(), edges.end(), [](const auto& l, const auto& r) {
+      return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
+    });
+  }
+  const Mesh& mesh;
+  std::vector<TinData::ConstrainedEdge> edges;
+  [[nodiscard]] const std::string& crs() const { return mesh.crs(); }
+  [[nodiscard]] const std::vector<Point3>& vertices() const { return mesh.points(); }
+  [[nodiscard]] std::size_t triangleCount() const { return mesh.triangleCount(); }
+  [[nodiscard]] TinData::Triangle triangle(std::size_t t) const {
+    const auto v = mesh.vertices(TriangleId(static_cast<std::uint32_t>(t)));
+    return {v[0].value, v[1].value, v[2].value};
+  }
+  [[nodiscard]] const std::vector<TinFeature>& features() const { return mesh.features(); }
+  [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const { return edges; }
+};
+
+template <class Source>
+std::uint64_t payloadSize(const Source& tin) {
+  std::uint64_t size = 4 + tin.crs().size();
+  size += 8 + 24ull * tin.vertices().size();
+  size += 8 + 12ull * tin.triangleCount();
   size += 8;
-  for (const auto& f : tin.features) size += 1 + 4 + f.source.size();
-  size += 8 + 12ull * tin.constrainedEdges.size();
+  for (const auto& f : tin.features()) size += 1 + 4 + f.source.size();
+  size += 8 + 12ull * tin.constrainedEdges().size();
   return size;
 }
 
@@ -62,62 +112,65 @@ std::uint64_t payloadSize(const TinData& tin) {
 template <class Sink>
 class PayloadWriter {
  public:
-  explicit PayloadWriter(Sink& sink) : sink_(sink) { buffer_.reserve(kBuffer); }
+  explicit PayloadWriter(Sink& sink) : sink_(sink), buffer_(kBuffer) {}
   template <class T>
   void put(T value) {
-    std::uint8_t bytes[sizeof(T)];
-    putLe(bytes, value);
-    append(bytes, sizeof(T));
+    if (used_ + sizeof(T) > kBuffer) flush();
+    putLe(buffer_.data() + used_, value);
+    used_ += sizeof(T);
   }
   void putString(const std::string& text) {
     put(static_cast<std::uint32_t>(text.size()));
     append(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
   }
   void append(const std::uint8_t* data, std::size_t size) {
-    if (buffer_.size() + size > kBuffer) flush();
+    if (used_ + size > kBuffer) flush();
     if (size > kBuffer) {
       emit(data, size);
       return;
     }
-    buffer_.insert(buffer_.end(), data, data + size);
+    if (size) std::memcpy(buffer_.data() + used_, data, size);
+    used_ += size;
   }
   void flush() {
-    emit(buffer_.data(), buffer_.size());
-    buffer_.clear();
+    emit(buffer_.data(), used_);
+    used_ = 0;
   }
   [[nodiscard]] std::uint32_t crc() const { return crc_; }
 
  private:
   static constexpr std::size_t kBuffer = 1 << 16;
   void emit(const std::uint8_t* data, std::size_t size) {
+    if (size == 0) return;
     crc_ = crc32({data, size}, crc_);
     sink_(data, size);
   }
   Sink& sink_;
   std::vector<std::uint8_t> buffer_;
+  std::size_t used_ = 0;
   std::uint32_t crc_ = 0;
 };
 
-template <class Sink>
-std::uint32_t writePayload(const TinData& tin, Sink& sink) {
+template <class Source, class Sink>
+std::uint32_t writePayload(const Source& tin, Sink& sink) {
   PayloadWriter<Sink> w(sink);
-  w.putString(tin.crs);
-  w.put(static_cast<std::uint64_t>(tin.vertices.size()));
-  for (const auto& v : tin.vertices) {
+  w.putString(tin.crs());
+  w.put(static_cast<std::uint64_t>(tin.vertices().size()));
+  for (const auto& v : tin.vertices()) {
     w.put(v.x);
     w.put(v.y);
     w.put(v.z);
   }
-  w.put(static_cast<std::uint64_t>(tin.triangles.size()));
-  for (const auto& t : tin.triangles)
-    for (auto i : t) w.put(i);
-  w.put(static_cast<std::uint64_t>(tin.features.size()));
-  for (const auto& f : tin.features) {
+  w.put(static_cast<std::uint64_t>(tin.triangleCount()));
+  for (std::size_t t = 0; t < tin.triangleCount(); ++t)
+    for (auto i : tin.triangle(t)) w.put(i);
+  w.put(static_cast<std::uint64_t>(tin.features().size()));
+  for (const auto& f : tin.features()) {
     w.put(static_cast<std::uint8_t>(f.kind));
     w.putString(f.source);
   }
-  w.put(static_cast<std::uint64_t>(tin.constrainedEdges.size()));
-  for (const auto& e : tin.constrainedEdges) {
+  w.put(static_cast<std::uint64_t>(tin.constrainedEdges().size()));
+  for (const auto& e : tin.constrainedEdges()) {
     w.put(e.a);
     w.put(e.b);
     w.put(e.feature);
@@ -184,8 +237,17 @@ class PayloadReader {
 }  // namespace
 
 std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc) {
+  const auto& t = kCrcTables;
   crc = ~crc;
-  for (const std::uint8_t b : bytes) crc = kCrcTable[(crc ^ b) & 0xFFu] ^ (crc >> 8);
+  const std::uint8_t* p = bytes.data();
+  std::size_t n = bytes.size();
+  for (; n >= 8; n -= 8, p += 8) {  // independent of the host's byte order
+    const std::uint32_t lo = crc ^ (std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 |
+                                    std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24);
+    crc = t[7][lo & 0xFFu] ^ t[6][(lo >> 8) & 0xFFu] ^ t[5][(lo >> 16) & 0xFFu] ^ t[4][lo >> 24] ^
+          t[3][p[4]] ^ t[2][p[5]] ^ t[1][p[6]] ^ t[0][p[7]];
+  }
+  for (; n > 0; --n, ++p) crc = t[0][(crc ^ *p) & 0xFFu] ^ (crc >> 8);
   return ~crc;
 }
 
@@ -216,59 +278,72 @@ std::optional<FeatureKind> featureKindFromName(std::string_view name) {
   return std::nullopt;
 }
 
-void checkTinContract(const TinData& tin, const std::string& name, bool forWriting) {
+namespace {
+
+template <class Source>
+void checkContract(const Source& tin, const std::string& name, bool forWriting) {
   auto bad = [&](const std::string& what) {
     if (forWriting) throw internalError("TinData for '" + name + "' is malformed: " + what);
     throw inputError("corrupt .tin file: " + what, at(name),
                      "the file is damaged; write it again with `tinsmith tin`");
   };
-  const std::size_t nv = tin.vertices.size();
+  const std::size_t nv = tin.vertices().size();
   if (nv > 0xFFFFFFFFull) bad("more than 2^32 - 1 vertices");
   for (std::size_t i = 0; i < nv; ++i) {
-    const auto& v = tin.vertices[i];
+    const auto& v = tin.vertices()[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
       bad("vertex " + std::to_string(i) + " has a non-finite coordinate");
   }
-  for (std::size_t t = 0; t < tin.triangles.size(); ++t) {
-    const auto& tri = tin.triangles[t];
+  for (std::size_t t = 0; t < tin.triangleCount(); ++t) {
+    const auto& tri = tin.triangle(t);
     if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv)
       bad("triangle " + std::to_string(t) + " refers to a vertex beyond the " +
           std::to_string(nv) + " vertices");
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
       bad("triangle " + std::to_string(t) + " repeats a vertex");
   }
-  for (std::size_t f = 0; f < tin.features.size(); ++f)
-    if (static_cast<std::uint8_t>(tin.features[f].kind) > kLastKind)
+  for (std::size_t f = 0; f < tin.features().size(); ++f)
+    if (static_cast<std::uint8_t>(tin.features()[f].kind) > kLastKind)
       bad("feature " + std::to_string(f) + " has an unknown kind " +
-          std::to_string(static_cast<int>(tin.features[f].kind)));
-  for (std::size_t i = 0; i < tin.constrainedEdges.size(); ++i) {
-    const auto& e = tin.constrainedEdges[i];
+          std::to_string(static_cast<int>(tin.features()[f].kind)));
+  for (std::size_t i = 0; i < tin.constrainedEdges().size(); ++i) {
+    const auto& e = tin.constrainedEdges()[i];
     if (e.a >= nv || e.b >= nv)
       bad("constrained edge " + std::to_string(i) + " refers to a vertex out of range");
     if (e.a >= e.b) bad("constrained edge " + std::to_string(i) + " does not have a < b");
-    if (e.feature >= tin.features.size())
+    if (e.feature >= tin.features().size())
       bad("constrained edge " + std::to_string(i) + " refers to feature " +
-          std::to_string(e.feature) + " of " + std::to_string(tin.features.size()));
+          std::to_string(e.feature) + " of " + std::to_string(tin.features().size()));
   }
+}
+
+}  // namespace
+
+void checkTinContract(const TinData& tin, const std::string& name, bool forWriting) {
+  checkContract(TinSource{tin}, name, forWriting);
 }
 
 std::string encodeTin(const TinData& tin) {
   checkTinContract(tin, "(memory)", true);
   std::string out;
-  const std::uint64_t size = payloadSize(tin);
+  const TinSource source{tin};
+  const std::uint64_t size = payloadSize(source);
   out.reserve(kTinHeaderSize + size);
   out.resize(kTinHeaderSize);
   auto sink = [&out](const std::uint8_t* data, std::size_t n) {
     out.append(reinterpret_cast<const char*>(data), n);
   };
-  const std::uint32_t crc = writePayload(tin, sink);
+  const std::uint32_t crc = writePayload(source, sink);
   const auto header = makeHeader(size, crc);
   std::memcpy(out.data(), header.data(), header.size());
   return out;
 }
 
-void writeTinFile(const std::filesystem::path& path, const TinData& tin) {
-  checkTinContract(tin, path.string(), true);
+namespace {
+
+template <class Source>
+void writeFile(const std::filesystem::path& path, const Source& tin) {
+  checkContract(tin, path.string(), true);
   AtomicFile file(path);
   const std::uint64_t size = payloadSize(tin);
   const auto placeholder = makeHeader(size, 0);
@@ -278,6 +353,16 @@ void writeTinFile(const std::filesystem::path& path, const TinData& tin) {
   const auto header = makeHeader(size, crc);
   file.writeAt(0, header.data(), header.size());
   file.commit();
+}
+
+}  // namespace
+
+void writeTinFile(const std::filesystem::path& path, const TinData& tin) {
+  writeFile(path, TinSource{tin});
+}
+
+void writeTinFile(const std::filesystem::path& path, const Mesh& mesh) {
+  writeFile(path, MeshSource(mesh));
 }
 
 TinData decodeTin(std::string_view bytes, const std::string& name) {

@@ -27,6 +27,7 @@
 #include <string>
 #include <string_view>
 
+#include "core/mesh/mesh.hpp"
 #include "core/tin/tin_data.hpp"
 
 namespace tinsmith::ingest {
@@ -38,6 +39,10 @@ inline constexpr std::size_t kTinHeaderSize = 32;
 /// Throws internalError when `tin` breaks the TinData contract (an index out of
 /// range, a non-finite coordinate) and ioError when the file cannot be written.
 void writeTinFile(const std::filesystem::path& path, const TinData& tin);
+/// Writes a mesh as writeTinFile(path, mesh.toTinData()) would — the same
+/// bytes — without the TinData copy (only the constrained-edge records, 12
+/// bytes each, are made).
+void writeTinFile(const std::filesystem::path& path, const Mesh& mesh);
 
 /// Reads a `.tin` file. Throws inputError naming the file for: a missing or
 /// unreadable file, a wrong magic (not a .tin file), a newer format version, a

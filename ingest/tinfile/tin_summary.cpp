@@ -1,6 +1,7 @@
 #include "ingest/tinfile/tin_summary.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -11,11 +12,46 @@
 
 namespace tinsmith::ingest {
 
+namespace {
+
+// Extent, z range and area: the part of the summary that reads only the
+// vertices and triangles.
+template <class TriangleAt>
+void summariseGeometry(TinSummary& s, const std::vector<Point3>& vertices, std::size_t triangles,
+                       TriangleAt&& triangleAt) {
+  s.vertices = vertices.size();
+  s.triangles = triangles;
+  s.empty = vertices.empty();
+  if (!s.empty) {
+    const auto& v0 = vertices.front();
+    s.minX = s.maxX = v0.x;
+    s.minY = s.maxY = v0.y;
+    s.minZ = s.maxZ = v0.z;
+    for (const auto& v : vertices) {
+      s.minX = std::min(s.minX, v.x);
+      s.maxX = std::max(s.maxX, v.x);
+      s.minY = std::min(s.minY, v.y);
+      s.maxY = std::max(s.maxY, v.y);
+      s.minZ = std::min(s.minZ, v.z);
+      s.maxZ = std::max(s.maxZ, v.z);
+    }
+  }
+  for (std::size_t i = 0; i < triangles; ++i) {
+    const auto t = triangleAt(i);
+    const auto& a = vertices[t[0]];
+    const auto& b = vertices[t[1]];
+    const auto& c = vertices[t[2]];
+    s.area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+  }
+}
+
+}  // namespace
+
 TinSummary summariseTin(const TinData& tin) {
   TinSummary s;
   s.crs = tin.crs;
-  s.vertices = tin.vertices.size();
-  s.triangles = tin.triangles.size();
+  summariseGeometry(s, tin.vertices, tin.triangles.size(),
+                    [&tin](std::size_t t) -> const TinData::Triangle& { return tin.triangles[t]; });
   // Distinct edges, as `tinsmith validate` counts them: an edge shared by
   // several features has one record per feature.
   {
@@ -28,27 +64,6 @@ TinSummary summariseTin(const TinData& tin) {
         static_cast<std::size_t>(std::unique(edges.begin(), edges.end()) - edges.begin());
   }
   s.features = tin.features.size();
-  s.empty = tin.vertices.empty();
-  if (!s.empty) {
-    const auto& v0 = tin.vertices.front();
-    s.minX = s.maxX = v0.x;
-    s.minY = s.maxY = v0.y;
-    s.minZ = s.maxZ = v0.z;
-    for (const auto& v : tin.vertices) {
-      s.minX = std::min(s.minX, v.x);
-      s.maxX = std::max(s.maxX, v.x);
-      s.minY = std::min(s.minY, v.y);
-      s.maxY = std::max(s.maxY, v.y);
-      s.minZ = std::min(s.minZ, v.z);
-      s.maxZ = std::max(s.maxZ, v.z);
-    }
-  }
-  for (const auto& t : tin.triangles) {
-    const auto& a = tin.vertices[t[0]];
-    const auto& b = tin.vertices[t[1]];
-    const auto& c = tin.vertices[t[2]];
-    s.area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
-  }
   for (const auto& f : tin.features) ++s.kinds[std::string(featureKindName(f.kind))].features;
   for (const auto& e : tin.constrainedEdges)
     if (e.feature < tin.features.size())
@@ -56,6 +71,30 @@ TinSummary summariseTin(const TinData& tin) {
   return s;
 }
 
+TinSummary summariseTin(const Mesh& mesh) {
+  TinSummary s;
+  s.crs = mesh.crs();
+  summariseGeometry(s, mesh.points(), mesh.triangleCount(), [&mesh](std::size_t t) {
+    const auto v = mesh.vertices(TriangleId(static_cast<std::uint32_t>(t)));
+    return std::array<std::uint32_t, 3>{v[0].value, v[1].value, v[2].value};
+  });
+  const auto& features = mesh.features();
+  s.features = features.size();
+  for (const auto& f : features) ++s.kinds[std::string(featureKindName(f.kind))].features;
+  std::vector<std::size_t> edgesOfKind(256, 0);
+  for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
+    const HalfedgeId he(h);
+    if (!mesh.isConstrained(he)) continue;
+    const HalfedgeId tw = mesh.twin(he);
+    if (tw.valid() && tw.value < h) continue;  // each edge once
+    ++s.constrainedEdges;
+    for (const std::uint32_t f : mesh.edgeFeatures(he))
+      if (f < features.size()) ++edgesOfKind[static_cast<std::uint8_t>(features[f].kind)];
+  }
+  for (std::size_t k = 0; k < edgesOfKind.size(); ++k)
+    if (edgesOfKind[k]) s.kinds[std::string(featureKindName(static_cast<FeatureKind>(k)))].edges = edgesOfKind[k];
+  return s;
+}
 
 std::string TinSummary::json() const {
   nlohmann::ordered_json j;

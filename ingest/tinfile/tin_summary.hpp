@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 
+#include "core/mesh/mesh.hpp"
 #include "core/tin/tin_data.hpp"
 
 namespace tinsmith::ingest {
@@ -30,5 +31,7 @@ struct TinSummary {
 };
 
 TinSummary summariseTin(const TinData& tin);
+/// The same as summariseTin(mesh.toTinData()), without the copy.
+TinSummary summariseTin(const Mesh& mesh);
 
 }  // namespace tinsmith::ingest

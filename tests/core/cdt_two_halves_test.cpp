@@ -125,6 +125,17 @@ TEST(CdtTwoHalves, CollinearHalfFallsBackToOneGo) {
   EXPECT_EQ(canonical(whole.tin), canonical(halves.tin));
 }
 
+TEST(CdtTwoHalves, NoSnapGapNearTheMedianFallsBackToOneGo) {
+  // x every 0.05 m with a 1 m snap tolerance: no left–right split can keep
+  // every cross pair farther apart than the tolerance.
+  std::vector<Point3> pts;
+  for (int i = 0; i < 3000; ++i) pts.push_back({0.05 * i, 37.0 * (i % 7), 0.0});
+  const Built whole = build(pts, 0, 1, 1.0);
+  const Built halves = build(pts, kSplit, 1, 1.0);
+  EXPECT_EQ(canonical(whole.tin), canonical(halves.tin));
+  EXPECT_EQ(whole.merges, halves.merges);
+}
+
 TEST(CdtTwoHalves, DuplicatesAndSnapMergesAreKept) {
   // Clusters of exact and near duplicates (within the snap tolerance), far
   // apart from each other: the same merges as in one go, none across the seam.

@@ -32,12 +32,12 @@ std::string meshProblem(const MultilevelFit& fit) {
 
 std::string levelTable(const MultilevelFit& fit) {
   std::ostringstream out;
-  out << "  level  vertices  triangles  solver        iterations  max error    rms error    refined cells\n";
+  out << "  level  vertices  triangles  solver        iterations  lambda      max error    rms error    refined cells\n";
   for (const auto& s : fit.levels()) {
     char line[200];
-    std::snprintf(line, sizeof line, "  %5d  %8zu  %9zu  %-12s  %10d  %.4e  %.4e  %zu\n", s.level, s.vertices,
-                  s.triangles, s.solver == SolverKind::Direct ? "direct" : "gauss-seidel", s.iterations, s.maxError,
-                  s.rmsError, s.cellsRefined);
+    std::snprintf(line, sizeof line, "  %5d  %8zu  %9zu  %-12s  %10d  %.4e  %.4e  %.4e  %zu\n", s.level, s.vertices,
+                  s.triangles, s.solver == SolverKind::Direct ? "direct" : "gauss-seidel", s.iterations, s.lambda,
+                  s.maxError, s.rmsError, s.cellsRefined);
     out << line;
   }
   return out.str();
@@ -71,20 +71,33 @@ TEST(FitMultilevel, FrankeBookExample) {
   opt.criteria.countAbove = 2;
   const MultilevelFit fit = fitMultilevel(pts, opt);
   const auto& last = fit.levels().back();
+  // The same run with exact solves at every level: the refinement does not
+  // depend on how far Gauss-Seidel is taken.
+  MultilevelOptions exact = opt;
+  exact.directLevels = 100;
+  const MultilevelFit direct = fitMultilevel(pts, exact);
   std::ostringstream out;
   out << "Franke, 3000 points (seed 2006), error 0.25 % of z range and count > 2, lambda = lambda_d, thin-plate\n"
       << levelTable(fit) << "  book: stops after subdividing Psi7 (Delta8): 1476 vertices, 2866 triangles, 9-12 GS iterations a level\n"
       << "  ours: stops at Delta" << last.level << ": " << last.vertices << " vertices, " << last.triangles
-      << " triangles\n\n";
+      << " triangles; direct solves at every level: Delta" << direct.levels().back().level << ", "
+      << direct.levels().back().vertices << " vertices\n\n";
   appendToBookTable(out.str());
+  EXPECT_EQ(direct.levels().back().level, last.level);
+  EXPECT_NEAR(static_cast<double>(direct.levels().back().vertices), static_cast<double>(last.vertices),
+              0.05 * static_cast<double>(last.vertices));
 
   EXPECT_EQ(meshProblem(fit), "");
   EXPECT_GE(last.level, 7);  // within a level of Δ8
   EXPECT_LE(last.level, 9);
-  // The issue asks for 1476 ± 30 %. With λ = λ_d exactly as (8.19) defines it
-  // we reach the tolerance with about half the book's vertices (≈ 750 for every
-  // point distribution tried); the book's count is reached near λ = 30–100 λ_d.
-  // Asserted here: at least 45 % and at most 130 % of the book's count.
+  // The issue asks for 1476 ± 30 %. With λ = λ_d recomputed from (8.19) for
+  // the system of every level (8.18) we reach the tolerance one level early
+  // with about half the book's vertices: ≈ 750–800 for seeds 2006, 7 and 11,
+  // for point densities following the gradient, the curvature or both, and
+  // with exact solves at every level or Gauss–Seidel stopped after 1–4 sweeps.
+  // Only more smoothing at the fine levels raises the count (30 λ_d: ≈ 1340 at
+  // Δ8), but then Gauss–Seidel needs 12–73 sweeps a level where the book
+  // reports 9–12 at λ_d. Asserted here: 45 % to 130 % of the book's count.
   EXPECT_GE(last.vertices, static_cast<std::size_t>(1476 * 0.45));
   EXPECT_LE(last.vertices, static_cast<std::size_t>(1476 * 1.3));
   for (const auto& s : fit.levels()) {
@@ -217,6 +230,53 @@ TEST(FitMultilevel, FixedVerticesAndWeightsCarryThroughAllLevels) {
   w.weights.back() = 1e9;
   const MultilevelFit weighted = fitMultilevel(data, w);
   EXPECT_NEAR(weighted.evaluate({0.3, 0.3}), 5.0, 1e-3);
+}
+
+TEST(FitMultilevel, LastLevelEqualsAFitFromScratchOverTheFinalMesh) {
+  // The multilevel fitter keeps the moments of unsplit triangles and locates
+  // only the points of split ones; the last level's system must still be the
+  // one assembled from scratch over the final triangulation (brute-force
+  // location), with and without weights and fixed vertices.
+  auto pts = frankePoints(3000, 23);
+  pts.push_back({0.0, 0.0, frankeFunction(0, 0)});  // domain exactly [0, 1]²
+  pts.push_back({1.0, 1.0, frankeFunction(1, 1)});
+  for (int variant = 0; variant < 2; ++variant) {
+    MultilevelOptions opt = bookOptions();
+    opt.criteria.errorPercent = 0.5;
+    opt.criteria.countAbove = 2;
+    opt.directLevels = 100;
+    opt.maxLevel = 6;
+    if (variant == 1) {
+      opt.weights.resize(pts.size());
+      for (std::size_t i = 0; i < pts.size(); ++i) opt.weights[i] = 0.5 + static_cast<double>(i % 7) * 0.25;
+      opt.fixed = {{0.5, 0.5, 1.5}, {0.75, 0.25, 0.1}};
+    }
+    const MultilevelFit fit = fitMultilevel(pts, opt);
+    const TinData tin = fit.toTinData();
+    testing::SmallMesh mesh;
+    for (const auto& v : tin.vertices) mesh.vertices.push_back(v.xy());
+    mesh.triangles.assign(tin.triangles.begin(), tin.triangles.end());
+    std::vector<Sample> samples;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      samples.push_back(testing::locateBruteForce(mesh, pts[i], opt.weights.empty() ? 1.0 : opt.weights[i]));
+      ASSERT_NE(samples.back().triangle, 0xffffffffu) << "point " << i;
+    }
+    LeastSquaresOptions ls;
+    ls.smoothing = Smoothing::ThinPlate;
+    ls.lambdaAbsolute = fit.levels().back().lambda;
+    ls.solver = SolverKind::Direct;
+    for (const auto& f : opt.fixed) {
+      for (std::size_t v = 0; v < tin.vertices.size(); ++v) {
+        if (tin.vertices[v].x == f.x && tin.vertices[v].y == f.y) ls.fixed.push_back({static_cast<std::uint32_t>(v), f.z});
+      }
+    }
+    ASSERT_EQ(ls.fixed.size(), opt.fixed.size());
+    const LeastSquaresResult scratch = fitLeastSquares(mesh.vertices, mesh.triangles, samples, ls);
+    ASSERT_EQ(static_cast<std::size_t>(scratch.coefficients.size()), fit.vertexZ().size());
+    for (std::size_t v = 0; v < fit.vertexZ().size(); ++v) {
+      EXPECT_NEAR(fit.vertexZ()[v], scratch.coefficients[static_cast<Eigen::Index>(v)], 1e-9) << "vertex " << v;
+    }
+  }
 }
 
 TEST(FitMultilevel, CurvatureCriterionRefinesWhereTheSurfaceBends) {

@@ -2,6 +2,7 @@
 // repair through the CDT on real contour-only data is in tin_builder_test.
 #include <gtest/gtest.h>
 
+#include "core/mesh/mesh.hpp"
 #include "ingest/build/flat_triangles.hpp"
 
 namespace tinsmith::ingest {
@@ -67,6 +68,23 @@ TEST(FlatTriangles, ASummitInsideAClosedContourGetsADome) {
 
 TEST(FlatTriangles, ProposalsTooCloseToAVertexAreSkipped) {
   EXPECT_TRUE(analyseFlatTriangles(bendTin(), 100.0).proposals.empty());
+}
+
+// The builder analyses the CDT's Mesh; tests and tools analyse TinData: the
+// two give the same result.
+TEST(FlatTriangles, MeshAndTinDataGiveTheSameAnalysis) {
+  const Mesh mesh = Mesh::fromTinData(bendTin());
+  const TinData again = mesh.toTinData();
+  EXPECT_EQ(countFlatTriangles(mesh), 2u);
+  EXPECT_EQ(countFlatTriangles(again), 2u);
+  EXPECT_EQ(contourVertices(mesh), contourVertices(again));
+  const auto a = analyseFlatTriangles(mesh), b = analyseFlatTriangles(again);
+  EXPECT_EQ(a.flatTriangles, b.flatTriangles);
+  EXPECT_EQ(a.regions, b.regions);
+  EXPECT_EQ(a.closedRegions, b.closedRegions);
+  ASSERT_EQ(a.proposals.size(), 1u);
+  ASSERT_EQ(b.proposals.size(), 1u);
+  EXPECT_EQ(a.proposals[0], b.proposals[0]);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "ingest/config/project_config.hpp"
 #include "ingest/filters/load_layers.hpp"
 #include "ingest/tinfile/tin_file.hpp"
+#include "tests/support/run_command.hpp"
 
 namespace tinsmith::ingest {
 namespace {
@@ -265,6 +266,56 @@ TEST(TinBuilder, ChathamFlatTrianglesDropToNearZero) {
   // The added vertices stay within the contour range ± one interval.
   EXPECT_GE(fixed.report.minZ, -20.0);
   EXPECT_LE(fixed.report.maxZ, 240.0);
+
+  // The raw TIN analysed as a Mesh (as the builder does) and as TinData agree.
+  const Mesh mesh = Mesh::fromTinData(raw.tin);
+  const auto m = analyseFlatTriangles(mesh, 0.01), t = analyseFlatTriangles(raw.tin, 0.01);
+  EXPECT_EQ(m.flatTriangles, t.flatTriangles);
+  EXPECT_EQ(m.regions, t.regions);
+  EXPECT_EQ(m.closedRegions, t.closedRegions);
+  EXPECT_EQ(m.proposals, t.proposals);
+  EXPECT_EQ(countFlatTriangles(mesh), before);
+
+  // buildTinInto hands over the mesh; written, it is the same file, with the
+  // same report, as buildTin's TinData written.
+  const auto dir = test::scratchDir("builder-into");
+  const BuildReport into = buildTinInto(layers, buildOptionsFrom(config), [&](const Mesh& out) {
+    writeTinFile(dir / "into.tin", out);
+  });
+  writeTinFile(dir / "tin.tin", fixed.tin);
+  EXPECT_EQ(test::readFile(dir / "into.tin"), test::readFile(dir / "tin.tin"));
+  EXPECT_EQ(into.vertices, fixed.report.vertices);
+  EXPECT_EQ(into.triangles, fixed.report.triangles);
+  EXPECT_EQ(into.constrainedEdges, fixed.report.constrainedEdges);
+  EXPECT_EQ(into.minZ, fixed.report.minZ);
+  EXPECT_EQ(into.maxX, fixed.report.maxX);
+  EXPECT_EQ(into.flatAfter, fixed.report.flatAfter);
+}
+
+// Release builds check the mesh's structure by default; the full validator
+// (Delaunay, every input present) runs when asked, and in debug builds.
+TEST(TinBuilder, ValidationLevels) {
+  std::vector<BuildLayer> layers{gridPoints()};
+  BuildOptions options;
+#ifdef NDEBUG
+  EXPECT_EQ(options.validation, BuildValidation::Structural);
+#else
+  EXPECT_EQ(options.validation, BuildValidation::Full);
+#endif
+  for (const auto& [level, name] : {std::pair{BuildValidation::Structural, "structural"},
+                                   std::pair{BuildValidation::Full, "full"}}) {
+    options.validation = level;
+    const auto r = buildTin(layers, options);
+    EXPECT_TRUE(r.report.valid);
+    EXPECT_EQ(r.report.validation, name);
+    EXPECT_NE(r.report.summary().find(std::string("validation: ok (") + name), std::string::npos)
+        << r.report.summary();
+  }
+  options.validation = BuildValidation::Off;
+  const auto r = buildTin(layers, options);
+  EXPECT_FALSE(r.report.valid);
+  EXPECT_EQ(r.report.validation, "off");
+  EXPECT_NE(r.report.summary().find("validation: off"), std::string::npos);
 }
 
 }  // namespace

@@ -8,7 +8,9 @@
 #include <limits>
 
 #include "core/base/error.hpp"
+#include "core/mesh/mesh.hpp"
 #include "ingest/tinfile/tin_file.hpp"
+#include "ingest/tinfile/tin_summary.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::ingest {
@@ -211,6 +213,21 @@ TEST(TinFile, FeatureKindNamesRoundTrip) {
     EXPECT_EQ(featureKindFromName(featureKindName(kind)), kind);
   }
   EXPECT_FALSE(featureKindFromName("volcano"));
+}
+
+// Writing a Mesh gives exactly the bytes of writing its TinData (the builder
+// writes meshes; everything else writes TinData), and the summaries agree.
+TEST(TinFile, MeshWritesTheBytesOfItsTinData) {
+  const Mesh mesh = Mesh::fromTinData(sampleTin());
+  ASSERT_TRUE(mesh.buildProblems().empty());
+  const auto dir = test::scratchDir("tinfile-mesh");
+  writeTinFile(dir / "mesh.tin", mesh);
+  EXPECT_EQ(test::readFile(dir / "mesh.tin"), encodeTin(mesh.toTinData()));
+  expectSame(readTinFile(dir / "mesh.tin"), mesh.toTinData());
+
+  const TinSummary a = summariseTin(mesh), b = summariseTin(mesh.toTinData());
+  EXPECT_EQ(a.json(), b.json());
+  EXPECT_EQ(a.constrainedEdges, 2u);  // the edge 2-4 of two features counts once
 }
 
 }  // namespace

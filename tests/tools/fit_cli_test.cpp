@@ -2,6 +2,7 @@
 // rejected with usage errors. Skipped when the binary has not been built.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -45,6 +46,79 @@ TEST(FitCli, FitsPointsAndWritesTinAndStats) {
   EXPECT_NE(missing.err.find("nope.xyz"), std::string::npos);
 }
 
+/// z of the .tin at (x, y) by `tinsmith query --json`.
+double queryZ(const std::filesystem::path& tin, double x, double y) {
+  const auto q = test::runCommand(binary() + " query " + tin.string() + " " + std::to_string(x) + " " +
+                                  std::to_string(y) + " --json");
+  EXPECT_EQ(q.exitCode, 0) << q.err;
+  const auto at = q.out.find("\"z\": ");
+  if (at == std::string::npos) {
+    ADD_FAILURE() << q.out;
+    return std::nan("");
+  }
+  return std::stod(q.out.substr(at + 5));
+}
+
+TEST(FitCli, WeightsColumnAndFixedPoints) {
+  if (!std::filesystem::exists(binary())) GTEST_SKIP() << "tinsmith binary not built";
+  const auto dir = test::scratchDir("fit_cli_weights");
+  const auto pts = testing::frankePoints(3000, 11);
+  {
+    // x, y, z, weight; one point far off the surface with a huge weight.
+    std::ofstream out(dir / "weighted.csv");
+    out.precision(17);
+    out << "x,y,z,w\n";
+    // Corners make the domain exactly [0, 1]², so the fixed points are grid
+    // vertices (each is moved to the nearest vertex of the finest grid).
+    out << "0,0," << frankeFunction(0, 0) << ",1\n1,1," << frankeFunction(1, 1) << ",1\n";
+    for (const auto& p : pts) out << p.x << "," << p.y << "," << p.z << ",1\n";
+    out << "0.3,0.3,5.0,1e9\n";
+    std::ofstream fixed(dir / "fixed.xyz");
+    fixed << "0.5 0.5 2.0\n0.25 0.75 -1.0\n";
+  }
+  const std::string common = " --tolerance 0.5% --criterion error,count:2 --max-level 7 -q ";
+  const auto r = test::runCommand(binary() + " fit " + (dir / "weighted.csv").string() + common +
+                                  "--weights-column w --fixed " + (dir / "fixed.xyz").string() + " -o " +
+                                  (dir / "fit.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NEAR(queryZ(dir / "fit.tin", 0.5, 0.5), 2.0, 1e-9);
+  EXPECT_NEAR(queryZ(dir / "fit.tin", 0.25, 0.75), -1.0, 1e-9);
+  EXPECT_NEAR(queryZ(dir / "fit.tin", 0.3, 0.3), 5.0, 1e-3);
+
+  // The same by column index; without the weights the heavy point is only one of many.
+  const auto byIndex = test::runCommand(binary() + " fit " + (dir / "weighted.csv").string() + common +
+                                        "--weights-column 3 -o " + (dir / "index.tin").string());
+  ASSERT_EQ(byIndex.exitCode, 0) << byIndex.err;
+  EXPECT_NEAR(queryZ(dir / "index.tin", 0.3, 0.3), 5.0, 1e-3);
+  const auto plain = test::runCommand(binary() + " fit " + (dir / "weighted.csv").string() + common + "-o " +
+                                      (dir / "plain.tin").string());
+  ASSERT_EQ(plain.exitCode, 0) << plain.err;
+  EXPECT_GT(std::abs(queryZ(dir / "plain.tin", 0.3, 0.3) - 5.0), 0.5);
+  EXPECT_GT(std::abs(queryZ(dir / "plain.tin", 0.5, 0.5) - 2.0), 0.5);
+
+  // Bad input: a weight that is not positive (file and line named), a fixed
+  // point outside the domain, a column name without a header.
+  {
+    std::ofstream out(dir / "bad.xyz");
+    for (int i = 0; i < 10; ++i) out << i * 0.1 << " " << (i % 3) * 0.3 << " 1 1\n";
+    out << "0.5 0.5 1 0\n";
+    std::ofstream far(dir / "far.xyz");
+    far << "7 7 1\n";
+  }
+  const auto badWeight = test::runCommand(binary() + " fit " + (dir / "bad.xyz").string() +
+                                          " --tolerance 1 --weights-column 3 -o " + (dir / "x.tin").string());
+  EXPECT_EQ(badWeight.exitCode, 3) << badWeight.err;
+  EXPECT_NE(badWeight.err.find("bad.xyz, line 11"), std::string::npos) << badWeight.err;
+  const auto farFixed = test::runCommand(binary() + " fit " + (dir / "weighted.csv").string() + common + "--fixed " +
+                                         (dir / "far.xyz").string() + " -o " + (dir / "x.tin").string());
+  EXPECT_EQ(farFixed.exitCode, 3) << farFixed.err;
+  EXPECT_NE(farFixed.err.find("outside"), std::string::npos) << farFixed.err;
+  const auto noHeader = test::runCommand(binary() + " fit " + (dir / "bad.xyz").string() +
+                                         " --tolerance 1 --weights-column w -o " + (dir / "x.tin").string());
+  EXPECT_EQ(noHeader.exitCode, 2) << noHeader.err;
+  EXPECT_NE(noHeader.err.find("header"), std::string::npos) << noHeader.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.tin"));
+}
 
 TEST(FitCli, FitsTheValidCellsOfARasterAndKeepsItsCrs) {
   if (!std::filesystem::exists(binary())) GTEST_SKIP() << "tinsmith binary not built";

@@ -211,6 +211,14 @@ TEST(TinCli, RedButteEndToEnd) {
   const auto rep = nlohmann::json::parse(readFile(report));
   EXPECT_TRUE(rep["result"]["valid"].get<bool>());
   EXPECT_EQ(rep["layers"].size(), 6u);
+
+  // --validate runs the full validator; the TIN is the same either way.
+  const fs::path full = dir / "full.tin";
+  r = runTinsmith("tin " + (kSource / "config/red-butte.toml").string() + " -o " + full.string() +
+                  " --validate");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("validation: ok (full)"), std::string::npos) << r.err;
+  EXPECT_EQ(readFile(full), readFile(tin));
   EXPECT_GT(rep["rivers"]["draped"].get<int>(), 0);
   EXPECT_EQ(rep["roads"]["draped"], 1);
   EXPECT_EQ(rep["lakes"].size(), 1u);

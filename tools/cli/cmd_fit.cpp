@@ -40,6 +40,8 @@ struct FitCliOptions {
   int threads = 0;
   std::string crs;
   bool quiet = false;
+  std::optional<std::string> weightsColumn;
+  std::optional<std::string> fixed;
 };
 
 double parseNumber(const std::string& text, const std::string& option) {
@@ -153,14 +155,60 @@ std::string statsJson(const fit::MultilevelFit& result, std::size_t points, doub
 
 /// The data points of `path`: a raster's valid cell centres (by extension),
 /// otherwise a text point file. A raster's CRS fills `crs` when none was given.
-std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
+bool isRasterPath(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   static const std::set<std::string> kRasterExtensions = {".tif", ".tiff", ".exr", ".img", ".asc", ".vrt"};
-  if (!kRasterExtensions.contains(ext)) return ingest::readTextPoints(path);
+  return kRasterExtensions.contains(ext);
+}
+
+std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
+  if (!isRasterPath(path)) return ingest::readTextPoints(path);
   const ingest::HeightGrid grid = ingest::readHeightGrid(path);
   if (crs.empty()) crs = grid.crs;
   return ingest::gridToPoints(grid);
+}
+
+/// The per-point weights w_k (8.8) from column `column` (a 0-based index or a
+/// header name) of the text point file `path`, in the order readTextPoints
+/// returns the points. Throws inputError naming the file and line of a weight
+/// that is not a positive finite number.
+std::vector<double> readWeights(const std::string& path, const std::string& column) {
+  if (isRasterPath(path)) {
+    throw usageError("--weights-column needs a text point file, not a raster", "write the points as x y z w text");
+  }
+  const ingest::TextPointTable points = ingest::readTextPointTable(path);
+  ingest::TextPointOptions wopt;
+  wopt.delimiter = points.delimiter;
+  wopt.header = points.hasHeader ? ingest::TextHeader::Present : ingest::TextHeader::Absent;
+  wopt.xIndex = points.xIndex;
+  wopt.yIndex = points.yIndex;
+  const bool isIndex = !column.empty() && column.find_first_not_of("0123456789") == std::string::npos;
+  if (isIndex) {
+    wopt.zIndex = std::stoi(column);
+  } else {
+    if (!points.hasHeader) {
+      throw usageError("--weights-column '" + column + "' names a column but " + path + " has no header",
+                       "give the 0-based column index instead, e.g. --weights-column 3");
+    }
+    wopt.zColumn = column;
+  }
+  const ingest::TextPointTable weights = ingest::readTextPointTable(path, wopt);
+  if (weights.points.size() != points.points.size()) {
+    throw internalError("the weight column of " + path + " has a different number of rows than the points");
+  }
+  std::vector<double> w(weights.points.size());
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    w[i] = weights.points[i].z;
+    if (!(w[i] > 0.0) || !std::isfinite(w[i])) {
+      SourceLocation where;
+      where.file = path;
+      where.line = weights.lines[i];
+      throw inputError("the weight " + std::to_string(w[i]) + " is not a positive number", where,
+                       "weights (8.8) must be > 0; drop the point instead of giving it weight 0");
+    }
+  }
+  return w;
 }
 
 }  // namespace
@@ -185,6 +233,12 @@ void addFitCommand(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "Worker threads (default: all cores)");
   cmd->add_option("--crs", o->crs, "CRS to record in the .tin (e.g. EPSG:32619)");
   cmd->add_flag("-q,--quiet", o->quiet, "No per-level progress");
+  cmd->add_option("--weights-column", o->weightsColumn,
+                  "Column of the point file (0-based index or header name) holding a weight w > 0 for each point "
+                  "(weighted least squares, 8.8)");
+  cmd->add_option("--fixed", o->fixed,
+                  "XYZ/CSV file of points the surface must pass through exactly (constrained least squares, 8.9); "
+                  "each is moved to the nearest vertex of the finest grid");
   cmd->callback([o] {
     fit::MultilevelOptions opt;
     opt.smoothing = parseSmoothing(o->smoothing);
@@ -203,6 +257,8 @@ void addFitCommand(CLI::App& app) {
 
     std::string crs = o->crs;
     const std::vector<Point3> points = readFitInput(o->points, crs);
+    if (o->weightsColumn) opt.weights = readWeights(o->points, *o->weightsColumn);
+    if (o->fixed) opt.fixed = ingest::readTextPoints(*o->fixed);
     const auto start = std::chrono::steady_clock::now();
     const fit::MultilevelFit result = fit::fitMultilevel(points, opt);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

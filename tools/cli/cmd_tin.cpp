@@ -1,6 +1,6 @@
 // `tinsmith tin`: build a constrained Delaunay TIN.
-//   tinsmith tin CONFIG.toml -o site.tin [--report r.json] [--strict]
-//   tinsmith tin --points FILE... --breaklines FILE... -o OUT.tin [--snap T] [--crs C]
+//   tinsmith tin CONFIG.toml -o site.tin [--report r.json] [--strict] [--validate]
+//   tinsmith tin --points FILE... --breaklines FILE... -o OUT.tin [--snap T] [--crs C] [--validate]
 // The first reads every [[layer]] of the config (ingest: read, reproject,
 // clean) and applies the terrain rules (builders.tin); the second triangulates
 // plain inputs as they are: XYZ/CSV points, and break lines as GeoJSON (or any
@@ -46,6 +46,7 @@ struct TinOptions {
   std::string crs;
   bool strict = false;
   bool noFlatRepair = false;
+  bool fullValidation = false;
   bool quiet = false;
 };
 
@@ -179,41 +180,46 @@ void run(const TinOptions& o) {
   }
   const ingest::Progress* p = bar ? &progress : nullptr;
 
-  ingest::BuildResult result;
+  // The TIN is written straight from the triangulation's mesh, before the
+  // triangulation is freed: no TinData copy of it is ever made.
+  auto writeTin = [&o](const Mesh& mesh) { ingest::writeTinFile(o.output, mesh); };
+  ingest::BuildReport report;
   if (plain) {
     ingest::BuildOptions options;
     options.crs = o.crs;
     options.snapTolerance = o.snap.value_or(0.0);
     options.flatTriangleRepair = false;
     options.riverDescent = false;
+    if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
     const auto start = std::chrono::steady_clock::now();
     auto layers = plainLayers(o);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result = ingest::buildTin(std::move(layers), options, p);
-    result.report.times.insert(result.report.times.begin(), {"read", readSeconds});
-    result.report.totalSeconds += readSeconds;
+    report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    report.times.insert(report.times.begin(), {"read", readSeconds});
+    report.totalSeconds += readSeconds;
   } else {
     ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
     if (o.strict) config.tin.strict = true;
     if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
     ingest::IngestResult ingested = ingest::loadLayers(config, p);
     auto layers = ingest::toBuildLayers(std::move(ingested.layers));
-    result = ingest::buildTin(std::move(layers), ingest::buildOptionsFrom(config), p);
-    ingest::addIngestReport(result.report, ingested);
+    ingest::BuildOptions options = ingest::buildOptionsFrom(config);
+    if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
+    report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    ingest::addIngestReport(report, ingested);
   }
   bar.reset();
-  ingest::writeTinFile(o.output, result.tin);
   if (!o.report.empty()) {
     try {
-      writeReport(o.report, result.report);
+      writeReport(o.report, report);
     } catch (...) {
       std::error_code ec;
       std::filesystem::remove(o.output, ec);  // both outputs or neither
       throw;
     }
   }
-  if (!o.quiet) std::cerr << result.report.summary() << "wrote " << o.output << "\n";
+  if (!o.quiet) std::cerr << report.summary() << "wrote " << o.output << "\n";
 }
 
 }  // namespace
@@ -232,6 +238,9 @@ void addTinCommand(CLI::App& app) {
   cmd->add_option("--crs", opt->crs, "Plain mode: the CRS to record in the TIN (e.g. EPSG:26912)");
   cmd->add_flag("--strict", opt->strict, "Config mode: crossing contours are fatal, not just reported");
   cmd->add_flag("--no-flat-repair", opt->noFlatRepair, "Config mode: keep flat triangles");
+  cmd->add_flag("--validate", opt->fullValidation,
+                "Run the full validator on the result (Delaunay property, every input point and "
+                "constraint present); by default only the mesh's structure is checked");
   cmd->add_flag("-q,--quiet", opt->quiet, "No summary and no progress on stderr");
   cmd->callback([opt] { run(*opt); });
 }

@@ -2,21 +2,34 @@
 // lines (made with OGR in a temporary folder, stored in EPSG:4326 so the
 // reprojection stage does real work) → read → reproject → clean → TIN build
 // (builders.tin: triangulation, flat-triangle repair, validation) → .tin
-// file, with wall time and peak memory per stage.
+// file, with wall time and peak memory per stage. As in `tinsmith tin`, the
+// .tin file is written from the triangulation's mesh at the end of the TIN
+// build (buildTinInto), so the last stage is "TIN build + write .tin"; the
+// write's own time and peak are listed with the build's stages.
 //
 //   ingest_bench [--contour-vertices N] [--spot-heights N] [--breakline-vertices N]
 //                [--dir DIR] [--keep]
 //
 // Stages are entries of a list (see main): each gets the shared BenchContext,
-// runs, and is measured apart — peak RSS is reset before each stage through
-// /proc/self/clear_refs, so "peak MB" is that stage's own high-water mark. A
-// later stage (the TIN build) is added by appending to the list and reading
-// ctx.layers.
+// runs, and is measured apart. Memory: the process peak is getrusage()'s
+// ru_maxrss (the kernel's high-water mark of the resident set — the figure
+// /usr/bin/time -v reports); "peak so far" is that mark after each stage, so
+// the stage that raises it is the one that sets the peak. A stage's own peak
+// ("stage peak") comes from a sampler thread reading /proc/self/statm every
+// millisecond (it can miss a spike shorter than that; the ru_maxrss column
+// cannot). The high-water mark is never reset: resetting it (clear_refs)
+// also resets what getrusage() and /usr/bin/time see, which then report only
+// the last stage's peak. The TIN build's own stages (from its progress ticks)
+// get a stage peak each too.
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 #include <ogrsf_frmts.h>
+#include <fcntl.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,10 +39,13 @@
 #include <functional>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "core/base/allocator.hpp"
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
+#include "ingest/base/progress.hpp"
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/build/tin_builder.hpp"
 #include "ingest/filters/clean.hpp"
@@ -47,6 +63,8 @@ struct Sizes {
   long breaklineVertices = 10000;
 };
 
+class RssSampler;
+
 /// What the stages share.
 struct BenchContext {
   Sizes sizes;
@@ -56,7 +74,17 @@ struct BenchContext {
   std::vector<IngestedLayer> layers;
   CleaningReport cleaning;
   std::size_t cleanedVertices = 0;
-  BuildResult tin;
+  BuildResult tin;  ///< the report only: the TIN goes to the file
+  double writeSeconds = 0.0;
+  RssSampler* sampler = nullptr;
+  /// The TIN build's own stages, one per progress tick of the builder (and
+  /// the write): name, CPU seconds, peak RSS kB (sampled).
+  struct Part {
+    std::string name;
+    double cpu = 0;
+    long peakKb = 0;
+  };
+  std::vector<Part> buildParts;
 };
 
 struct Stage {
@@ -65,13 +93,22 @@ struct Stage {
   bool counted = true;  ///< part of the ingest total (generation is not)
 };
 
-long readStatusKb(const char* key) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind(key, 0) == 0) return std::stol(line.substr(std::strlen(key)));
-  }
-  return -1;
+/// The resident set now, in kB (/proc/self/statm, second field, in pages).
+long residentKb(int statmFd) {
+  char buf[128];
+  const ssize_t n = ::pread(statmFd, buf, sizeof buf - 1, 0);
+  if (n <= 0) return -1;
+  buf[n] = '\0';
+  long size = 0, resident = 0;
+  if (std::sscanf(buf, "%ld %ld", &size, &resident) != 2) return -1;
+  return resident * (::sysconf(_SC_PAGESIZE) / 1024);
+}
+
+/// The process's peak resident set so far, in kB (ru_maxrss).
+long maxRssKb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
 }
 
 double cpuSeconds() {
@@ -81,9 +118,56 @@ double cpuSeconds() {
          static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
 }
 
-void resetPeak() {
-  std::ofstream("/proc/self/clear_refs") << "5";
-}
+/// Samples the resident set every millisecond on its own thread and keeps
+/// the maximum since the last restart(): a stage's own peak, without touching
+/// the kernel's high-water mark.
+class RssSampler {
+ public:
+  RssSampler() : fd_(::open("/proc/self/statm", O_RDONLY | O_CLOEXEC)) {
+    max_ = now();
+    thread_ = std::thread([this] {
+      while (!stop_.load(std::memory_order_relaxed)) {
+        sample();
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    });
+  }
+  ~RssSampler() {
+    stop_ = true;
+    thread_.join();
+    if (fd_ >= 0) ::close(fd_);
+  }
+  RssSampler(const RssSampler&) = delete;
+  RssSampler& operator=(const RssSampler&) = delete;
+  [[nodiscard]] long now() const { return fd_ >= 0 ? residentKb(fd_) : -1; }
+  /// The maximum since the last restart (a sample taken now included); starts anew.
+  long restart() {
+    sample();
+    const long kb = now();
+    subMax_ = kb;
+    return max_.exchange(kb);
+  }
+  /// The same for a stage inside a stage: restarts only the inner maximum.
+  long restartInner() {
+    sample();
+    return subMax_.exchange(now());
+  }
+
+ private:
+  void sample() {
+    const long kb = now();
+    for (std::atomic<long>* m : {&max_, &subMax_}) {
+      long seen = m->load(std::memory_order_relaxed);
+      while (kb > seen && !m->compare_exchange_weak(seen, kb)) {
+      }
+    }
+  }
+  int fd_;
+  std::atomic<long> max_{0};
+  std::atomic<long> subMax_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 // Terrain of the synthetic site: smooth, in metres.
 double terrain(double x, double y) {
@@ -202,6 +286,7 @@ std::size_t countVertices(const std::vector<IngestedLayer>& layers) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  returnLargeBlocksToSystem();  // as the tinsmith binary does
   BenchContext ctx;
   bool keep = false;
   for (int i = 1; i < argc; ++i) {
@@ -246,47 +331,78 @@ int main(int argc, char** argv) {
          options.tolerance = c.config.tin.snapTolerance;
          c.cleaning = cleanLayers(c.layers, options);
        }},
-      {"TIN build",
+      {"TIN build + write .tin",
        [](BenchContext& c) {
          c.cleanedVertices = countVertices(c.layers);
          auto layers = toBuildLayers(std::move(c.layers));
-         c.tin = buildTin(std::move(layers), buildOptionsFrom(c.config));
+         // Each progress tick of the builder starts one of its stages.
+         std::string current;
+         double cpuStart = cpuSeconds();
+         auto endPart = [&c, &cpuStart](const std::string& name) {
+           const long peak = c.sampler->restartInner();
+           const double now = cpuSeconds();
+           if (!name.empty()) c.buildParts.push_back({name, now - cpuStart, peak});
+           cpuStart = now;
+         };
+         Progress progress;
+         progress.callback = [&current, &endPart](std::string_view, std::string_view detail,
+                                                  std::uint64_t, std::uint64_t) {
+           endPart(current);
+           current = detail;
+         };
+         // As `tinsmith tin` does: the .tin file is written from the
+         // triangulation's mesh before the triangulation is freed.
+         auto write = [&c, &current, &endPart](const Mesh& mesh) {
+           endPart(current);  // "done": the summary after validation
+           current.clear();
+           const auto start = std::chrono::steady_clock::now();
+           writeTinFile(c.dir / "bench.tin", mesh);
+           c.writeSeconds =
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+           endPart("write .tin");
+         };
+         c.sampler->restartInner();
+         c.tin.report = buildTinInto(std::move(layers), buildOptionsFrom(c.config), write, &progress);
        }},
-      {"write .tin", [](BenchContext& c) { writeTinFile(c.dir / "bench.tin", c.tin.tin); }},
   };
 
   try {
+    RssSampler sampler;
+    ctx.sampler = &sampler;
     std::printf(
-        "| stage | wall s | CPU s | peak RSS MB | RSS after MB |\n|---|---:|---:|---:|---:|\n");
+        "| stage | wall s | CPU s | stage peak RSS MB | peak so far MB | RSS after MB |\n"
+        "|---|---:|---:|---:|---:|---:|\n");
     double total = 0.0;
     double totalCpu = 0.0;
     double readClean = 0.0, triangulation = 0.0;
-    long peakKb = 0;
     std::size_t inputVertices = 0;
     long baselineKb = -1;  // RSS before the first counted stage: libraries, not data
     for (const auto& stage : stages) {
-      if (stage.counted && baselineKb < 0) baselineKb = readStatusKb("VmRSS:");
-      resetPeak();
+      if (stage.counted && baselineKb < 0) baselineKb = sampler.now();
+      sampler.restart();
       const auto start = std::chrono::steady_clock::now();
       const double cpuStart = cpuSeconds();
       stage.run(ctx);
       const double cpu = cpuSeconds() - cpuStart;
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const long hwm = readStatusKb("VmHWM:");
-      const long rss = readStatusKb("VmRSS:");
+      const long stagePeak = sampler.restart();
+      const long peakSoFar = maxRssKb();
+      const long rss = sampler.now();
       if (stage.name == "read") inputVertices = countVertices(ctx.layers);
       if (stage.name == "read" || stage.name == "reproject" || stage.name == "clean") readClean += seconds;
-      if (stage.name == "TIN build") triangulation = seconds;
+      if (stage.name.rfind("TIN build", 0) == 0) triangulation = seconds - ctx.writeSeconds;
       if (stage.counted) {
         total += seconds;
         totalCpu += cpu;
-        peakKb = std::max(peakKb, hwm);
       }
-      std::printf("| %s | %.3f | %.3f | %.1f | %.1f |\n", stage.name.c_str(), seconds, cpu,
-                  hwm / 1024.0, rss / 1024.0);
+      std::printf("| %s | %.3f | %.3f | %.1f | %.1f | %.1f |\n", stage.name.c_str(), seconds, cpu,
+                  stagePeak / 1024.0, peakSoFar / 1024.0, rss / 1024.0);
     }
-    std::printf("| **total (GeoPackage → .tin)** | **%.3f** | **%.3f** | **%.1f** | |\n\n", total,
+    // The kernel's high-water mark: exact, and what /usr/bin/time -v reports.
+    // The generation stage comes first and stays far below the build's peak.
+    const long peakKb = maxRssKb();
+    std::printf("| **total (GeoPackage → .tin)** | **%.3f** | **%.3f** | | **%.1f** | |\n\n", total,
                 totalCpu, peakKb / 1024.0);
     std::printf("share of the total: read + reproject + clean %.0f%%, TIN build %.0f%%, rest %.0f%%\n",
                 100 * readClean / total, 100 * triangulation / total,
@@ -294,6 +410,10 @@ int main(int argc, char** argv) {
     std::printf("reading and cleaning / TIN build = %.2f (goal: <= 1)\n", readClean / triangulation);
     std::printf("TIN build stages:");
     for (const auto& t : ctx.tin.report.times) std::printf(" %s %.3f s;", t.stage.c_str(), t.seconds);
+    std::printf(" write .tin %.3f s;", ctx.writeSeconds);
+    std::printf("\nTIN build stages by progress tick (CPU s, sampled peak RSS MB):");
+    for (const auto& part : ctx.buildParts)
+      std::printf(" %s %.3f s %.1f MB;", part.name.c_str(), part.cpu, part.peakKb / 1024.0);
     std::printf("\nTIN: %zu vertices, %zu triangles, %zu constrained edges; %zu crossings split, "
                 "%zu flat triangles before repair, %zu after\n",
                 ctx.tin.report.vertices, ctx.tin.report.triangles, ctx.tin.report.constrainedEdges,
@@ -302,8 +422,9 @@ int main(int argc, char** argv) {
                 inputVertices, ctx.sizes.contourVertices, ctx.sizes.spotHeights,
                 ctx.sizes.breaklineVertices);
     std::printf(
-        "baseline RSS %.1f MB; peak above baseline %.1f MB = %.0f bytes per input vertex\n",
-        baselineKb / 1024.0, (peakKb - baselineKb) / 1024.0,
+        "baseline RSS %.1f MB; peak RSS (ru_maxrss) %.1f MB; above baseline %.1f MB = %.0f bytes "
+        "per input vertex\n",
+        baselineKb / 1024.0, peakKb / 1024.0, (peakKb - baselineKb) / 1024.0,
         inputVertices ? (peakKb - baselineKb) * 1024.0 / static_cast<double>(inputVertices) : 0.0);
     const auto& r = ctx.cleaning;
     std::printf(
