@@ -2,7 +2,18 @@
 # Installs everything tinsmith needs to build, test and run, from Debian
 # bookworm packages only. Idempotent: installs only what is missing. Needs root
 # (or sudo) when something is missing.
+#
+#   bash tools/setup.sh           # build, test and run
+#   bash tools/setup.sh --bench   # also the tools the benchmarks compare against
 set -euo pipefail
+
+bench=0
+for arg in "$@"; do
+  case "$arg" in
+    --bench) bench=1 ;;
+    *) echo "setup: unknown option '$arg' (use --bench or nothing)" >&2; exit 2 ;;
+  esac
+done
 
 packages=(
   # toolchain
@@ -15,6 +26,13 @@ packages=(
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev
 )
+if [ "$bench" -eq 1 ]; then
+  packages+=(
+    # benchmark-only references (tests/bench/): GRASS GIS v.surf.rst, and
+    # python3 GDAL + NumPy for the error evaluator
+    grass-core python3-gdal python3-numpy
+  )
+fi
 
 missing=()
 for p in "${packages[@]}"; do
