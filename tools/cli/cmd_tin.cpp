@@ -47,6 +47,7 @@ struct TinOptions {
   bool strict = false;
   bool noFlatRepair = false;
   bool fullValidation = false;
+  unsigned threads = 0;
   bool quiet = false;
 };
 
@@ -191,6 +192,7 @@ void run(const TinOptions& o) {
     options.flatTriangleRepair = false;
     options.riverDescent = false;
     if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
+    options.threads = o.threads;
     const auto start = std::chrono::steady_clock::now();
     auto layers = plainLayers(o);
     const double readSeconds =
@@ -206,6 +208,7 @@ void run(const TinOptions& o) {
     auto layers = ingest::toBuildLayers(std::move(ingested.layers));
     ingest::BuildOptions options = ingest::buildOptionsFrom(config);
     if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
+    options.threads = o.threads;
     report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
     ingest::addIngestReport(report, ingested);
   }
@@ -241,6 +244,9 @@ void addTinCommand(CLI::App& app) {
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
+  cmd->add_option("--threads", opt->threads,
+                  "Threads for the triangulation (default 0: all cores; the TIN is the same for "
+                  "any count)");
   cmd->add_flag("-q,--quiet", opt->quiet, "No summary and no progress on stderr");
   cmd->callback([opt] { run(*opt); });
 }
