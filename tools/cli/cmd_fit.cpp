@@ -42,7 +42,27 @@ struct FitCliOptions {
   bool quiet = false;
   std::optional<std::string> weightsColumn;
   std::optional<std::string> fixed;
+  std::optional<std::string> domain;
 };
+
+double parseNumber(const std::string& text, const std::string& option);
+
+/// --domain X0,Y0,SIZE: three numbers, SIZE > 0.
+std::vector<double> parseDomain(const std::string& text) {
+  std::vector<double> v;
+  std::size_t begin = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', begin);
+    v.push_back(parseNumber(text.substr(begin, comma - begin), "--domain"));
+    if (comma == std::string::npos) break;
+    begin = comma + 1;
+  }
+  if (v.size() != 3 || !(v[2] > 0)) {
+    throw usageError("--domain: '" + text + "' is not X0,Y0,SIZE with SIZE > 0",
+                     "e.g. --domain 430000,4512000,8000 for an 8 km square");
+  }
+  return v;
+}
 
 double parseNumber(const std::string& text, const std::string& option) {
   std::size_t used = 0;
@@ -232,7 +252,11 @@ void addFitCommand(CLI::App& app) {
   cmd->add_option("--direct-levels", o->directLevels, "Levels solved by the direct solver first (default 3)");
   cmd->add_option("--threads", o->threads, "Worker threads (default: all cores)");
   cmd->add_option("--crs", o->crs, "CRS to record in the .tin (e.g. EPSG:32619)");
-  cmd->add_flag("-q,--quiet", o->quiet, "No per-level progress");
+  cmd->add_option("--domain", o->domain,
+                  "The square to fit over, as X0,Y0,SIZE: lower-left corner and side in the "
+                  "points' units (default: the bounding square of the points); every point must "
+                  "lie in it");
+  cmd->add_flag("-q,--quiet", o->quiet, "No progress and no summary on stderr");
   cmd->add_option("--weights-column", o->weightsColumn,
                   "Column of the point file (0-based index or header name) holding a weight w > 0 for each point "
                   "(weighted least squares, 8.8)");
@@ -253,6 +277,11 @@ void addFitCommand(CLI::App& app) {
     opt.maxLevel = o->maxLevel;
     opt.directLevels = o->directLevels;
     opt.threads = o->threads;
+    if (o->domain) {
+      const std::vector<double> d = parseDomain(*o->domain);
+      opt.domainOrigin = Point2{d[0], d[1]};
+      opt.domainSize = d[2];
+    }
     if (!o->quiet) opt.progress = [](const std::string& line) { std::cerr << line << "\n"; };
 
     std::string crs = o->crs;
@@ -268,6 +297,7 @@ void addFitCommand(CLI::App& app) {
       out.write(statsJson(result, points.size(), seconds));
       out.commit();
     }
+    if (o->quiet) return;
     const auto& last = result.levels().back();
     std::cerr << "wrote " << o->output << ": " << last.vertices << " vertices, " << last.triangles
               << " triangles, level " << last.level << ", max error " << last.maxError << ", rms " << last.rmsError
