@@ -934,6 +934,10 @@ struct Cdt::Impl {
   //     hole the safe ones leave. DT(S) is built with the hole's border edges
   //     as constraints (they are Delaunay edges of all the points), which
   //     keeps the two sides consistent on cocircular input.
+  // The same holds for constrained triangulations when each half carries only
+  // constraints with both ends on its side (they cannot hide a point of the
+  // other side from a safe triangle) and DT(S) also keeps the constrained
+  // edges inside the hole; constraints across the split go in afterwards.
   // The split depends on the points only, never on the thread count, so
   // neither does the mesh.
 
