@@ -935,9 +935,10 @@ struct Cdt::Impl {
   //     as constraints (they are Delaunay edges of all the points), which
   //     keeps the two sides consistent on cocircular input.
   // The same holds for constrained triangulations when each half carries only
-  // constraints with both ends on its side (they cannot hide a point of the
-  // other side from a safe triangle) and DT(S) also keeps the constrained
-  // edges inside the hole; constraints across the split go in afterwards.
+  // constraints with both ends on its side (they stay there, so they cannot
+  // cross the other side's safe triangles) and DT(S) also keeps the
+  // constrained edges inside the hole; constraints across the split go in
+  // afterwards.
   // The split depends on the points only, never on the thread count, so
   // neither does the mesh.
 
