@@ -116,6 +116,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     bool broken = false;
     bool haveMin = false;
     Point2 minV;
+    int minVisits = 0;  // a loop through a pinched vertex may pass it twice
     int turn = 0;
     for (std::size_t steps = 0; !seen[h.value]; ++steps) {
       seen[h.value] = true;
@@ -135,7 +136,10 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
       if (!haveMin || v.x < minV.x || (v.x == minV.x && v.y < minV.y)) {
         haveMin = true;
         minV = v;
+        minVisits = 1;
         turn = geometry::orient2d(a, b, m.xy(m.target(g)));
+      } else if (v == minV) {
+        ++minVisits;
       }
       h = g;
     }
@@ -143,7 +147,9 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
       problems.add("boundary loop through half-edge " + std::to_string(i) + " does not close");
       continue;
     }
-    if (turn == 0) turn = area > 0 ? 1 : -1;
+    // At a vertex the loop passes twice (two holes touching there) the
+    // local turn says nothing about the loop: take the area's sign.
+    if (turn == 0 || minVisits > 1) turn = area > 0 ? 1 : -1;
     loopSum += turn;
   }
   r.boundaryLoops = loops;

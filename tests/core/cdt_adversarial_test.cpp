@@ -335,6 +335,29 @@ TEST(CdtAdversarial, CrossingZFromHigherPriorityFeature) {
   EXPECT_EQ(ev.inserted, river);
 }
 
+TEST(CdtAdversarial, TwoHolesTouchingAtAVertex) {
+  // The holes share their leftmost vertex: the domain's boundary passes it
+  // twice in one loop (found by the fuzzer; the validator took that loop's
+  // turn at the shared vertex for its orientation). Four mirror images, so
+  // that the loop reaches the shared vertex first from either hole.
+  for (const double sx : {1.0, -1.0}) {
+    for (const double sy : {1.0, -1.0}) {
+      auto at = [&](double x, double y) { return Point3{5 + sx * (x - 5), 5 + sy * (y - 5), 0}; };
+      Cdt cdt;
+      const FeatureId outer = cdt.addFeature(FeatureKind::Boundary, "outer");
+      const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+      cdt.insertPoints(randomPoints(500, 31, 0, 10));
+      cdt.addBoundary(std::vector<Point3>{at(0, 0), at(10, 0), at(10, 10), at(0, 10)}, outer);
+      cdt.addHole(std::vector<Point3>{at(2, 2), at(4, 1), at(4, 3)}, lake);
+      cdt.addHole(std::vector<Point3>{at(2, 2), at(4, 5), at(3, 6)}, lake);
+      cdt.finalize();
+      EXPECT_TRUE(isValid(cdt)) << sx << " " << sy;
+      const ValidationReport r = validate(cdt.mesh());
+      EXPECT_EQ(r.boundaryLoops, 2u);  // the outer ring; both holes in one loop
+    }
+  }
+}
+
 TEST(CdtAdversarial, DeterministicOutput) {
   auto build = [] {
     Cdt cdt;
