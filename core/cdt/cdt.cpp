@@ -330,7 +330,7 @@ struct Cdt::Impl {
 
   std::uint32_t lastTriangle = 0;
   int reroutingDepth = 0;  // nesting of rerouteThrough()
-  static constexpr int kMaxRerouting = 1;
+  static constexpr int kMaxRerouting = 4;
   bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
@@ -1526,9 +1526,8 @@ struct Cdt::Impl {
 
   /// Un-constrains e (R→L), inserts X (z, feature) as a point (it may merge
   /// into a vertex within the snap tolerance) and inserts R→X and X→L with
-  /// e's features. Returns X's vertex. Reroutings do not nest (kMaxRerouting;
-  /// nested ones were seen to cascade): a sliver crossing met while
-  /// rerouting falls back to the nearest vertex (reported as forced).
+  /// e's features. Returns X's vertex. Nested reroutings are bounded by
+  /// kMaxRerouting; beyond that crossings fall back to the nearest vertex.
   std::uint32_t rerouteThrough(std::uint32_t e, const Point2& X, double zX, FeatureId fX) {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     const auto view = edgeFeatures.find(edgeKey(R, L));
