@@ -329,8 +329,6 @@ struct Cdt::Impl {
   std::uint32_t packedTriangles = 0;
 
   std::uint32_t lastTriangle = 0;
-  int reroutingDepth = 0;  // nesting of rerouteThrough()
-  static constexpr int kMaxRerouting = 4;
   bool trackVhe = false;  // vhe is maintained only while constraints go in
   std::uint32_t rng = 2463534242u;
   std::vector<std::uint32_t> stack;
@@ -1488,7 +1486,7 @@ struct Cdt::Impl {
                       orient2d(xy[L], xy[c], X) > 0 && orient2d(xy[d], xy[L], X) > 0 &&
                       orient2d(xy[R], xy[d], X) > 0;
       useExisting = !ok;
-      forced = !ok && reroutingDepth >= kMaxRerouting;
+      forced = !ok;
     }
     CdtReport::Intersection ev;
     ev.existing = existing;
@@ -1497,13 +1495,7 @@ struct Cdt::Impl {
     ev.zInserted = zI;
     ev.forced = forced;
     std::uint32_t v;
-    if (useExisting && !forced && dist2(nearest) > tol * tol) {
-      // The rounded crossing cannot split e into four valid triangles (a
-      // sliver beside e): X goes in as a free vertex, and the constraint on
-      // e is routed R→X→L (bent by X's rounding only).
-      v = rerouteThrough(e, X, insertedWins ? zI : zE, insertedWins ? f : existing);
-      ev.moved = std::sqrt(dist2(v));
-    } else if (useExisting) {
+    if (useExisting) {
       v = nearest;
       ev.moved = std::sqrt(dist2(v));
       if (v == c || v == d) detourConstraint(e, v);
@@ -1522,38 +1514,6 @@ struct Cdt::Impl {
     ev.at = {xy[v].x, xy[v].y, z[v]};
     report.intersections.push_back(ev);
     return v;
-  }
-
-  /// Un-constrains e (R→L), inserts X (z, feature) as a point (it may merge
-  /// into a vertex within the snap tolerance) and inserts R→X and X→L with
-  /// e's features. Returns X's vertex. Nested reroutings are bounded by
-  /// kMaxRerouting; beyond that crossings fall back to the nearest vertex.
-  std::uint32_t rerouteThrough(std::uint32_t e, const Point2& X, double zX, FeatureId fX) {
-    const std::uint32_t R = tv[e], L = tv[nxt(e)];
-    const auto view = edgeFeatures.find(edgeKey(R, L));
-    const std::vector<FeatureId> fs(view.begin(), view.end());
-    cons[e] = cons[opp[e]] = 0;
-    edgeFeatures.erase(edgeKey(R, L));
-    const auto v = static_cast<std::uint32_t>(xy.size());
-    xy.push_back(X);
-    z.push_back(zX);
-    vfeat.push_back(fX);
-    rep.push_back(kNone);
-    vhe.push_back(kNone);
-    insertedUpTo = xy.size();
-    lastTriangle = e / 3;
-    insertVertex(v);
-    const std::uint32_t w = find(v);
-    ++reroutingDepth;
-    for (const FeatureId g : fs) {
-      if (w != R) insertSegment(R, w, g);
-      if (w != L) insertSegment(w, L, g);
-    }
-    --reroutingDepth;
-    // Edges that R→L kept from view may now see across it: restore the
-    // Delaunay property around its ends and the new vertex.
-    for (const std::uint32_t u : {R, L, w}) lopAround(u);
-    return w;
   }
 
   /// The constrained edge of e (R→L) is replaced by R→via→L, via being the

@@ -101,11 +101,10 @@ struct CdtReport {
     FeatureId existing = kNoFeature;  ///< feature of the constraint already there
     FeatureId inserted = kNoFeature;  ///< feature of the constraint being inserted
     double zExisting = 0, zInserted = 0;  ///< z of each constraint at that point
-    /// The rounded crossing could not split the crossed edge (a sliver
-    /// beside it), and neither could rerouting the existing constraint
-    /// through it as a free vertex (nested too deep), so it was moved to the
-    /// nearest vertex of the two triangles beside the edge, farther than the
-    /// snap tolerance: the constraints bend through `at`. Very rare.
+    /// The rounded crossing could not split the crossed edge (degenerate
+    /// triangles there) and was moved to the nearest vertex of the two
+    /// triangles beside it, farther than the snap tolerance: the constraints
+    /// bend through `at`.
     bool forced = false;
     /// How far the vertex used lies from the computed crossing (0 for a new
     /// vertex; up to the snap tolerance when snapped; more when forced). Both
