@@ -167,26 +167,15 @@ class EdgeFeatureMap {
     e.list = static_cast<std::uint32_t>(lists_.size() - 1);
   }
   void erase(std::uint64_t key) {
-    std::size_t i = slotOf(key);
-    if (i == kMissing) return;
-    // Backward-shift deletion: pull later entries of the probe run forward.
-    const std::size_t mask = slots_.size() - 1;
-    for (std::size_t j = (i + 1) & mask; slots_[j].key != kEmpty; j = (j + 1) & mask) {
-      const std::size_t home = hash(slots_[j].key);
-      if (((j - home) & mask) >= ((j - i) & mask)) {
-        slots_[i] = slots_[j];
-        i = j;
-      }
-    }
-    slots_[i].key = kEmpty;
-    --size_;
+    const std::size_t i = slotOf(key);
+    if (i != kMissing) eraseAt(i);
   }
   /// The edge `from` was split into `a` and `b`: both inherit its features.
   void split(std::uint64_t from, std::uint64_t a, std::uint64_t b) {
     const std::size_t i = slotOf(from);
     if (i == kMissing) return;
     const Entry e = slots_[i].entry;
-    erase(from);
+    eraseAt(i);
     set(a, e);
     set(b, e);
   }
@@ -232,6 +221,19 @@ class EdgeFeatureMap {
       if (slots_[i].key == key) return i;
       if (slots_[i].key == kEmpty) return kMissing;
     }
+  }
+  /// Backward-shift deletion: later entries of the probe run move forward.
+  void eraseAt(std::size_t i) {
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t j = (i + 1) & mask; slots_[j].key != kEmpty; j = (j + 1) & mask) {
+      const std::size_t home = hash(slots_[j].key);
+      if (((j - home) & mask) >= ((j - i) & mask)) {
+        slots_[i] = slots_[j];
+        i = j;
+      }
+    }
+    slots_[i].key = kEmpty;
+    --size_;
   }
   void set(std::uint64_t key, const Entry& e) {
     const std::size_t i = slotOf(key);
@@ -288,7 +290,7 @@ struct Location {
 struct Cdt::Impl {
   CdtOptions options;
   std::vector<TinFeature> features;
-  std::vector<Role> featureRole;  // unused for now beyond segments' roles
+  std::vector<Role> featureRole;  // per feature: bounds the domain (boundary, hole) or not
 
   // Input vertices (intersection vertices are appended).
   std::vector<Point2> xy;
