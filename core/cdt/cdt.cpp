@@ -312,6 +312,9 @@ struct Cdt::Impl {
 
   CdtReport report;
   std::unordered_map<std::uint32_t, std::uint32_t> zSource;  // vertex → input its z came from
+  // Per feature: how far its constraints were bent by taking in sliver apexes
+  // (crossingVertex); the validator allows that much more.
+  std::vector<double> bend;
   Mesh mesh;
   std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
   bool finalized = false;
@@ -1169,6 +1172,8 @@ struct Cdt::Impl {
       ev.vertex = VertexId(rightGlobal[ev.vertex.value]);
       report.intersections.push_back(ev);
     }
+    if (bend.size() < right.bend.size()) bend.resize(right.bend.size(), 0.0);
+    for (std::size_t g = 0; g < right.bend.size(); ++g) bend[g] += right.bend[g];
     report.dropped.insert(report.dropped.end(), right.report.dropped.begin(),
                           right.report.dropped.end());
     right.edgeFeatures.forEach([&](std::uint64_t key, EdgeFeatureMap::View fs) {
@@ -1259,7 +1264,7 @@ struct Cdt::Impl {
     seam.insertPendingPoints();
     seam.insertPendingSegments();
     if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
-        !seam.report.dropped.empty()) {
+        !seam.report.dropped.empty() || !seam.bend.empty()) {
       throw internalError("the seam between the two halves changed its input");
     }
 
@@ -1454,10 +1459,81 @@ struct Cdt::Impl {
     return std::ldexp(std::max(std::fabs(p.x), std::fabs(p.y)), -40);
   }
 
+  /// The triangle that holds point p strictly inside, if the open segment
+  /// from vertex a to p crosses no constrained edge and passes through no
+  /// vertex; else kNone.
+  std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p) const {
+    // The wedge at a that the segment leaves through: a→u→w, u right, w left.
+    std::uint32_t e = kNone;
+    const std::uint32_t start = vhe[a];
+    std::uint32_t h = start;
+    do {
+      const std::uint32_t u = tv[nxt(h)], w = tv[prv(h)];
+      if (u != kInf && w != kInf) {
+        const int ou = orient2d(xy[a], p, xy[u]), ow = orient2d(xy[a], p, xy[w]);
+        if (ou == 0 || ow == 0) return kNone;
+        if (ou < 0 && ow > 0) {
+          e = nxt(h);
+          break;
+        }
+      }
+      h = opp[prv(h)];
+    } while (h != start);
+    if (e == kNone) return kNone;
+    for (std::size_t steps = 0; steps < tv.size(); ++steps) {
+      const int o = orient2d(xy[tv[e]], xy[tv[nxt(e)]], p);
+      if (o > 0) return e / 3;  // p is on this side of e: inside e's triangle
+      if (o == 0 || cons[e]) return kNone;
+      const std::uint32_t g = opp[e];
+      const std::uint32_t x = tv[prv(g)];
+      if (x == kInf) return kNone;
+      const int ox = orient2d(xy[a], p, xy[x]);
+      if (ox == 0) return kNone;
+      e = ox > 0 ? nxt(g) : prv(g);
+    }
+    return kNone;
+  }
+
+  /// Do the edges p–q and u–w carry a feature in common?
+  bool sharesFeature(std::uint32_t p, std::uint32_t q, std::uint32_t u, std::uint32_t w) const {
+    const auto other = edgeFeatures.find(edgeKey(u, w));
+    for (const FeatureId g : edgeFeatures.find(edgeKey(p, q))) {
+      if (std::find(other.begin(), other.end(), g) != other.end()) return true;
+    }
+    return false;
+  }
+
+  /// Distance from vertex v to the segment between vertices a and b.
+  double distanceToSegment(std::uint32_t v, std::uint32_t a, std::uint32_t b) const {
+    const Point2 &p = xy[v], &pa = xy[a], &pb = xy[b];
+    const double dx = pb.x - pa.x, dy = pb.y - pa.y, l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((p.x - pa.x) * dx + (p.y - pa.y) * dy) / l2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    return std::hypot(p.x - (pa.x + t * dx), p.y - (pa.y + t * dy));
+  }
+
   /// The constraint cur→tgt crosses constrained edge e (R→L, in the
-  /// triangle on cur's side). Makes a vertex at the crossing — a new one
-  /// splitting e, or R or L when the crossing is (nearly) at one of them —
-  /// and returns it.
+  /// triangle on cur's side). Makes a vertex at the crossing and returns it:
+  /// R, L or an apex beside e when the crossing is within the tolerance of
+  /// one, else a new vertex at the rounded crossing X. Returns kNone when it
+  /// rerouted e's constraint instead: the caller walks cur→tgt again.
+  ///
+  /// X splits e into four strictly counter-clockwise triangles unless a
+  /// triangle beside e is a sliver and X, rounded, falls outside it. Then, in
+  /// order of preference:
+  /// - X lies strictly inside the other triangle beside e: X goes in there and
+  ///   e's constraint runs R→X→L, bent by X's rounding only. Both new edges
+  ///   lie inside that triangle, so the reroute crosses nothing.
+  /// - X lies in a triangle farther off (beyond a sliver) and the segments from
+  ///   R and L to X cross no constrained edge and pass through no vertex: X
+  ///   goes in there and e's constraint is recovered as R→X→L by flips alone.
+  /// - An apex of a sliver lies on e within the tolerance, or nearer to e than
+  ///   X to any vertex: it is taken into e's constraint (R→apex→L). That adds
+  ///   no vertex and no crossing (its edges to R and L exist); as those edges
+  ///   must not carry e's features yet, every such step lengthens the
+  ///   features' chains, so it repeats only finitely often.
+  /// - Otherwise the crossing is moved to the nearest of R, L and the apexes,
+  ///   reported as `forced` when that bends a constraint beyond the tolerance.
   std::uint32_t crossingVertex(std::uint32_t cur, std::uint32_t tgt, std::uint32_t e,
                                FeatureId f) {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
@@ -1481,25 +1557,57 @@ struct Cdt::Impl {
     // lines (three constraints through one point): a constructed point this
     // close to a vertex is that vertex, even with snapTolerance 0.
     const double tol = std::max(options.snapTolerance, constructionTolerance(X));
-    bool useExisting = dist2(nearest) <= tol * tol, forced = false;
-    if (!useExisting) {
-      // The split must leave four strictly counter-clockwise triangles.
-      const bool ok = c != kInf && d != kInf && orient2d(xy[c], xy[R], X) > 0 &&
-                      orient2d(xy[L], xy[c], X) > 0 && orient2d(xy[d], xy[L], X) > 0 &&
-                      orient2d(xy[R], xy[d], X) > 0;
-      useExisting = !ok;
-      forced = !ok;
+    enum class Make { AtVertex, SplitEdge, InTriangle, Rerouted } make = Make::SplitEdge;
+    std::uint32_t inTriangle = kNone;
+    if (dist2(nearest) <= tol * tol) {
+      make = Make::AtVertex;
+    } else {
+      // Is X strictly inside the triangle (a, b, u) beyond its edge a→b?
+      auto inside = [&](std::uint32_t a, std::uint32_t b, std::uint32_t u) {
+        return u != kInf && orient2d(xy[b], xy[u], X) > 0 && orient2d(xy[u], xy[a], X) > 0;
+      };
+      const bool cOk = inside(R, L, c), dOk = inside(L, R, d);
+      if (!cOk || !dOk) {
+        const int side = orient2d(xy[R], xy[L], X);  // > 0: c's side
+        if (side > 0 && cOk) {
+          make = Make::InTriangle;
+          inTriangle = e / 3;
+        } else if (side < 0 && dOk) {
+          make = Make::InTriangle;
+          inTriangle = opp[e] / 3;
+        } else if (const std::uint32_t t = clearPathEnd(R, X);
+                   t != kNone && clearPathEnd(L, X) == t) {
+          make = Make::Rerouted;
+          inTriangle = t;
+        } else {
+          const auto [apex, bendBy] = sliverApexOnEdge(e, !cOk ? c : kInf, !dOk ? d : kInf,
+                                                       std::max(tol, std::sqrt(dist2(nearest))));
+          if (apex != kNone && apex != cur && apex != tgt) {
+            for (const FeatureId g : edgeFeatures.find(edgeKey(R, L))) {
+              if (g >= bend.size()) bend.resize(g + 1, 0.0);
+              bend[g] += bendBy;
+            }
+            detourConstraint(e, apex);
+            return kNone;
+          }
+          // An apex at an end of cur→tgt: the crossing is there.
+          if (apex != kNone) nearest = apex;
+          make = Make::AtVertex;
+        }
+      }
     }
     CdtReport::Intersection ev;
     ev.existing = existing;
     ev.inserted = f;
     ev.zExisting = zE;
     ev.zInserted = zI;
-    ev.forced = forced;
     std::uint32_t v;
-    if (useExisting) {
+    if (make == Make::AtVertex) {
+      // Both constraints now run through v: each bends by v's distance from
+      // it (the distance from X is no measure where the lines nearly overlap).
       v = nearest;
-      ev.moved = std::sqrt(dist2(v));
+      ev.moved = std::max(distanceToSegment(v, cur, tgt), distanceToSegment(v, R, L));
+      ev.forced = ev.moved > tol;
       if (v == c || v == d) detourConstraint(e, v);
     } else {
       v = static_cast<std::uint32_t>(xy.size());
@@ -1509,7 +1617,25 @@ struct Cdt::Impl {
       rep.push_back(v);
       vhe.push_back(kNone);
       insertedUpTo = xy.size();
-      splitEdge(e, v);
+      if (make == Make::SplitEdge) {
+        splitEdge(e, v);
+      } else if (make == Make::InTriangle) {
+        splitTriangle(inTriangle, v);  // e stays constrained, so it is not flipped
+        detourConstraint(findHalfedge(R, L), v);
+      } else {
+        splitTriangle(inTriangle, v);
+        const std::uint32_t h = findHalfedge(R, L);
+        const auto view = edgeFeatures.find(edgeKey(R, L));
+        const std::vector<FeatureId> fs(view.begin(), view.end());
+        cons[h] = cons[opp[h]] = 0;
+        edgeFeatures.erase(edgeKey(R, L));
+        for (const FeatureId g : fs) {
+          insertSegment(R, v, g);
+          insertSegment(v, L, g);
+        }
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
+        lop(todo);
+      }
       lopAround(v);
     }
     ev.vertex = VertexId(v);
@@ -1518,9 +1644,23 @@ struct Cdt::Impl {
     return v;
   }
 
+  /// Of the apexes c and d beside e (kInf to skip one), the one nearest to
+  /// e's segment within maxDistance whose edges to e's ends do not carry any
+  /// of e's features yet, and its distance; kNone if none.
+  std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e, std::uint32_t c,
+                                                    std::uint32_t d, double maxDistance) const {
+    const std::uint32_t R = tv[e], L = tv[nxt(e)];
+    std::pair<std::uint32_t, double> best{kNone, maxDistance};
+    for (const std::uint32_t u : {c, d}) {
+      if (u == kInf || sharesFeature(R, L, R, u) || sharesFeature(R, L, u, L)) continue;
+      const double du = distanceToSegment(u, R, L);
+      if (du <= best.second) best = {u, du};
+    }
+    return best;
+  }
+
   /// The constrained edge of e (R→L) is replaced by R→via→L, via being the
-  /// apex of e's triangle or of its twin's: the crossing of another
-  /// constraint with it is taken to be at via.
+  /// apex of e's triangle or of its twin's (the edges via–R and via–L exist).
   void detourConstraint(std::uint32_t e, std::uint32_t via) {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     const auto view = edgeFeatures.find(edgeKey(R, L));
@@ -1638,7 +1778,8 @@ struct Cdt::Impl {
         continue;
       }
       if (hitConstraint) {
-        targets.push_back(crossingVertex(cur, tgt, e, f));
+        const std::uint32_t v = crossingVertex(cur, tgt, e, f);
+        if (v != kNone) targets.push_back(v);
         continue;
       }
       removeCrossings(cur, end, crossed, f);
@@ -2162,6 +2303,7 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
         moved[g] += ev.moved;
       }
     }
+    for (std::size_t g = 0; g < m.bend.size() && g < moved.size(); ++g) moved[g] += m.bend[g];
     for (const Segment& s : m.segments) {
       const std::uint32_t a = m.meshOf[s.a], b = m.meshOf[s.b];
       if (a == b || s.feature >= m.features.size()) continue;

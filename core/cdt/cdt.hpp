@@ -101,14 +101,15 @@ struct CdtReport {
     FeatureId existing = kNoFeature;  ///< feature of the constraint already there
     FeatureId inserted = kNoFeature;  ///< feature of the constraint being inserted
     double zExisting = 0, zInserted = 0;  ///< z of each constraint at that point
-    /// The rounded crossing could not split the crossed edge (degenerate
-    /// triangles there) and was moved to the nearest vertex of the two
-    /// triangles beside it, farther than the snap tolerance: the constraints
-    /// bend through `at`.
+    /// The rounded crossing could not go in as a vertex on both constraints
+    /// (slivers between near-duplicate vertices) and was moved to the nearest
+    /// vertex of the two triangles beside the crossed edge, bending a
+    /// constraint by more than the snap tolerance: they bend through `at`.
     bool forced = false;
-    /// How far the vertex used lies from the computed crossing (0 for a new
-    /// vertex; up to the snap tolerance when snapped; more when forced). Both
-    /// constraints bend by this much; bends add up along a constraint.
+    /// How far the constraints bend to pass through the vertex used: its
+    /// larger distance from the two constraint segments (0 for a new vertex,
+    /// up to the snap tolerance when snapped, more when forced). Bends add up
+    /// along a constraint.
     double moved = 0;
   };
   struct Dropped {

@@ -250,5 +250,82 @@ TEST(CdtConstraintRegression, FiveLinesThroughAnInputPointMakeNoNearDuplicateVer
        {10.000000000000000, 30.000000000000000, 90.000000000000000, 70.000000000000000}});
 }
 
+// A constrained edge R–L with a vertex one ulp from L, so the triangle beside
+// the edge on that side is a sliver; a second break line crosses the edge near
+// R. The rounded crossing falls on the wrong side of the sliver's long edge and
+// cannot split R–L into four triangles; it once went to the nearest vertex,
+// 1.1 m away. It lies in a triangle beyond the sliver, and the segments from R
+// and L to it cross no constraint, so it goes in there and R–L's constraint is
+// recovered through it: a new vertex on both lines.
+TEST(CdtConstraintRegression, CrossingBesideASliverStaysOnBothLines) {
+  const Point3 R{6999980.9999999991, 7000017.0000000000, 10.0};
+  const Point3 L{6999980.0000000000, 6999980.0000000000, 20.0};
+  const Point3 apex{6999980.0000000000, 6999980.0000000009, 0.0};  // one ulp above L
+  const Point3 A{6999981.7548746532, 7000013.3426183844, 30.0};
+  const Point3 B{6999980.0000000000, 7000015.0000000009, 40.0};
+  Cdt cdt;
+  cdt.insertPoints(std::vector<Point3>{L, apex, R,
+                                       {6999990.0, 6999990.0, 0.0},
+                                       {6999970.0, 6999990.0, 0.0},
+                                       {6999990.0, 7000020.0, 0.0},
+                                       {6999970.0, 7000020.0, 0.0}});
+  const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+  const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
+  const std::vector<InputSegment> segs{{R, L, road}, {A, B, river}};
+  insertSegments(cdt, segs);
+  cdt.finalize();
+  const Mesh& mesh = cdt.mesh();
+  EXPECT_TRUE(isValid(cdt));
+  EXPECT_TRUE(segmentsAreChains(mesh, segs, 1e-8));
+  EXPECT_EQ(mesh.vertexCount(), 10u);  // seven points, A, B and the crossing
+  ASSERT_EQ(cdt.report().intersections.size(), 1u);
+  const CdtReport::Intersection& x = cdt.report().intersections[0];
+  EXPECT_FALSE(x.forced);
+  EXPECT_EQ(x.moved, 0.0);
+  // Both features pass through the crossing vertex.
+  const VertexId v = vertexAt(mesh, x.at.xy());
+  ASSERT_TRUE(v.valid());
+  int roadEdges = 0, riverEdges = 0;
+  mesh.forEachOutgoing(v, [&](HalfedgeId h) {
+    for (FeatureId f : mesh.edgeFeatures(h)) {
+      roadEdges += f == road;
+      riverEdges += f == river;
+    }
+  });
+  EXPECT_EQ(roadEdges, 2);
+  EXPECT_EQ(riverEdges, 2);
+}
+
+// Found by the fuzzer: a closed, self-crossing break line at UTM coordinates,
+// one vertex an ulp off a lattice value. One rounded crossing falls just
+// outside the sliver beside the crossed edge but inside the triangle on the
+// edge's other side; it goes in there, and no crossing is moved to a vertex.
+TEST(CdtConstraintRegression, SelfCrossingRingWithAnUlpOffVertexKeepsEveryCrossing) {
+  const std::vector<Point3> ring{{6999998.9000000004, 6999998.9000000004, 0},
+                                 {6999998.5, 6999998.4000000004, 27},
+                                 {6999998.5000000009, 7000001.5, 49},
+                                 {6999998.5, 6999998.5, 58},
+                                 {6999998.4000000004, 6999999.5, 53},
+                                 {6999999, 7000001.7999999998, 0},
+                                 {6999998, 6999998, 0}};
+  for (const std::size_t split : {std::size_t{6}, std::size_t{50000}}) {
+    CdtOptions options;
+    options.splitMinPoints = split;
+    Cdt cdt(options);
+    const FeatureId f = cdt.addFeature(FeatureKind::Contour, "ring");
+    cdt.insertConstraint(ring, f, true);
+    cdt.finalize();
+    std::vector<InputSegment> segs;
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      segs.push_back({ring[i], ring[(i + 1) % ring.size()], f});
+    }
+    EXPECT_TRUE(isValid(cdt));
+    EXPECT_TRUE(segmentsAreChains(cdt.mesh(), segs));
+    for (const CdtReport::Intersection& x : cdt.report().intersections) {
+      EXPECT_FALSE(x.forced) << "moved " << x.moved;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tinsmith

@@ -65,10 +65,12 @@ int runOne(const std::uint8_t* data, std::size_t size) {
     const int n = in.ConsumeIntegralInRange<int>(1, 12);
     std::vector<tinsmith::Point3> pts;
     for (int i = 0; i < n; ++i) pts.push_back(point(in, scale, offset));
+    int feature = op;
     if (op <= 4) {
       cdt.insertPoints(pts, features[op]);
     } else if (op <= 7) {
-      cdt.insertConstraint(pts, features[in.ConsumeIntegralInRange<int>(0, 5)], op == 7);
+      feature = in.ConsumeIntegralInRange<int>(0, 5);
+      cdt.insertConstraint(pts, features[feature], op == 7);
     } else if (op == 8) {
       cdt.addBoundary(pts, boundary);
     } else {
@@ -76,7 +78,8 @@ int runOne(const std::uint8_t* data, std::size_t size) {
     }
     any = true;
     if (std::getenv("CDT_FUZZ_VERBOSE")) {
-      std::fprintf(stderr, "op %d snap %g:", op, options.snapTolerance);
+      std::fprintf(stderr, "op %d feature %d snap %.17g split %zu:", op, feature,
+                   options.snapTolerance, options.splitMinPoints);
       for (const auto& p : pts) std::fprintf(stderr, " (%.17g, %.17g, %g)", p.x, p.y, p.z);
       std::fprintf(stderr, "\n");
     }
@@ -102,6 +105,11 @@ int runOne(const std::uint8_t* data, std::size_t size) {
       std::abort();
     }
     return 0;
+  }
+  if (std::getenv("CDT_FUZZ_VERBOSE")) {
+    for (const auto& x : cdt.report().intersections) {
+      if (x.forced) std::fprintf(stderr, "forced crossing moved %.17g (scale %g)\n", x.moved, scale);
+    }
   }
   const tinsmith::ValidationReport r = cdt.validate();
   if (!r.ok) {
