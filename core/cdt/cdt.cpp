@@ -1494,13 +1494,16 @@ struct Cdt::Impl {
     return kNone;
   }
 
-  /// Do the edges p–q and u–w carry a feature in common?
-  bool sharesFeature(std::uint32_t p, std::uint32_t q, std::uint32_t u, std::uint32_t w) const {
-    const auto other = edgeFeatures.find(edgeKey(u, w));
-    for (const FeatureId g : edgeFeatures.find(edgeKey(p, q))) {
-      if (std::find(other.begin(), other.end(), g) != other.end()) return true;
+  /// Is each feature of the edge R–L on both or on neither of the edges R–u
+  /// and u–L?
+  bool chainsStayOpen(std::uint32_t R, std::uint32_t L, std::uint32_t u) const {
+    const auto ru = edgeFeatures.find(edgeKey(R, u)), ul = edgeFeatures.find(edgeKey(u, L));
+    for (const FeatureId g : edgeFeatures.find(edgeKey(R, L))) {
+      const bool onRu = std::find(ru.begin(), ru.end(), g) != ru.end();
+      const bool onUl = std::find(ul.begin(), ul.end(), g) != ul.end();
+      if (onRu != onUl) return false;
     }
-    return false;
+    return true;
   }
 
   /// Distance from vertex v to the segment between vertices a and b.
@@ -1529,9 +1532,9 @@ struct Cdt::Impl {
   ///   goes in there and e's constraint is recovered as R→X→L by flips alone.
   /// - An apex of a sliver lies on e within the tolerance, or nearer to e than
   ///   X to any vertex: it is taken into e's constraint (R→apex→L). That adds
-  ///   no vertex and no crossing (its edges to R and L exist); as those edges
-  ///   must not carry e's features yet, every such step lengthens the
-  ///   features' chains, so it repeats only finitely often.
+  ///   no vertex and no crossing (its edges to R and L exist). Each feature's
+  ///   chain gains the apex or drops e where it already runs through the apex
+  ///   (sliverApexOnEdge); the walk's guard would stop a cycle of such steps.
   /// - Otherwise the crossing is moved to the nearest of R, L and the apexes,
   ///   reported as `forced` when that bends a constraint beyond the tolerance.
   std::uint32_t crossingVertex(std::uint32_t cur, std::uint32_t tgt, std::uint32_t e,
@@ -1645,14 +1648,17 @@ struct Cdt::Impl {
   }
 
   /// Of the apexes c and d beside e (kInf to skip one), the one nearest to
-  /// e's segment within maxDistance whose edges to e's ends do not carry any
-  /// of e's features yet, and its distance; kNone if none.
+  /// e's segment within maxDistance, and its distance; kNone if none. An apex
+  /// qualifies if each of e's features is on both or on neither of its edges
+  /// to e's ends: the feature's chain then grows by an edge, or loses e where
+  /// it already runs through the apex. A feature on one of them only would
+  /// make its chain run back on itself.
   std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e, std::uint32_t c,
                                                     std::uint32_t d, double maxDistance) const {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     std::pair<std::uint32_t, double> best{kNone, maxDistance};
     for (const std::uint32_t u : {c, d}) {
-      if (u == kInf || sharesFeature(R, L, R, u) || sharesFeature(R, L, u, L)) continue;
+      if (u == kInf || !chainsStayOpen(R, L, u)) continue;
       const double du = distanceToSegment(u, R, L);
       if (du <= best.second) best = {u, du};
     }
