@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <deque>
 #include <exception>
+#include <optional>
 #include <limits>
 #include <string>
 #include <thread>
@@ -312,8 +313,9 @@ struct Cdt::Impl {
 
   CdtReport report;
   std::unordered_map<std::uint32_t, std::uint32_t> zSource;  // vertex → input its z came from
-  // Per feature: how far its constraints were bent by taking in sliver apexes
-  // (crossingVertex); the validator allows that much more.
+  // Per feature: how far its constraints were bent by taking in apexes beside
+  // them, beyond what report.intersections records (crossingVertex); the
+  // validator allows that much more.
   std::vector<double> bend;
   Mesh mesh;
   std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
@@ -1524,9 +1526,10 @@ struct Cdt::Impl {
   /// X splits e into four strictly counter-clockwise triangles unless a
   /// triangle beside e is a sliver and X, rounded, falls outside it. Then, in
   /// order of preference:
-  /// - X lies strictly inside the other triangle beside e: X goes in there and
-  ///   e's constraint runs R→X→L, bent by X's rounding only. Both new edges
-  ///   lie inside that triangle, so the reroute crosses nothing.
+  /// - X lies strictly inside the other triangle beside e, or does so when
+  ///   moved a few ulps across e (it fell on e or beyond by rounding): X goes
+  ///   in there and e's constraint runs R→X→L, bent by rounding only. Both new
+  ///   edges lie inside that triangle, so the reroute crosses nothing.
   /// - X lies in a triangle farther off (beyond a sliver) and the segments from
   ///   R and L to X cross no constrained edge and pass through no vertex: X
   ///   goes in there and e's constraint is recovered as R→X→L by flips alone.
@@ -1559,8 +1562,12 @@ struct Cdt::Impl {
     // X is rounded, and R or L may itself be a rounded crossing of the same
     // lines (three constraints through one point): a constructed point this
     // close to a vertex is that vertex, even with snapTolerance 0.
-    const double tol = std::max(options.snapTolerance, constructionTolerance(X));
+    // The rounding error of X scales with the coordinates it is computed
+    // from, not with X (which may be near the origin).
+    double tol = options.snapTolerance;
+    for (const std::uint32_t u : {cur, tgt, R, L}) tol = std::max(tol, constructionTolerance(xy[u]));
     enum class Make { AtVertex, SplitEdge, InTriangle, Rerouted } make = Make::SplitEdge;
+    Point2 at = X;  // where a new vertex goes
     std::uint32_t inTriangle = kNone;
     if (dist2(nearest) <= tol * tol) {
       make = Make::AtVertex;
@@ -1578,6 +1585,14 @@ struct Cdt::Impl {
         } else if (side < 0 && dOk) {
           make = Make::InTriangle;
           inTriangle = opp[e] / 3;
+        } else if (const auto P = nudgedInto(R, L, c, X); cOk && P) {
+          make = Make::InTriangle;  // X was on e or just across it, by rounding
+          inTriangle = e / 3;
+          at = *P;
+        } else if (const auto Q = nudgedInto(L, R, d, X); dOk && Q) {
+          make = Make::InTriangle;
+          inTriangle = opp[e] / 3;
+          at = *Q;
         } else if (const std::uint32_t t = clearPathEnd(R, X);
                    t != kNone && clearPathEnd(L, X) == t) {
           make = Make::Rerouted;
@@ -1586,10 +1601,7 @@ struct Cdt::Impl {
           const auto [apex, bendBy] = sliverApexOnEdge(e, !cOk ? c : kInf, !dOk ? d : kInf,
                                                        std::max(tol, std::sqrt(dist2(nearest))));
           if (apex != kNone && apex != cur && apex != tgt) {
-            for (const FeatureId g : edgeFeatures.find(edgeKey(R, L))) {
-              if (g >= bend.size()) bend.resize(g + 1, 0.0);
-              bend[g] += bendBy;
-            }
+            addBend(R, L, kNoFeature, bendBy);
             detourConstraint(e, apex);
             return kNone;
           }
@@ -1611,10 +1623,14 @@ struct Cdt::Impl {
       v = nearest;
       ev.moved = std::max(distanceToSegment(v, cur, tgt), distanceToSegment(v, R, L));
       ev.forced = ev.moved > tol;
-      if (v == c || v == d) detourConstraint(e, v);
+      if (v == c || v == d) {
+        // Every feature of e bends, not only the one the event names.
+        addBend(R, L, existing, ev.moved);
+        detourConstraint(e, v);
+      }
     } else {
       v = static_cast<std::uint32_t>(xy.size());
-      xy.push_back(X);
+      xy.push_back(at);
       z.push_back(insertedWins ? zI : zE);
       vfeat.push_back(insertedWins ? f : existing);
       rep.push_back(v);
@@ -1645,6 +1661,38 @@ struct Cdt::Impl {
     ev.at = {xy[v].x, xy[v].y, z[v]};
     report.intersections.push_back(ev);
     return v;
+  }
+
+  /// Records that the features of edge R–L (but `except`) bend by `by`.
+  void addBend(std::uint32_t R, std::uint32_t L, FeatureId except, double by) {
+    for (const FeatureId g : edgeFeatures.find(edgeKey(R, L))) {
+      if (g == except) continue;
+      if (g >= bend.size()) bend.resize(g + 1, 0.0);
+      bend[g] += by;
+    }
+  }
+
+  /// X moved by up to 8 ulps across the edge a→b towards u, to a point
+  /// strictly inside the triangle (a, b, u); nullopt if none is found.
+  std::optional<Point2> nudgedInto(std::uint32_t a, std::uint32_t b, std::uint32_t u,
+                                   const Point2& X) const {
+    if (u == kInf) return std::nullopt;
+    const double dx = xy[b].x - xy[a].x, dy = xy[b].y - xy[a].y, len = std::hypot(dx, dy);
+    if (!(len > 0)) return std::nullopt;
+    double magnitude = std::max(std::fabs(X.x), std::fabs(X.y));
+    for (const std::uint32_t w : {a, b}) {
+      magnitude = std::max({magnitude, std::fabs(xy[w].x), std::fabs(xy[w].y)});
+    }
+    const double ulp = std::ldexp(magnitude, -52);
+    for (int k = 1; k <= 8; ++k) {
+      const double step = k * ulp / len;
+      const Point2 P{X.x - dy * step, X.y + dx * step};  // left of a→b
+      if (orient2d(xy[a], xy[b], P) > 0 && orient2d(xy[b], xy[u], P) > 0 &&
+          orient2d(xy[u], xy[a], P) > 0) {
+        return P;
+      }
+    }
+    return std::nullopt;
   }
 
   /// Of the apexes c and d beside e (kInf to skip one), the one nearest to

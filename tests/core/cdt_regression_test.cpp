@@ -254,9 +254,9 @@ TEST(CdtConstraintRegression, FiveLinesThroughAnInputPointMakeNoNearDuplicateVer
 // the edge on that side is a sliver; a second break line crosses the edge near
 // R. The rounded crossing falls on the wrong side of the sliver's long edge and
 // cannot split R–L into four triangles; it once went to the nearest vertex,
-// 1.1 m away. It lies in a triangle beyond the sliver, and the segments from R
-// and L to it cross no constraint, so it goes in there and R–L's constraint is
-// recovered through it: a new vertex on both lines.
+// 1.1 m away. Moved a few ulps back across R–L it lies in the triangle on the
+// other side, so it goes in there and R–L's constraint runs through it: a new
+// vertex on both lines.
 TEST(CdtConstraintRegression, CrossingBesideASliverStaysOnBothLines) {
   const Point3 R{6999980.9999999991, 7000017.0000000000, 10.0};
   const Point3 L{6999980.0000000000, 6999980.0000000000, 20.0};
@@ -297,9 +297,10 @@ TEST(CdtConstraintRegression, CrossingBesideASliverStaysOnBothLines) {
 }
 
 // Found by the fuzzer: a closed, self-crossing break line at UTM coordinates,
-// one vertex an ulp off a lattice value. One rounded crossing falls just
-// outside the sliver beside the crossed edge but inside the triangle on the
-// edge's other side; it goes in there, and no crossing is moved to a vertex.
+// one vertex an ulp off a lattice value. Rounded crossings fall just outside
+// slivers beside the crossed edges; each goes into the triangle on the edge's
+// other side (as computed, or moved a few ulps across the edge), and no
+// crossing is moved to a vertex.
 TEST(CdtConstraintRegression, SelfCrossingRingWithAnUlpOffVertexKeepsEveryCrossing) {
   const std::vector<Point3> ring{{6999998.9000000004, 6999998.9000000004, 0},
                                  {6999998.5, 6999998.4000000004, 27},
