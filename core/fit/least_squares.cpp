@@ -56,40 +56,51 @@ std::array<double, 3> barycentric(const Point2& p, const Point2& a, const Point2
 
 std::vector<MeshEdge> meshEdges(std::size_t vertexCount, std::span<const Triangle> triangles) {
   checkTriangles(vertexCount, triangles);
-  // Half-edges (from, to, opposite) sorted by their undirected key pair up twins.
+  // Half-edges (from, to, opposite) bucketed by their lower end (a counting
+  // sort), then ordered by (higher end, from) within each small bucket: twins
+  // are neighbours, and edges come out ordered by (lo, hi).
   struct HalfEdge {
-    std::uint32_t lo, hi, from, opposite;
+    std::uint32_t hi, from, opposite;
   };
-  std::vector<HalfEdge> half;
-  half.reserve(triangles.size() * 3);
+  std::vector<std::uint32_t> start(vertexCount + 1, 0);
   for (const auto& t : triangles) {
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
-      half.push_back({std::min(a, b), std::max(a, b), a, c});
+    for (int k = 0; k < 3; ++k) ++start[std::min(t[k], t[(k + 1) % 3]) + 1];
+  }
+  for (std::size_t v = 0; v < vertexCount; ++v) start[v + 1] += start[v];
+  std::vector<HalfEdge> half(triangles.size() * 3);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (const auto& t : triangles) {
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+        half[fill[std::min(a, b)]++] = {std::max(a, b), a, c};
+      }
     }
   }
-  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.lo != y.lo ? x.lo < y.lo : (x.hi != y.hi ? x.hi < y.hi : x.from < y.from);
-  });
   std::vector<MeshEdge> edges;
   edges.reserve(half.size() / 2 + 1);
-  for (std::size_t i = 0; i < half.size();) {
-    std::size_t j = i + 1;
-    while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
-    const std::string where = "edge (" + std::to_string(half[i].lo) + ", " + std::to_string(half[i].hi) + ")";
-    if (j - i > 2) throw geometryError(where + " belongs to more than two triangles", {}, "give a manifold triangulation");
-    MeshEdge e;
-    const HalfEdge& h = half[i];
-    e.s = h.from;
-    e.t = h.from == h.lo ? h.hi : h.lo;
-    e.left = h.opposite;
-    if (j - i == 2) {
-      const HalfEdge& g = half[i + 1];
-      if (g.from == h.from) throw geometryError(where + ": its two triangles have the same orientation", {}, "orient every triangle counter-clockwise");
-      e.right = g.opposite;
+  for (std::size_t lo = 0; lo < vertexCount; ++lo) {
+    const auto first = half.begin() + start[lo], last = half.begin() + start[lo + 1];
+    std::sort(first, last, [](const HalfEdge& x, const HalfEdge& y) {
+      return x.hi != y.hi ? x.hi < y.hi : x.from < y.from;
+    });
+    for (auto i = first; i != last;) {
+      auto j = i + 1;
+      while (j != last && j->hi == i->hi) ++j;
+      auto where = [&] { return "edge (" + std::to_string(lo) + ", " + std::to_string(i->hi) + ")"; };
+      if (j - i > 2) throw geometryError(where() + " belongs to more than two triangles", {}, "give a manifold triangulation");
+      MeshEdge e;
+      e.s = i->from;
+      e.t = i->from == lo ? i->hi : static_cast<std::uint32_t>(lo);
+      e.left = i->opposite;
+      if (j - i == 2) {
+        const HalfEdge& g = *(i + 1);
+        if (g.from == i->from) throw geometryError(where() + ": its two triangles have the same orientation", {}, "orient every triangle counter-clockwise");
+        e.right = g.opposite;
+      }
+      edges.push_back(e);
+      i = j;
     }
-    edges.push_back(e);
-    i = j;
   }
   return edges;
 }
