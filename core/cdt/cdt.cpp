@@ -1461,16 +1461,17 @@ struct Cdt::Impl {
     return std::ldexp(std::max(std::fabs(p.x), std::fabs(p.y)), -40);
   }
 
-  /// The triangle that holds point p strictly inside, if the open segment
-  /// from vertex a to p crosses no constrained edge and passes through no
-  /// vertex; else kNone.
-  std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p) const {
+  /// The triangle that holds point p strictly inside (or, with a target
+  /// vertex at p, a triangle at the target), if the open segment from vertex a
+  /// to p crosses no constrained edge and passes through no vertex; else kNone.
+  std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p, std::uint32_t target = kNone) const {
     // The wedge at a that the segment leaves through: a→u→w, u right, w left.
     std::uint32_t e = kNone;
     const std::uint32_t start = vhe[a];
     std::uint32_t h = start;
     do {
       const std::uint32_t u = tv[nxt(h)], w = tv[prv(h)];
+      if (target != kNone && (u == target || w == target)) return h / 3;
       if (u != kInf && w != kInf) {
         const int ou = orient2d(xy[a], p, xy[u]), ow = orient2d(xy[a], p, xy[w]);
         if (ou == 0 || ow == 0) return kNone;
@@ -1489,11 +1490,29 @@ struct Cdt::Impl {
       const std::uint32_t g = opp[e];
       const std::uint32_t x = tv[prv(g)];
       if (x == kInf) return kNone;
+      if (x == target) return g / 3;
       const int ox = orient2d(xy[a], p, xy[x]);
       if (ox == 0) return kNone;
       e = ox > 0 ? nxt(g) : prv(g);
     }
     return kNone;
+  }
+
+  /// The constrained edge R–L is replaced by R→w→L, w a vertex the segments
+  /// from R and L to which cross no constrained edge and pass through no
+  /// vertex (clearPathEnd): they are recovered by flips alone.
+  void rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w) {
+    const std::uint32_t h = findHalfedge(R, L);
+    const auto view = edgeFeatures.find(edgeKey(R, L));
+    const std::vector<FeatureId> fs(view.begin(), view.end());
+    cons[h] = cons[opp[h]] = 0;
+    edgeFeatures.erase(edgeKey(R, L));
+    for (const FeatureId g : fs) {
+      insertSegment(R, w, g);
+      insertSegment(w, L, g);
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
+    lop(todo);
   }
 
   /// Is each feature of the edge R–L on both or on neither of the edges R–u
@@ -1569,7 +1588,20 @@ struct Cdt::Impl {
     enum class Make { AtVertex, SplitEdge, InTriangle, Rerouted } make = Make::SplitEdge;
     Point2 at = X;  // where a new vertex goes
     std::uint32_t inTriangle = kNone;
-    if (dist2(nearest) <= tol * tol) {
+    // The crossing at an end of cur→tgt that is no corner beside e (slivers
+    // between them): e's constraint runs through that end if it can by flips.
+    std::uint32_t end = kNone;
+    for (const std::uint32_t u : {cur, tgt}) {
+      if (u != R && u != L && u != c && u != d && dist2(u) <= tol * tol && dist2(u) < dist2(nearest) &&
+          clearPathEnd(R, xy[u], u) != kNone && clearPathEnd(L, xy[u], u) != kNone) {
+        end = u;
+      }
+    }
+    if (end != kNone) {
+      rerouteThrough(R, L, end);
+      nearest = end;
+      make = Make::AtVertex;
+    } else if (dist2(nearest) <= tol * tol) {
       make = Make::AtVertex;
     } else {
       // Is X strictly inside the triangle (a, b, u) beyond its edge a→b?
@@ -1643,17 +1675,7 @@ struct Cdt::Impl {
         detourConstraint(findHalfedge(R, L), v);
       } else {
         splitTriangle(inTriangle, v);
-        const std::uint32_t h = findHalfedge(R, L);
-        const auto view = edgeFeatures.find(edgeKey(R, L));
-        const std::vector<FeatureId> fs(view.begin(), view.end());
-        cons[h] = cons[opp[h]] = 0;
-        edgeFeatures.erase(edgeKey(R, L));
-        for (const FeatureId g : fs) {
-          insertSegment(R, v, g);
-          insertSegment(v, L, g);
-        }
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
-        lop(todo);
+        rerouteThrough(R, L, v);
       }
       lopAround(v);
     }
