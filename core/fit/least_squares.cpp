@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/IterativeLinearSolvers>
@@ -259,30 +260,68 @@ std::array<double, 4> thinPlateBetas(const Point2& s, const Point2& t, const Poi
 }
 
 SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
-  // E = DᵀD with one row √L_e β_e per interior edge (4 entries), so that
-  // cᵀEc = Σ_e L_e (T_e f)²; built as a sparse product to keep memory low.
+  // E = DᵀD with one row d_e = √L_e β_e per interior edge e (4 entries, on the
+  // stencil {s, t, l, r}), so that cᵀEc = Σ_e L_e (T_e f)². Built row by row
+  // (Gustavson): row i of E sums d_e,i · d_e over the edges whose stencil
+  // holds i, found through a vertex → stencil-slot index.
   const auto edges = meshEdges(vertices.size(), triangles);
-  std::size_t interior = 0;
-  for (const auto& e : edges) interior += e.right == MeshEdge::kNone ? 0 : 1;
-  // D is filled row by row with its four entries (sorted by column), straight
-  // into compressed storage: no triplet list.
-  SparseMatrix d(static_cast<Eigen::Index>(interior), static_cast<Eigen::Index>(vertices.size()));
-  d.reserve(Eigen::VectorXi::Constant(static_cast<Eigen::Index>(interior), 4));
-  int row = 0;
+  const std::size_t n = vertices.size();
+  struct StencilRow {
+    std::array<std::uint32_t, 4> v;
+    std::array<double, 4> d;
+  };
+  std::vector<StencilRow> rows;
+  rows.reserve(edges.size());
   for (const auto& e : edges) {
     if (e.right == MeshEdge::kNone) continue;
     const auto beta = thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
     const double w = std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
-    std::array<std::pair<std::uint32_t, double>, 4> entries{
-        {{e.s, w * beta[0]}, {e.t, w * beta[1]}, {e.left, w * beta[2]}, {e.right, w * beta[3]}}};
-    std::sort(entries.begin(), entries.end());
-    for (const auto& [col, value] : entries) d.insert(row, static_cast<int>(col)) = value;
-    ++row;
+    rows.push_back({{e.s, e.t, e.left, e.right}, {w * beta[0], w * beta[1], w * beta[2], w * beta[3]}});
   }
-  d.makeCompressed();
-  SparseMatrix e = SparseMatrix(d.transpose()) * d;
-  e.makeCompressed();
-  return e;
+  // slots[start[i] .. start[i+1]) = 4·row + position of i in that row.
+  std::vector<std::uint32_t> start(n + 1, 0);
+  for (const auto& r : rows) {
+    for (const std::uint32_t v : r.v) ++start[v + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+  std::vector<std::uint32_t> slots(start[n]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      for (std::uint32_t a = 0; a < 4; ++a) slots[fill[rows[k].v[a]]++] = static_cast<std::uint32_t>(4 * k + a);
+    }
+  }
+  std::vector<SparseMatrix::StorageIndex> outer(n + 1, 0), inner;
+  std::vector<double> values;
+  inner.reserve(14 * n);
+  values.reserve(14 * n);
+  std::vector<double> sum(n, 0.0);
+  std::vector<std::uint32_t> seenIn(n, std::numeric_limits<std::uint32_t>::max()), columns;
+  for (std::size_t i = 0; i < n; ++i) {
+    columns.clear();
+    for (std::uint32_t q = start[i]; q < start[i + 1]; ++q) {
+      const StencilRow& r = rows[slots[q] / 4];
+      const double di = r.d[slots[q] % 4];
+      for (int b = 0; b < 4; ++b) {
+        const std::uint32_t j = r.v[b];
+        if (seenIn[j] != i) {
+          seenIn[j] = static_cast<std::uint32_t>(i);
+          sum[j] = 0.0;
+          columns.push_back(j);
+        }
+        sum[j] += di * r.d[b];
+      }
+    }
+    std::sort(columns.begin(), columns.end());
+    for (const std::uint32_t j : columns) {
+      inner.push_back(static_cast<SparseMatrix::StorageIndex>(j));
+      values.push_back(sum[j]);
+    }
+    outer[i + 1] = static_cast<SparseMatrix::StorageIndex>(inner.size());
+  }
+  return Eigen::Map<const SparseMatrix>(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n),
+                                        static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
+                                        values.data());
 }
 
 SparseMatrix smoothingMatrix(Smoothing kind, std::span<const Point2> vertices, std::span<const Triangle> triangles) {
