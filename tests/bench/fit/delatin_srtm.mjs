@@ -1,10 +1,12 @@
 // Reference for the fitter benchmark: delatin (greedy-insertion Delaunay TIN,
-// Garland–Heckbert) on an SRTM .hgt grid, for each max-error target; prints
-// vertices, max error and RMSE over every grid point (measured here by
-// rasterizing the mesh, not delatin's own getRMSD), and the time of run().
+// Garland–Heckbert) on an SRTM .hgt grid, for each target — a max error in
+// metres, or "nCOUNT" for a vertex count (refined point by point until it has
+// COUNT vertices: the comparison at equal vertex count); prints vertices, max
+// error and RMSE over every grid point (measured here by rasterizing the mesh,
+// not delatin's own getRMSD), and the time of the refinement.
 //
 //   npm install delatin@0.2.0   (in this folder or a scratch folder holding a copy of this script)
-//   node delatin_srtm.mjs N44W072.hgt 10 5 2
+//   node delatin_srtm.mjs N44W072.hgt 10 5 2 n232539
 import { readFileSync } from 'node:fs';
 import Delatin from 'delatin';
 
@@ -14,10 +16,15 @@ const size = Math.round(Math.sqrt(buf.length / 2));
 const data = new Float64Array(size * size);
 for (let i = 0; i < size * size; i++) data[i] = buf.readInt16BE(2 * i);
 
-for (const target of targets.map(Number)) {
+for (const target of targets) {
   const t0 = process.hrtime.bigint();
   const tin = new Delatin(data, size, size);
-  tin.run(target);
+  if (target.startsWith('n')) {
+    const count = Number(target.slice(1));
+    while (tin.coords.length / 2 < count && tin.getMaxError() > 0) tin.refine();
+  } else {
+    tin.run(Number(target));
+  }
   const seconds = Number(process.hrtime.bigint() - t0) / 1e9;
   const { coords, triangles } = tin;
   const seen = new Uint8Array(size * size);
@@ -43,6 +50,7 @@ for (const target of targets.map(Number)) {
       }
     }
   }
-  console.log(`delatin target ${target} m: ${coords.length / 2} vertices, ${triangles.length / 3} triangles, ` +
+  const what = target.startsWith('n') ? `${target.slice(1)} vertices` : `${target} m`;
+  console.log(`delatin target ${what}: ${coords.length / 2} vertices, ${triangles.length / 3} triangles, ` +
     `max error ${maxErr.toFixed(3)} m, RMSE ${Math.sqrt(sumSq / count).toFixed(3)} m over ${count} points, ${seconds.toFixed(2)} s`);
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Side-by-side run on SRTM N44W072 (1.44 M points): the multilevel fitter
 # (points projected to UTM 19N) against delatin (greedy-insertion TIN on the
-# same grid), for max-error targets given as arguments (default 10 5 2 m).
+# same grid), for max-error targets given as arguments (default 10 5 2 m),
+# then delatin refined to the fitter's vertex counts (RMSE at equal count).
 # Errors of both are measured at every DEM point.
 #
 #   bash tests/bench/fit/srtm_vs_delatin.sh BUILD_DIR/fit_scale_bench [TARGET...]
@@ -23,7 +24,12 @@ echo '{"type":"module"}' > package.json
 npm install --silent --no-audit --no-fund delatin@0.2.0 >/dev/null
 cp "$here/delatin_srtm.mjs" .
 node delatin_srtm.mjs "$hgt" "${targets[@]}"
+counts=()
 for t in "${targets[@]}"; do
   echo "fit, max error $t m, lambda 0.01 lambda_d, thin-plate:"
-  /usr/bin/time -f "  %e s wall, %U s user, %M KB peak" "$bench" xyz utm.xyz --max-error "$t" --lambda 0.01 | tail -1
+  line=$(/usr/bin/time -f "  %e s wall, %U s user, %M KB peak" "$bench" xyz utm.xyz --max-error "$t" --lambda 0.01 2>&1 | tail -2)
+  echo "$line"
+  counts+=("n$(sed -nE 's/.* vertices ([0-9]+) .*/\1/p' <<<"$line")")
 done
+echo "delatin at the fitter's vertex counts (RMSE at equal vertex count):"
+node delatin_srtm.mjs "$hgt" "${counts[@]}"
