@@ -1464,7 +1464,7 @@ struct Cdt::Impl {
   /// The triangle that holds point p strictly inside (or, with a target
   /// vertex at p, a triangle at the target), if the open segment from vertex a
   /// to p crosses no constrained edge and passes through no vertex; else kNone.
-  std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p, std::uint32_t target = kNone) const {
+  [[gnu::noinline]] std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p, std::uint32_t target = kNone) const {
     // The wedge at a that the segment leaves through: a→u→w, u right, w left.
     std::uint32_t e = kNone;
     const std::uint32_t start = vhe[a];
@@ -1501,7 +1501,7 @@ struct Cdt::Impl {
   /// The constrained edge R–L is replaced by R→w→L, w a vertex the segments
   /// from R and L to which cross no constrained edge and pass through no
   /// vertex (clearPathEnd): they are recovered by flips alone.
-  void rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w) {
+  [[gnu::noinline]] void rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w) {
     const std::uint32_t h = findHalfedge(R, L);
     const auto view = edgeFeatures.find(edgeKey(R, L));
     const std::vector<FeatureId> fs(view.begin(), view.end());
@@ -1583,8 +1583,11 @@ struct Cdt::Impl {
     // close to a vertex is that vertex, even with snapTolerance 0.
     // The rounding error of X scales with the coordinates it is computed
     // from, not with X (which may be near the origin).
-    double tol = options.snapTolerance;
-    for (const std::uint32_t u : {cur, tgt, R, L}) tol = std::max(tol, constructionTolerance(xy[u]));
+    double magnitude = 0.0;
+    for (const std::uint32_t u : {cur, tgt, R, L}) {
+      magnitude = std::max({magnitude, std::fabs(xy[u].x), std::fabs(xy[u].y)});
+    }
+    const double tol = std::max(options.snapTolerance, constructionTolerance({magnitude, magnitude}));
     enum class Make { AtVertex, SplitEdge, InTriangle, Rerouted } make = Make::SplitEdge;
     Point2 at = X;  // where a new vertex goes
     std::uint32_t inTriangle = kNone;
@@ -1696,7 +1699,7 @@ struct Cdt::Impl {
 
   /// X moved by up to 8 ulps across the edge a→b towards u, to a point
   /// strictly inside the triangle (a, b, u); nullopt if none is found.
-  std::optional<Point2> nudgedInto(std::uint32_t a, std::uint32_t b, std::uint32_t u,
+  [[gnu::noinline]] std::optional<Point2> nudgedInto(std::uint32_t a, std::uint32_t b, std::uint32_t u,
                                    const Point2& X) const {
     if (u == kInf) return std::nullopt;
     const double dx = xy[b].x - xy[a].x, dy = xy[b].y - xy[a].y, len = std::hypot(dx, dy);
@@ -1723,7 +1726,7 @@ struct Cdt::Impl {
   /// to e's ends: the feature's chain then grows by an edge, or loses e where
   /// it already runs through the apex. A feature on one of them only would
   /// make its chain run back on itself.
-  std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e, std::uint32_t c,
+  [[gnu::noinline]] std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e, std::uint32_t c,
                                                     std::uint32_t d, double maxDistance) const {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     std::pair<std::uint32_t, double> best{kNone, maxDistance};
