@@ -1500,7 +1500,8 @@ struct Cdt::Impl {
 
   /// The constrained edge R–L is replaced by R→w→L, w a vertex the segments
   /// from R and L to which cross no constrained edge and pass through no
-  /// vertex (clearPathEnd): they are recovered by flips alone.
+  /// vertex (an apex beside R–L, or see clearPathEnd): they are edges already
+  /// or are recovered by flips alone.
   [[gnu::noinline]] void rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w) {
     const std::uint32_t h = findHalfedge(R, L);
     const auto view = edgeFeatures.find(edgeKey(R, L));
@@ -1637,7 +1638,7 @@ struct Cdt::Impl {
                                                        std::max(tol, std::sqrt(dist2(nearest))));
           if (apex != kNone && apex != cur && apex != tgt) {
             addBend(R, L, kNoFeature, bendBy);
-            detourConstraint(e, apex);
+            rerouteThrough(R, L, apex);
             return kNone;
           }
           // An apex at an end of cur→tgt: the crossing is there.
@@ -1661,7 +1662,7 @@ struct Cdt::Impl {
       if (v == c || v == d) {
         // Every feature of e bends, not only the one the event names.
         addBend(R, L, existing, ev.moved);
-        detourConstraint(e, v);
+        rerouteThrough(R, L, v);
       }
     } else {
       v = static_cast<std::uint32_t>(xy.size());
@@ -1675,7 +1676,7 @@ struct Cdt::Impl {
         splitEdge(e, v);
       } else if (make == Make::InTriangle) {
         splitTriangle(inTriangle, v);  // e stays constrained, so it is not flipped
-        detourConstraint(findHalfedge(R, L), v);
+        rerouteThrough(R, L, v);
       } else {
         splitTriangle(inTriangle, v);
         rerouteThrough(R, L, v);
@@ -1736,22 +1737,6 @@ struct Cdt::Impl {
       if (du <= best.second) best = {u, du};
     }
     return best;
-  }
-
-  /// The constrained edge of e (R→L) is replaced by R→via→L, via being the
-  /// apex of e's triangle or of its twin's (the edges via–R and via–L exist).
-  void detourConstraint(std::uint32_t e, std::uint32_t via) {
-    const std::uint32_t R = tv[e], L = tv[nxt(e)];
-    const auto view = edgeFeatures.find(edgeKey(R, L));
-    const std::vector<FeatureId> fs(view.begin(), view.end());
-    cons[e] = cons[opp[e]] = 0;
-    edgeFeatures.erase(edgeKey(R, L));
-    for (const FeatureId g : fs) {
-      addEdgeFeature(R, via, g);
-      addEdgeFeature(via, L, g);
-    }
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
-    lop(todo);
   }
 
   /// Is u a vertex exactly on the input segment a0→b0 (exact orient2d) and
