@@ -1543,6 +1543,10 @@ struct Cdt::Impl {
   /// one, else a new vertex at the rounded crossing X. Returns kNone when it
   /// rerouted e's constraint instead: the caller walks cur→tgt again.
   ///
+  /// When X is within the tolerance of an end of cur→tgt that is not beside e
+  /// (slivers between), e's constraint is rerouted through that end if the
+  /// segments to it cross nothing (rerouteThrough).
+  ///
   /// X splits e into four strictly counter-clockwise triangles unless a
   /// triangle beside e is a sliver and X, rounded, falls outside it. Then, in
   /// order of preference:
@@ -1589,7 +1593,7 @@ struct Cdt::Impl {
       magnitude = std::max({magnitude, std::fabs(xy[u].x), std::fabs(xy[u].y)});
     }
     const double tol = std::max(options.snapTolerance, constructionTolerance({magnitude, magnitude}));
-    enum class Make { AtVertex, SplitEdge, InTriangle, Rerouted } make = Make::SplitEdge;
+    enum class Make { AtVertex, SplitEdge, InTriangle } make = Make::SplitEdge;
     Point2 at = X;  // where a new vertex goes
     std::uint32_t inTriangle = kNone;
     // The crossing at an end of cur→tgt that is no corner beside e (slivers
@@ -1631,7 +1635,7 @@ struct Cdt::Impl {
           at = *Q;
         } else if (const std::uint32_t t = clearPathEnd(R, X);
                    t != kNone && clearPathEnd(L, X) == t) {
-          make = Make::Rerouted;
+          make = Make::InTriangle;  // beyond a sliver, reachable by flips
           inTriangle = t;
         } else {
           const auto [apex, bendBy] = sliverApexOnEdge(e, !cOk ? c : kInf, !dOk ? d : kInf,
@@ -1674,11 +1678,8 @@ struct Cdt::Impl {
       insertedUpTo = xy.size();
       if (make == Make::SplitEdge) {
         splitEdge(e, v);
-      } else if (make == Make::InTriangle) {
-        splitTriangle(inTriangle, v);  // e stays constrained, so it is not flipped
-        rerouteThrough(R, L, v);
       } else {
-        splitTriangle(inTriangle, v);
+        splitTriangle(inTriangle, v);  // e stays constrained, so it is not flipped
         rerouteThrough(R, L, v);
       }
       lopAround(v);
