@@ -14,8 +14,8 @@
 #include <cstdio>
 #include <deque>
 #include <exception>
-#include <optional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -1464,7 +1464,8 @@ struct Cdt::Impl {
   /// The triangle that holds point p strictly inside (or, with a target
   /// vertex at p, a triangle at the target), if the open segment from vertex a
   /// to p crosses no constrained edge and passes through no vertex; else kNone.
-  [[gnu::noinline]] std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p, std::uint32_t target = kNone) const {
+  [[gnu::noinline]] std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p,
+                                               std::uint32_t target = kNone) const {
     // The wedge at a that the segment leaves through: a→u→w, u right, w left.
     std::uint32_t e = kNone;
     const std::uint32_t start = vhe[a];
@@ -1592,7 +1593,8 @@ struct Cdt::Impl {
     for (const std::uint32_t u : {cur, tgt, R, L}) {
       magnitude = std::max({magnitude, std::fabs(xy[u].x), std::fabs(xy[u].y)});
     }
-    const double tol = std::max(options.snapTolerance, constructionTolerance({magnitude, magnitude}));
+    const double tol =
+        std::max(options.snapTolerance, constructionTolerance({magnitude, magnitude}));
     enum class Make { AtVertex, SplitEdge, InTriangle } make = Make::SplitEdge;
     Point2 at = X;  // where a new vertex goes
     std::uint32_t inTriangle = kNone;
@@ -1600,8 +1602,9 @@ struct Cdt::Impl {
     // between them): e's constraint runs through that end if it can by flips.
     std::uint32_t end = kNone;
     for (const std::uint32_t u : {cur, tgt}) {
-      if (u != R && u != L && u != c && u != d && dist2(u) <= tol * tol && dist2(u) < dist2(nearest) &&
-          clearPathEnd(R, xy[u], u) != kNone && clearPathEnd(L, xy[u], u) != kNone) {
+      if (u != R && u != L && u != c && u != d && dist2(u) <= tol * tol &&
+          dist2(u) < dist2(nearest) && clearPathEnd(R, xy[u], u) != kNone &&
+          clearPathEnd(L, xy[u], u) != kNone) {
         end = u;
       }
     }
@@ -1701,8 +1704,8 @@ struct Cdt::Impl {
 
   /// X moved by up to 8 ulps across the edge a→b towards u, to a point
   /// strictly inside the triangle (a, b, u); nullopt if none is found.
-  [[gnu::noinline]] std::optional<Point2> nudgedInto(std::uint32_t a, std::uint32_t b, std::uint32_t u,
-                                   const Point2& X) const {
+  [[gnu::noinline]] std::optional<Point2> nudgedInto(std::uint32_t a, std::uint32_t b,
+                                                     std::uint32_t u, const Point2& X) const {
     if (u == kInf) return std::nullopt;
     const double dx = xy[b].x - xy[a].x, dy = xy[b].y - xy[a].y, len = std::hypot(dx, dy);
     if (!(len > 0)) return std::nullopt;
@@ -1728,8 +1731,10 @@ struct Cdt::Impl {
   /// to e's ends: the feature's chain then grows by an edge, or loses e where
   /// it already runs through the apex. A feature on one of them only would
   /// make its chain run back on itself.
-  [[gnu::noinline]] std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e, std::uint32_t c,
-                                                    std::uint32_t d, double maxDistance) const {
+  [[gnu::noinline]] std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e,
+                                                                      std::uint32_t c,
+                                                                      std::uint32_t d,
+                                                                      double maxDistance) const {
     const std::uint32_t R = tv[e], L = tv[nxt(e)];
     std::pair<std::uint32_t, double> best{kNone, maxDistance};
     for (const std::uint32_t u : {c, d}) {

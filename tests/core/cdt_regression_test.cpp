@@ -264,7 +264,9 @@ TEST(CdtConstraintRegression, CrossingBesideASliverStaysOnBothLines) {
   const Point3 A{6999981.7548746532, 7000013.3426183844, 30.0};
   const Point3 B{6999980.0000000000, 7000015.0000000009, 40.0};
   Cdt cdt;
-  cdt.insertPoints(std::vector<Point3>{L, apex, R,
+  cdt.insertPoints(std::vector<Point3>{L,
+                                       apex,
+                                       R,
                                        {6999990.0, 6999990.0, 0.0},
                                        {6999970.0, 6999990.0, 0.0},
                                        {6999990.0, 7000020.0, 0.0},

@@ -108,7 +108,8 @@ int runOne(const std::uint8_t* data, std::size_t size) {
   }
   if (std::getenv("CDT_FUZZ_VERBOSE")) {
     for (const auto& x : cdt.report().intersections) {
-      if (x.forced) std::fprintf(stderr, "forced crossing moved %.17g (scale %g)\n", x.moved, scale);
+      if (x.forced)
+        std::fprintf(stderr, "forced crossing moved %.17g (scale %g)\n", x.moved, scale);
     }
   }
   const tinsmith::ValidationReport r = cdt.validate();
