@@ -8,10 +8,12 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "ingest/tinfile/tin_counts.hpp"
 
 namespace tinsmith::ingest {
 
-struct BuildReport {
+/// The TinCounts part describes the TIN built.
+struct BuildReport : TinCounts {
   struct Layer {
     std::string name;
     std::string kind;    ///< as in the config: contours, points, road, …
@@ -66,8 +68,6 @@ struct BuildReport {
   std::size_t flatBefore = 0, flatAfter = 0, flatVerticesAdded = 0, flatIterations = 0;
   std::size_t flatRegions = 0, flatClosedRegions = 0;
 
-  std::size_t vertices = 0, triangles = 0, constrainedEdges = 0, features = 0;
-  double minX = 0, minY = 0, maxX = 0, maxY = 0, minZ = 0, maxZ = 0;
   bool valid = false;
   std::string validation;  ///< what was checked: "structural", "full" or "off"
   std::vector<std::string> validationProblems;

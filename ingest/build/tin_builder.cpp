@@ -129,19 +129,6 @@ bool takesLines(FeatureKind kind) {
 
 namespace {
 
-void setSummary(BuildReport& report, const TinSummary& s) {
-  report.vertices = s.vertices;
-  report.triangles = s.triangles;
-  report.constrainedEdges = s.constrainedEdges;
-  report.features = s.features;
-  report.minX = s.minX;
-  report.minY = s.minY;
-  report.maxX = s.maxX;
-  report.maxY = s.maxY;
-  report.minZ = s.minZ;
-  report.maxZ = s.maxZ;
-}
-
 // The whole build. The result goes to `consume` (the CDT's mesh) when given,
 // else into `out` (a TinData copy).
 BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
@@ -447,13 +434,13 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   // is freed on return).
   releaseFreeMemory();
   if (consume) {
-    setSummary(report, summariseTin(cdt.mesh()));
+    static_cast<TinCounts&>(report) = summariseTin(cdt.mesh());
     report.totalSeconds = secondsSince(start);
     tick("done", kSteps, kSteps);
     (*consume)(cdt.mesh());
   } else {
     *out = cdt.toTinData();
-    setSummary(report, summariseTin(*out));
+    static_cast<TinCounts&>(report) = summariseTin(*out);
     report.totalSeconds = secondsSince(start);
     tick("done", kSteps, kSteps);
   }

@@ -8,18 +8,16 @@
 
 #include "core/mesh/mesh.hpp"
 #include "core/tin/tin_data.hpp"
+#include "ingest/tinfile/tin_counts.hpp"
 
 namespace tinsmith::ingest {
 
-struct TinSummary {
+struct TinSummary : TinCounts {
   std::string file;
   std::size_t fileBytes = 0;
   std::string crs;
-  /// constrainedEdges: distinct edges (an edge of several features counts once).
-  std::size_t vertices = 0, triangles = 0, constrainedEdges = 0, features = 0;
   bool empty = true;  ///< no vertices: extent and z range are meaningless
-  double minX = 0, minY = 0, maxX = 0, maxY = 0, minZ = 0, maxZ = 0;
-  double area = 0;  ///< sum of triangle areas in x, y (square metres)
+  double area = 0;    ///< sum of triangle areas in x, y (square metres)
   struct PerKind {
     std::size_t features = 0;
     std::size_t edges = 0;  ///< constrained edges carrying a feature of this kind
