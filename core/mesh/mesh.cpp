@@ -131,19 +131,24 @@ TinData Mesh::toTinData() const {
   for (std::size_t t = 0; t < triangleCount(); ++t) {
     tin.triangles[t] = {corners_[3 * t], corners_[3 * t + 1], corners_[3 * t + 2]};
   }
+  tin.constrainedEdges = constrainedEdges();
+  return tin;
+}
+
+std::vector<TinData::ConstrainedEdge> Mesh::constrainedEdges() const {
+  std::vector<TinData::ConstrainedEdge> edges;
   for (std::uint32_t h = 0; h < corners_.size(); ++h) {
     const HalfedgeId he(h);
     const HalfedgeId tw(twins_[h]);
     if (tw.valid() && tw.value < h) continue;
     std::uint32_t a = corners_[h], b = corners_[next(he).value];
     if (a > b) std::swap(a, b);
-    for (std::uint32_t f : edgeFeatures(he)) tin.constrainedEdges.push_back({a, b, f});
+    for (std::uint32_t f : edgeFeatures(he)) edges.push_back({a, b, f});
   }
-  std::sort(tin.constrainedEdges.begin(), tin.constrainedEdges.end(),
-            [](const auto& l, const auto& r) {
-              return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
-            });
-  return tin;
+  std::sort(edges.begin(), edges.end(), [](const auto& l, const auto& r) {
+    return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
+  });
+  return edges;
 }
 
 void Mesh::setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hf) {

@@ -67,6 +67,9 @@ class Mesh {
   /// The indexed form: vertices, triangles (CCW), constrained edges (one entry
   /// per edge and feature, a < b, sorted), features, crs.
   [[nodiscard]] TinData toTinData() const;
+  /// The constrained-edge records of toTinData(): one per (edge, feature),
+  /// a < b, sorted by (a, b, feature).
+  [[nodiscard]] std::vector<TinData::ConstrainedEdge> constrainedEdges() const;
 
   // --- sizes -------------------------------------------------------------
   [[nodiscard]] std::size_t vertexCount() const { return points_.size(); }

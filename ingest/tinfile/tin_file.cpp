@@ -55,8 +55,8 @@ T getLe(const std::uint8_t* in) {
 }
 
 // What the writer reads, from a TinData or from a Mesh (without copying its
-// vertices and triangles: only the constrained-edge records are made, in the
-// order Mesh::toTinData gives them, so both write the same bytes).
+// vertices and triangles: only the constrained-edge records are made, as
+// Mesh::toTinData makes them, so both write the same bytes).
 struct TinSource {
   const TinData& tin;
   [[nodiscard]] const std::string& crs() const { return tin.crs; }
@@ -70,20 +70,7 @@ struct TinSource {
 };
 
 struct MeshSource {
-  explicit MeshSource(const Mesh& m) : mesh(m) {
-    for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
-      const HalfedgeId he(h);
-      if (!mesh.isConstrained(he)) continue;
-      const HalfedgeId tw = mesh.twin(he);
-      if (tw.valid() && tw.value < h) continue;
-      std::uint32_t a = mesh.origin(he).value, b = mesh.target(he).value;
-      if (a > b) std::swap(a, b);
-      for (const std::uint32_t f : mesh.edgeFeatures(he)) edges.push_back({a, b, f});
-    }
-    std::sort(edges.begin(), edges.end(), [](const auto& l, const auto& r) {
-      return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
-    });
-  }
+  explicit MeshSource(const Mesh& m) : mesh(m), edges(m.constrainedEdges()) {}
   const Mesh& mesh;
   std::vector<TinData::ConstrainedEdge> edges;
   [[nodiscard]] const std::string& crs() const { return mesh.crs(); }
