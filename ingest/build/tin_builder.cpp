@@ -433,17 +433,11 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   // TinData copy of it — the last big allocation while the Cdt lives (the Cdt
   // is freed on return).
   releaseFreeMemory();
-  if (consume) {
-    static_cast<TinCounts&>(report) = summariseTin(cdt.mesh());
-    report.totalSeconds = secondsSince(start);
-    tick("done", kSteps, kSteps);
-    (*consume)(cdt.mesh());
-  } else {
-    *out = cdt.toTinData();
-    static_cast<TinCounts&>(report) = summariseTin(*out);
-    report.totalSeconds = secondsSince(start);
-    tick("done", kSteps, kSteps);
-  }
+  static_cast<TinCounts&>(report) = summariseTin(cdt.mesh());
+  if (out) *out = cdt.toTinData();
+  report.totalSeconds = secondsSince(start);
+  tick("done", kSteps, kSteps);
+  if (consume) (*consume)(cdt.mesh());
   return report;
 }
 
