@@ -5,19 +5,17 @@
 #include <limits>
 #include <unordered_set>
 
+#include "ingest/tinfile/tin_view.hpp"
+
 namespace tinsmith::ingest {
 
 namespace {
 
-// The analysis reads a TIN through one of two views with the same interface:
-// TinData (tests, loaded files) or the CDT's Mesh (the builder, so that no
-// TinData copy exists while it repairs). Same vertex and triangle numbering in
-// both (Mesh::toTinData keeps them), so the results are identical.
-struct TinView {
-  const TinData& tin;
-  [[nodiscard]] const std::vector<Point3>& points() const { return tin.vertices; }
-  [[nodiscard]] std::size_t triangleCount() const { return tin.triangles.size(); }
-  [[nodiscard]] const TinData::Triangle& triangle(std::uint32_t t) const { return tin.triangles[t]; }
+// The analysis reads a TIN through one of two views (tin_view.hpp): TinData
+// (tests, loaded files) or the CDT's Mesh (the builder, so that no TinData
+// copy exists while it repairs), with the contour edges added here. The
+// results are identical.
+struct TinContours : TinDataView {
   /// Calls f(a, b) for every edge that a Contour feature constrains (an edge
   /// may come more than once, in either direction).
   template <class F>
@@ -33,14 +31,7 @@ struct TinView {
   }
 };
 
-struct MeshView {
-  const Mesh& mesh;
-  [[nodiscard]] const std::vector<Point3>& points() const { return mesh.points(); }
-  [[nodiscard]] std::size_t triangleCount() const { return mesh.triangleCount(); }
-  [[nodiscard]] TinData::Triangle triangle(std::uint32_t t) const {
-    const auto v = mesh.vertices(TriangleId(t));
-    return {v[0].value, v[1].value, v[2].value};
-  }
+struct MeshContours : MeshView {
   template <class F>
   void forEachContourEdge(F&& f) const {
     for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
@@ -325,17 +316,17 @@ FlatTriangleAnalysis analyse(const View& tin, double minSpacing) {
 
 }  // namespace
 
-std::vector<char> contourVertices(const TinData& tin) { return contourVerticesOf(TinView{tin}); }
-std::vector<char> contourVertices(const Mesh& mesh) { return contourVerticesOf(MeshView{mesh}); }
+std::vector<char> contourVertices(const TinData& tin) { return contourVerticesOf(TinContours{{tin}}); }
+std::vector<char> contourVertices(const Mesh& mesh) { return contourVerticesOf(MeshContours{{mesh}}); }
 
-std::size_t countFlatTriangles(const TinData& tin) { return countFlat(TinView{tin}); }
-std::size_t countFlatTriangles(const Mesh& mesh) { return countFlat(MeshView{mesh}); }
+std::size_t countFlatTriangles(const TinData& tin) { return countFlat(TinContours{{tin}}); }
+std::size_t countFlatTriangles(const Mesh& mesh) { return countFlat(MeshContours{{mesh}}); }
 
 FlatTriangleAnalysis analyseFlatTriangles(const TinData& tin, double minSpacing) {
-  return analyse(TinView{tin}, minSpacing);
+  return analyse(TinContours{{tin}}, minSpacing);
 }
 FlatTriangleAnalysis analyseFlatTriangles(const Mesh& mesh, double minSpacing) {
-  return analyse(MeshView{mesh}, minSpacing);
+  return analyse(MeshContours{{mesh}}, minSpacing);
 }
 
 }  // namespace tinsmith::ingest

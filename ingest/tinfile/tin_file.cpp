@@ -11,6 +11,7 @@
 
 #include "core/base/error.hpp"
 #include "ingest/tinfile/atomic_file.hpp"
+#include "ingest/tinfile/tin_view.hpp"
 
 namespace tinsmith::ingest {
 
@@ -54,40 +55,25 @@ T getLe(const std::uint8_t* in) {
   return std::bit_cast<T>(bits);
 }
 
-// What the writer reads, from a TinData or from a Mesh (without copying its
-// vertices and triangles: only the constrained-edge records are made, as
-// Mesh::toTinData makes them, so both write the same bytes).
-struct TinSource {
-  const TinData& tin;
-  [[nodiscard]] const std::string& crs() const { return tin.crs; }
-  [[nodiscard]] const std::vector<Point3>& vertices() const { return tin.vertices; }
-  [[nodiscard]] std::size_t triangleCount() const { return tin.triangles.size(); }
-  [[nodiscard]] const TinData::Triangle& triangle(std::size_t t) const { return tin.triangles[t]; }
-  [[nodiscard]] const std::vector<TinFeature>& features() const { return tin.features; }
+// What the writer reads: a view (tin_view.hpp) and the constrained-edge
+// records. From a Mesh only those records are made, as Mesh::toTinData makes
+// them, so both write the same bytes.
+struct TinSource : TinDataView {
   [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const {
     return tin.constrainedEdges;
   }
 };
 
-struct MeshSource {
-  explicit MeshSource(const Mesh& m) : mesh(m), edges(m.constrainedEdges()) {}
-  const Mesh& mesh;
+struct MeshSource : MeshView {
+  explicit MeshSource(const Mesh& m) : MeshView{m}, edges(m.constrainedEdges()) {}
   std::vector<TinData::ConstrainedEdge> edges;
-  [[nodiscard]] const std::string& crs() const { return mesh.crs(); }
-  [[nodiscard]] const std::vector<Point3>& vertices() const { return mesh.points(); }
-  [[nodiscard]] std::size_t triangleCount() const { return mesh.triangleCount(); }
-  [[nodiscard]] TinData::Triangle triangle(std::size_t t) const {
-    const auto v = mesh.vertices(TriangleId(static_cast<std::uint32_t>(t)));
-    return {v[0].value, v[1].value, v[2].value};
-  }
-  [[nodiscard]] const std::vector<TinFeature>& features() const { return mesh.features(); }
   [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const { return edges; }
 };
 
 template <class Source>
 std::uint64_t payloadSize(const Source& tin) {
   std::uint64_t size = 4 + tin.crs().size();
-  size += 8 + 24ull * tin.vertices().size();
+  size += 8 + 24ull * tin.points().size();
   size += 8 + 12ull * tin.triangleCount();
   size += 8;
   for (const auto& f : tin.features()) size += 1 + 4 + f.source.size();
@@ -142,8 +128,8 @@ template <class Source, class Sink>
 std::uint32_t writePayload(const Source& tin, Sink& sink) {
   PayloadWriter<Sink> w(sink);
   w.putString(tin.crs());
-  w.put(static_cast<std::uint64_t>(tin.vertices().size()));
-  for (const auto& v : tin.vertices()) {
+  w.put(static_cast<std::uint64_t>(tin.points().size()));
+  for (const auto& v : tin.points()) {
     w.put(v.x);
     w.put(v.y);
     w.put(v.z);
@@ -274,10 +260,10 @@ void checkContract(const Source& tin, const std::string& name, bool forWriting) 
     throw inputError("corrupt .tin file: " + what, at(name),
                      "the file is damaged; write it again with `tinsmith tin`");
   };
-  const std::size_t nv = tin.vertices().size();
+  const std::size_t nv = tin.points().size();
   if (nv > 0xFFFFFFFFull) bad("more than 2^32 - 1 vertices");
   for (std::size_t i = 0; i < nv; ++i) {
-    const auto& v = tin.vertices()[i];
+    const auto& v = tin.points()[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
       bad("vertex " + std::to_string(i) + " has a non-finite coordinate");
   }
@@ -307,13 +293,13 @@ void checkContract(const Source& tin, const std::string& name, bool forWriting) 
 }  // namespace
 
 void checkTinContract(const TinData& tin, const std::string& name, bool forWriting) {
-  checkContract(TinSource{tin}, name, forWriting);
+  checkContract(TinSource{{tin}}, name, forWriting);
 }
 
 std::string encodeTin(const TinData& tin) {
   checkTinContract(tin, "(memory)", true);
   std::string out;
-  const TinSource source{tin};
+  const TinSource source{{tin}};
   const std::uint64_t size = payloadSize(source);
   out.reserve(kTinHeaderSize + size);
   out.resize(kTinHeaderSize);
@@ -345,7 +331,7 @@ void writeFile(const std::filesystem::path& path, const Source& tin) {
 }  // namespace
 
 void writeTinFile(const std::filesystem::path& path, const TinData& tin) {
-  writeFile(path, TinSource{tin});
+  writeFile(path, TinSource{{tin}});
 }
 
 void writeTinFile(const std::filesystem::path& path, const Mesh& mesh) {

@@ -1,7 +1,6 @@
 #include "ingest/tinfile/tin_summary.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -9,18 +8,19 @@
 #include <vector>
 
 #include "ingest/tinfile/tin_file.hpp"
+#include "ingest/tinfile/tin_view.hpp"
 
 namespace tinsmith::ingest {
 
 namespace {
 
 // Extent, z range and area: the part of the summary that reads only the
-// vertices and triangles.
-template <class TriangleAt>
-void summariseGeometry(TinSummary& s, const std::vector<Point3>& vertices, std::size_t triangles,
-                       TriangleAt&& triangleAt) {
+// vertices and triangles, from either view (tin_view.hpp).
+template <class View>
+void summariseGeometry(TinSummary& s, const View& tin) {
+  const auto& vertices = tin.points();
   s.vertices = vertices.size();
-  s.triangles = triangles;
+  s.triangles = tin.triangleCount();
   s.empty = vertices.empty();
   if (!s.empty) {
     const auto& v0 = vertices.front();
@@ -36,8 +36,8 @@ void summariseGeometry(TinSummary& s, const std::vector<Point3>& vertices, std::
       s.maxZ = std::max(s.maxZ, v.z);
     }
   }
-  for (std::size_t i = 0; i < triangles; ++i) {
-    const auto t = triangleAt(i);
+  for (std::size_t i = 0; i < s.triangles; ++i) {
+    const auto t = tin.triangle(i);
     const auto& a = vertices[t[0]];
     const auto& b = vertices[t[1]];
     const auto& c = vertices[t[2]];
@@ -50,8 +50,7 @@ void summariseGeometry(TinSummary& s, const std::vector<Point3>& vertices, std::
 TinSummary summariseTin(const TinData& tin) {
   TinSummary s;
   s.crs = tin.crs;
-  summariseGeometry(s, tin.vertices, tin.triangles.size(),
-                    [&tin](std::size_t t) -> const TinData::Triangle& { return tin.triangles[t]; });
+  summariseGeometry(s, TinDataView{tin});
   // Distinct edges, as `tinsmith validate` counts them: an edge shared by
   // several features has one record per feature.
   {
@@ -74,10 +73,7 @@ TinSummary summariseTin(const TinData& tin) {
 TinSummary summariseTin(const Mesh& mesh) {
   TinSummary s;
   s.crs = mesh.crs();
-  summariseGeometry(s, mesh.points(), mesh.triangleCount(), [&mesh](std::size_t t) {
-    const auto v = mesh.vertices(TriangleId(static_cast<std::uint32_t>(t)));
-    return std::array<std::uint32_t, 3>{v[0].value, v[1].value, v[2].value};
-  });
+  summariseGeometry(s, MeshView{mesh});
   const auto& features = mesh.features();
   s.features = features.size();
   for (const auto& f : features) ++s.kinds[std::string(featureKindName(f.kind))].features;
