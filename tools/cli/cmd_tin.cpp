@@ -184,6 +184,12 @@ void run(const TinOptions& o) {
   // The TIN is written straight from the triangulation's mesh, before the
   // triangulation is freed: no TinData copy of it is ever made.
   auto writeTin = [&o](const Mesh& mesh) { ingest::writeTinFile(o.output, mesh); };
+  // The options both modes take from the command line.
+  auto build = [&](std::vector<ingest::BuildLayer> layers, ingest::BuildOptions options) {
+    if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
+    options.threads = o.threads;
+    return ingest::buildTinInto(std::move(layers), options, writeTin, p);
+  };
   ingest::BuildReport report;
   if (plain) {
     ingest::BuildOptions options;
@@ -191,13 +197,11 @@ void run(const TinOptions& o) {
     options.snapTolerance = o.snap.value_or(0.0);
     options.flatTriangleRepair = false;
     options.riverDescent = false;
-    if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
-    options.threads = o.threads;
     const auto start = std::chrono::steady_clock::now();
     auto layers = plainLayers(o);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    report = build(std::move(layers), options);
     report.times.insert(report.times.begin(), {"read", readSeconds});
     report.totalSeconds += readSeconds;
   } else {
@@ -206,10 +210,7 @@ void run(const TinOptions& o) {
     if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
     ingest::IngestResult ingested = ingest::loadLayers(config, p);
     auto layers = ingest::toBuildLayers(std::move(ingested.layers));
-    ingest::BuildOptions options = ingest::buildOptionsFrom(config);
-    if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
-    options.threads = o.threads;
-    report = ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    report = build(std::move(layers), ingest::buildOptionsFrom(config));
     ingest::addIngestReport(report, ingested);
   }
   bar.reset();
