@@ -256,6 +256,12 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   if (!(size > 0.0)) {
     throw inputError("the data points have no extent in x and y", {}, "give points that span an area");
   }
+  // The fit runs on z − zShift and adds zShift back at the end. The result is
+  // the same in exact arithmetic (the hat functions sum to one and every
+  // smoothing term annihilates constants), but the solvers' relative stopping
+  // tests (‖Δc‖/‖c‖, ‖r‖/‖b‖) no longer depend on how high the terrain lies:
+  // at 1 000 m they would accept a surface metres away from the solution.
+  const double zShift = 0.5 * (zmin + zmax);
   const int gridLevels = options.maxLevel + 1;
   BinaryTriangulation mesh(origin, size, gridLevels);
   const std::uint64_t side = mesh.side();
@@ -302,7 +308,10 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(order);  // frees (assigning {} keeps the capacity)
     pts.resize(n);
     forEachPart(n, threads, [&](std::size_t b, std::size_t e, int) {
-      for (std::size_t i = b; i < e; ++i) pts[i] = input[permutation[i]];
+      for (std::size_t i = b; i < e; ++i) {
+        pts[i] = input[permutation[i]];
+        pts[i].z -= zShift;
+      }
     });
     if (!options.weights.empty()) {
       weights.resize(n);
@@ -330,7 +339,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     }
     const std::uint64_t k = mesh.key(static_cast<std::uint64_t>(std::llround(g.x)), static_cast<std::uint64_t>(std::llround(g.y)));
     mesh.activate(k);
-    fixedKeys.emplace_back(k, f.z);
+    fixedKeys.emplace_back(k, f.z - zShift);
   }
   std::vector<FixedVertex> fixed;
   for (const auto& [k, z] : fixedKeys) {
@@ -593,6 +602,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
   }
 
   std::vector<double> z(coefficients.data(), coefficients.data() + coefficients.size());
+  for (double& v : z) v += zShift;
   return MultilevelFit(std::move(mesh), std::move(z), std::move(stats));
 }
 

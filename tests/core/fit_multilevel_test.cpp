@@ -185,6 +185,36 @@ TEST(FitMultilevel, SolversGiveTheSameSurface) {
   EXPECT_LT(gs.levels().back().rmsError, 2 * direct.levels().back().rmsError);
 }
 
+TEST(FitMultilevel, HowHighTheTerrainLiesChangesNothing) {
+  // The same relief 1 500 m up: every solver must give the same refinement
+  // and surface. The solvers' relative stopping tests used to see the height
+  // too: conjugate gradients stopped before its first step on the fine levels
+  // and refined to the last level, and Gauss-Seidel stopped early.
+  const auto base = frankePoints(3000, 7);
+  std::vector<Point3> low, high;
+  for (const auto& p : base) {
+    low.push_back({p.x, p.y, 20.0 * p.z});
+    high.push_back({p.x, p.y, 1500.0 + 20.0 * p.z});
+  }
+  MultilevelOptions opt = bookOptions();
+  opt.criteria.errorAbsolute = 0.05;
+  opt.criteria.countAbove = 2;
+  opt.maxLevel = 12;
+  for (SolverKind s : {SolverKind::GaussSeidel, SolverKind::ConjugateGradient}) {
+    opt.solver = s;
+    const MultilevelFit a = fitMultilevel(low, opt);
+    const MultilevelFit b = fitMultilevel(high, opt);
+    SCOPED_TRACE(s == SolverKind::GaussSeidel ? "gauss-seidel" : "cg");
+    ASSERT_EQ(a.levels().size(), b.levels().size());
+    EXPECT_LT(b.levels().back().level, opt.maxLevel);
+    for (std::size_t k = 0; k < a.levels().size(); ++k) {
+      EXPECT_EQ(a.levels()[k].vertices, b.levels()[k].vertices) << "level " << k + 1;
+      EXPECT_NEAR(a.levels()[k].maxError, b.levels()[k].maxError, 1e-6) << "level " << k + 1;
+    }
+    for (const auto& p : base) EXPECT_NEAR(a.evaluate(p.xy()) + 1500.0, b.evaluate(p.xy()), 1e-6);
+  }
+}
+
 TEST(FitMultilevel, ThreadsGiveTheSameResult) {
 #if defined(__SANITIZE_ADDRESS__)
   const auto pts = frankePoints(20000, 9);  // still above the threading threshold
