@@ -579,6 +579,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
         refine = curved;  // cells without data may be curved too
       }
     }
+    st.cellsFailing = refine.size();
     st.cellsRefined = refine.size();
     const bool last = refine.empty() || level >= options.maxLevel;
     if (!last) {

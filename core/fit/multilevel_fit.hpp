@@ -71,7 +71,8 @@ struct LevelStats {
   double lambda = 0.0;
   double maxError = 0.0;          ///< max |f_k(p_i) − z_i| over the data
   double rmsError = 0.0;
-  std::size_t cellsRefined = 0;   ///< cells of Ψ_k whose centre was activated
+  std::size_t cellsFailing = 0;   ///< cells of Ψ_k that fail the refinement criterion
+  std::size_t cellsRefined = 0;   ///< cells of Ψ_k whose centre was activated (0 on the last level)
   double seconds = 0.0;
 };
 
@@ -83,6 +84,9 @@ class MultilevelFit {
   /// z at the active vertices, by dense vertex id.
   [[nodiscard]] std::span<const double> vertexZ() const { return z_; }
   [[nodiscard]] std::span<const LevelStats> levels() const { return levels_; }
+  /// Whether the fit stopped at MultilevelOptions::maxLevel with cells that
+  /// still fail the criterion (otherwise it stopped because none did).
+  [[nodiscard]] bool stoppedAtMaxLevel() const { return levels_.back().cellsFailing > 0; }
 
   /// f(p); throws inputError when p is outside the domain.
   [[nodiscard]] double evaluate(Point2 p) const;

@@ -33,6 +33,19 @@ TEST(FitCli, FitsPointsAndWritesTinAndStats) {
   EXPECT_NE(stats.find("\"levels\""), std::string::npos);
   EXPECT_NE(stats.find("\"solver\": \"gauss-seidel\""), std::string::npos);
   EXPECT_NE(r.err.find("wrote"), std::string::npos);
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(stats.find("\"stopped\": \"criterion met\""), std::string::npos);
+
+  // Stopped by --max-level with cells still failing: a warning (also with
+  // -q) and the stop reason in the statistics.
+  const auto capped = test::runCommand(binary() + " fit " + (dir / "franke.xyz").string() +
+                                       " --tolerance 0.25% --criterion error,count:2 --max-level 3 -q -o " +
+                                       (dir / "capped.tin").string() + " --stats " + (dir / "capped.json").string());
+  ASSERT_EQ(capped.exitCode, 0) << capped.err;
+  EXPECT_NE(capped.err.find("warning: 64 cells of level 3 still fail"), std::string::npos) << capped.err;
+  const auto cappedStats = nlohmann::json::parse(test::readFile(dir / "capped.json"));
+  EXPECT_EQ(cappedStats["final"]["stopped"], "max level");
+  EXPECT_EQ(cappedStats["final"]["cells_failing"], 64);
 
   const auto bad = test::runCommand(binary() + " fit " + (dir / "franke.xyz").string() + " --criterion error -o " +
                                     (dir / "x.tin").string());

@@ -155,7 +155,9 @@ std::string statsJson(const fit::MultilevelFit& result, std::size_t points, doub
                 {"vertices", last.vertices},
                 {"triangles", last.triangles},
                 {"max_error", last.maxError},
-                {"rms_error", last.rmsError}};
+                {"rms_error", last.rmsError},
+                {"stopped", result.stoppedAtMaxLevel() ? "max level" : "criterion met"},
+                {"cells_failing", last.cellsFailing}};
   j["levels"] = nlohmann::ordered_json::array();
   for (const auto& s : levels) {
     j["levels"].push_back({{"level", s.level},
@@ -167,6 +169,7 @@ std::string statsJson(const fit::MultilevelFit& result, std::size_t points, doub
                            {"lambda", s.lambda},
                            {"max_error", s.maxError},
                            {"rms_error", s.rmsError},
+                           {"cells_failing", s.cellsFailing},
                            {"cells_refined", s.cellsRefined},
                            {"seconds", s.seconds}});
   }
@@ -297,11 +300,17 @@ void addFitCommand(CLI::App& app) {
       out.write(statsJson(result, points.size(), seconds));
       out.commit();
     }
-    if (o->quiet) return;
     const auto& last = result.levels().back();
-    std::cerr << "wrote " << o->output << ": " << last.vertices << " vertices, " << last.triangles
-              << " triangles, level " << last.level << ", max error " << last.maxError << ", rms " << last.rmsError
-              << "\n";
+    if (!o->quiet) {
+      std::cerr << "wrote " << o->output << ": " << last.vertices << " vertices, " << last.triangles
+                << " triangles, level " << last.level << ", max error " << last.maxError << ", rms " << last.rmsError
+                << "\n";
+    }
+    if (result.stoppedAtMaxLevel()) {  // a warning, so even with --quiet
+      std::cerr << "warning: " << last.cellsFailing << " cells of level " << last.level
+                << " still fail the refinement criterion; the fit stopped at --max-level " << opt.maxLevel
+                << " (raise it for a finer fit)\n";
+    }
   });
 }
 
