@@ -395,9 +395,11 @@ struct StoppingRule {
   const IterationControl& control;
   double bNorm = std::max(b.norm(), 1e-300);
 
+  [[nodiscard]] double relativeResidual(const Vector& c) const { return (b - a * c).norm() / bNorm; }
+
   bool done(const Vector& c, double change, SolveReport& report) const {
     if (change / std::max(c.norm(), 1e-300) >= control.relativeImprovement) return false;
-    report.relativeResidual = (b - a * c).norm() / bNorm;
+    report.relativeResidual = relativeResidual(c);
     return report.relativeResidual < control.relativeResidual;
   }
 };
@@ -425,7 +427,7 @@ SolveReport gaussSeidel(const SparseMatrix& a, const Vector& b, Vector& c, const
       return report;
     }
   }
-  report.relativeResidual = (b - a * c).norm() / rule.bNorm;
+  report.relativeResidual = rule.relativeResidual(c);
   return report;
 }
 
@@ -464,7 +466,7 @@ SolveReport conjugateGradient(const SparseMatrix& a, const Vector& b, Vector& c,
     p = z + (rzNext / rz) * p;
     rz = rzNext;
   }
-  report.relativeResidual = (b - a * c).norm() / rule.bNorm;
+  report.relativeResidual = rule.relativeResidual(c);
   return report;
 }
 

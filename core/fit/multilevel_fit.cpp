@@ -580,14 +580,12 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       }
     }
     st.cellsFailing = refine.size();
-    st.cellsRefined = refine.size();
     const bool last = refine.empty() || level >= options.maxLevel;
     if (!last) {
       for (std::uint64_t c : refine) {
         mesh.activate(mesh.cellCentre(level, compactBits(c), compactBits(c >> 1)));
       }
-    } else {
-      st.cellsRefined = 0;
+      st.cellsRefined = refine.size();
     }
     st.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.push_back(st);
