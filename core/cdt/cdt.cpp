@@ -319,7 +319,10 @@ struct Cdt::Impl {
   std::vector<double> bend;
   Mesh mesh;
   std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
+  // finalize() has run and no input came after it: the mesh may be read.
   bool finalized = false;
+  // Input (points, constraints, domain rings) came since the last finalize().
+  bool changed = false;
   bool meshBuilt = false;
 
   // After buildMesh() the working triangle arrays live in `mesh` (compacted);
@@ -403,6 +406,11 @@ struct Cdt::Impl {
   }
 
   // ---------------------------------------------------------------- basics
+  /// New input: the mesh is out of date until the next finalize().
+  void inputAdded() {
+    finalized = false;
+    changed = true;
+  }
   [[nodiscard]] bool triangulated() const { return !tv.empty(); }
   [[nodiscard]] std::uint32_t triCount() const { return static_cast<std::uint32_t>(tv.size() / 3); }
   [[nodiscard]] bool isGhost(std::uint32_t t) const {
@@ -2084,6 +2092,7 @@ VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
   m.z.push_back(p.z);
   m.vfeat.push_back(feature);
   m.rep.push_back(kNone);
+  m.inputAdded();
   return VertexId(id);
 }
 
@@ -2120,6 +2129,7 @@ void Cdt::insertConstraintSegment(VertexId a, VertexId b, FeatureId feature) {
     throw usageError("constraint segment names a vertex that was not inserted");
   }
   m.segments.push_back({a.value, b.value, feature});
+  m.inputAdded();
 }
 
 void Cdt::addBoundary(std::span<const Point3> ring, FeatureId feature) {
@@ -2128,6 +2138,7 @@ void Cdt::addBoundary(std::span<const Point3> ring, FeatureId feature) {
   }
   impl_->featureRole[feature] = Role::Boundary;
   impl_->hasBoundary = true;
+  impl_->inputAdded();
   insertConstraint(ring, feature, true);
 }
 
@@ -2137,6 +2148,7 @@ void Cdt::addHole(std::span<const Point3> ring, FeatureId feature) {
   }
   impl_->featureRole[feature] = Role::Hole;
   impl_->hasHole = true;
+  impl_->inputAdded();
   insertConstraint(ring, feature, true);
 }
 
@@ -2146,7 +2158,7 @@ void Cdt::finalize() {
     throw geometryError("no points to triangulate", {}, "give at least three points");
   }
   if (m.packed) {
-    if (m.insertedUpTo >= m.xy.size() && m.segmentsDone >= m.segments.size()) {
+    if (!m.changed) {
       m.finalized = true;  // nothing new: the mesh stands
       return;
     }
@@ -2159,6 +2171,7 @@ void Cdt::finalize() {
   m.trackVhe = false;
   std::vector<std::uint32_t>().swap(m.vhe);
   m.finalized = true;
+  m.changed = false;
   m.meshBuilt = false;
 }
 
@@ -2289,7 +2302,10 @@ void Cdt::buildMesh() const {
 }
 
 const Mesh& Cdt::mesh() const {
-  if (!impl_->finalized) throw usageError("Cdt::mesh() called before finalize()");
+  if (!impl_->finalized) {
+    throw usageError("Cdt::mesh() called before finalize(), or with input added since the last one",
+                     "call finalize() after the last insertion");
+  }
   buildMesh();
   return impl_->mesh;
 }
@@ -2322,6 +2338,7 @@ std::string formatCoord(double v) {
 ValidationReport Cdt::validate(const ValidationOptions& options) const {
   ValidationReport r = tinsmith::validate(mesh(), options);
   const Impl& m = *impl_;
+  if (m.meshOf.size() != m.xy.size()) throw internalError("the input vertex map is out of date");
   auto add = [&](const std::string& s) {
     r.ok = false;
     ++r.problemCount;

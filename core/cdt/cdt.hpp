@@ -43,7 +43,8 @@
 //   cdt.finalize();                  // throws tinsmith::Error on bad input
 //   TinData tin = cdt.toTinData();   // or cdt.mesh()
 // More input may be added after finalize(); the next finalize() inserts it into
-// the existing triangulation.
+// the existing triangulation. Until then mesh(), toTinData() and validate()
+// throw usageError and meshVertex() returns invalid ids.
 #pragma once
 
 #include <cstddef>
@@ -165,7 +166,8 @@ class Cdt {
   /// points; internalError on a broken invariant.
   void finalize();
 
-  /// The finished mesh (after finalize()): only triangles inside the domain;
+  /// The finished mesh (after finalize(), with no input added since; else
+  /// throws usageError): only triangles inside the domain;
   /// vertex ids are compacted (see meshVertex()). Built on the first call after
   /// each finalize() (domain classification + compaction, about a fifth of the
   /// triangulation time); not thread-safe on that first call.
@@ -174,7 +176,7 @@ class Cdt {
   /// features, crs).
   [[nodiscard]] TinData toTinData() const;
   /// Mesh vertex of an input vertex (after merges); invalid if it was dropped
-  /// (outside the domain) or finalize() has not run.
+  /// (outside the domain) or finalize() has not run since the last input.
   [[nodiscard]] VertexId meshVertex(VertexId input) const;
   [[nodiscard]] std::size_t inputVertexCount() const;
 
