@@ -411,6 +411,12 @@ struct Cdt::Impl {
     finalized = false;
     changed = true;
   }
+  /// Throws what Cdt::insertPoint documents unless p can become input vertex
+  /// `id` of `feature`.
+  void checkPoint(const Point3& p, FeatureId feature, std::size_t id) const;
+  /// Appends points as input vertices, all or none: every one is checked
+  /// before the first goes in.
+  VertexId appendPoints(std::span<const Point3> points, FeatureId feature);
   [[nodiscard]] bool triangulated() const { return !tv.empty(); }
   [[nodiscard]] std::uint32_t triCount() const { return static_cast<std::uint32_t>(tv.size() / 3); }
   [[nodiscard]] bool isGhost(std::uint32_t t) const {
@@ -2058,19 +2064,18 @@ FeatureId Cdt::addFeature(FeatureKind kind, std::string source) {
 
 const std::vector<TinFeature>& Cdt::features() const { return impl_->features; }
 
-VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
-  Impl& m = *impl_;
+void Cdt::Impl::checkPoint(const Point3& p, FeatureId feature, std::size_t id) const {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
     SourceLocation where;
-    if (feature != kNoFeature && feature < m.features.size()) {
-      where.file = m.features[feature].source;
+    if (feature != kNoFeature && feature < features.size()) {
+      where.file = features[feature].source;
     }
-    throw inputError("point " + std::to_string(m.xy.size()) + " has a non-finite coordinate (" +
+    throw inputError("point " + std::to_string(id) + " has a non-finite coordinate (" +
                          std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
                          std::to_string(p.z) + ")",
                      where, "remove NaN/infinite values from the input");
   }
-  if (feature != kNoFeature && feature >= m.features.size()) {
+  if (feature != kNoFeature && feature >= features.size()) {
     throw usageError("feature id " + std::to_string(feature) + " was not registered with addFeature");
   }
   // The predicates are exact while their products neither overflow nor
@@ -2081,38 +2086,48 @@ VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
   };
   if (outOfRange(p.x) || outOfRange(p.y)) {
     SourceLocation where;
-    if (feature != kNoFeature) where.file = m.features[feature].source;
-    throw inputError("point " + std::to_string(m.xy.size()) + " has a coordinate outside the "
+    if (feature != kNoFeature) where.file = features[feature].source;
+    throw inputError("point " + std::to_string(id) +
+                         " has a coordinate outside the "
                          "supported range (0 or 1e-50 to 1e60 in magnitude)",
                      where, "check the coordinate units and CRS");
   }
-  const auto id = static_cast<std::uint32_t>(m.xy.size());
   if (id >= kInf - 1) throw inputError("too many points (at most 2^32 - 3)");
-  m.xy.push_back(p.xy());
-  m.z.push_back(p.z);
-  m.vfeat.push_back(feature);
-  m.rep.push_back(kNone);
-  m.inputAdded();
-  return VertexId(id);
+}
+
+VertexId Cdt::Impl::appendPoints(std::span<const Point3> points, FeatureId feature) {
+  const auto first = VertexId(static_cast<std::uint32_t>(xy.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) checkPoint(points[i], feature, xy.size() + i);
+  // Grow geometrically: many small polylines must not reallocate each time.
+  const std::size_t need = xy.size() + points.size();
+  if (need > xy.capacity()) {
+    const std::size_t cap = std::max(need, 2 * xy.capacity());
+    xy.reserve(cap);
+    z.reserve(cap);
+    vfeat.reserve(cap);
+    rep.reserve(cap);
+  }
+  for (const Point3& p : points) {
+    xy.push_back(p.xy());
+    z.push_back(p.z);
+    vfeat.push_back(feature);
+    rep.push_back(kNone);
+  }
+  if (!points.empty()) inputAdded();
+  return first;
+}
+
+VertexId Cdt::insertPoint(const Point3& p, FeatureId feature) {
+  return impl_->appendPoints(std::span<const Point3>(&p, 1), feature);
 }
 
 VertexId Cdt::insertPoints(std::span<const Point3> points, FeatureId feature) {
-  const auto first = VertexId(static_cast<std::uint32_t>(impl_->xy.size()));
-  // Grow geometrically: many small polylines must not reallocate each time.
-  const std::size_t need = impl_->xy.size() + points.size();
-  if (need > impl_->xy.capacity()) {
-    const std::size_t cap = std::max(need, 2 * impl_->xy.capacity());
-    impl_->xy.reserve(cap);
-    impl_->z.reserve(cap);
-    impl_->vfeat.reserve(cap);
-    impl_->rep.reserve(cap);
-  }
-  for (const Point3& p : points) insertPoint(p, feature);
-  return first;
+  return impl_->appendPoints(points, feature);
 }
 
 void Cdt::insertConstraint(std::span<const Point3> polyline, FeatureId feature, bool closed) {
   if (polyline.empty()) return;
+  // Every vertex is checked before the first goes in: a bad one adds nothing.
   const VertexId first = insertPoints(polyline, feature);
   for (std::uint32_t i = 0; i + 1 < polyline.size(); ++i) {
     insertConstraintSegment(VertexId(first.value + i), VertexId(first.value + i + 1), feature);
@@ -2136,20 +2151,20 @@ void Cdt::addBoundary(std::span<const Point3> ring, FeatureId feature) {
   if (feature == kNoFeature || feature >= impl_->features.size()) {
     throw usageError("addBoundary needs a registered feature");
   }
+  insertConstraint(ring, feature, true);  // all or nothing: may throw
   impl_->featureRole[feature] = Role::Boundary;
   impl_->hasBoundary = true;
   impl_->inputAdded();
-  insertConstraint(ring, feature, true);
 }
 
 void Cdt::addHole(std::span<const Point3> ring, FeatureId feature) {
   if (feature == kNoFeature || feature >= impl_->features.size()) {
     throw usageError("addHole needs a registered feature");
   }
+  insertConstraint(ring, feature, true);  // all or nothing: may throw
   impl_->featureRole[feature] = Role::Hole;
   impl_->hasHole = true;
   impl_->inputAdded();
-  insertConstraint(ring, feature, true);
 }
 
 void Cdt::finalize() {

@@ -145,11 +145,14 @@ class Cdt {
   /// triangulated at the next finalize().
   VertexId insertPoint(const Point3& p, FeatureId feature = kNoFeature);
   /// Adds many points; returns the id of the first (the rest follow in order).
+  /// All or nothing: throws as insertPoint for the first bad point, having
+  /// added none.
   VertexId insertPoints(std::span<const Point3> points, FeatureId feature = kNoFeature);
 
   /// Adds a constraint polyline (its vertices become input vertices); `closed`
   /// adds the segment from the last vertex back to the first. A polyline with
-  /// fewer than 2 vertices adds its points only.
+  /// fewer than 2 vertices adds its points only. All or nothing, as
+  /// insertPoints (so are addBoundary and addHole).
   void insertConstraint(std::span<const Point3> polyline, FeatureId feature, bool closed = false);
   /// Adds a constraint segment between two input vertices.
   void insertConstraintSegment(VertexId a, VertexId b, FeatureId feature);

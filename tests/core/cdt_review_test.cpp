@@ -79,5 +79,40 @@ TEST(CdtReview, FinalizeTwiceAndReadingAgainStillWork) {
   EXPECT_EQ(cdt.report().merges.size(), 0u);
 }
 
+// A polyline with a bad vertex in the middle left its earlier vertices
+// inserted without their segments.
+TEST(CdtReview, PolylineWithABadVertexChangesNothing) {
+  Cdt cdt;
+  const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+  const FeatureId edge = cdt.addFeature(FeatureKind::Boundary, "edge");
+  cdt.insertPoints(randomPoints(300, 11));
+  cdt.finalize();
+  ASSERT_TRUE(isValid(cdt));
+  const std::size_t inputs = cdt.inputVertexCount(), vertices = cdt.mesh().vertexCount();
+  const std::size_t triangles = cdt.mesh().triangleCount();
+
+  const std::vector<Point3> line{{10, 10, 0}, {500, 20, 0}, {NAN, 30, 0}, {990, 990, 0}};
+  EXPECT_EQ(kindOf([&] { cdt.insertConstraint(line, road); }), ErrorKind::Input);
+  const std::vector<Point3> far{{10, 10, 0}, {500, 20, 0}, {1e100, 30, 0}};
+  EXPECT_EQ(kindOf([&] { cdt.insertConstraint(far, road, true); }), ErrorKind::Input);
+  EXPECT_EQ(kindOf([&] { cdt.insertPoints(line, road); }), ErrorKind::Input);
+  EXPECT_EQ(kindOf([&] { cdt.addBoundary(line, edge); }), ErrorKind::Input);
+  // Nothing changed: the mesh stands, no finalize() needed.
+  EXPECT_EQ(cdt.inputVertexCount(), inputs);
+  ASSERT_TRUE(isValid(cdt));
+  EXPECT_EQ(cdt.mesh().vertexCount(), vertices);
+  EXPECT_EQ(cdt.mesh().triangleCount(), triangles);
+  cdt.finalize();
+  EXPECT_TRUE(isValid(cdt));
+  EXPECT_EQ(cdt.mesh().vertexCount(), vertices);
+  EXPECT_EQ(cdt.mesh().triangleCount(), triangles);  // the failed boundary bounds nothing
+
+  // The same polyline without the bad vertex goes in whole.
+  cdt.insertConstraint(std::vector<Point3>{{10, 10, 0}, {500, 20, 0}, {990, 990, 0}}, road);
+  cdt.finalize();
+  EXPECT_TRUE(isValid(cdt));
+  EXPECT_EQ(cdt.inputVertexCount(), inputs + 3);
+}
+
 }  // namespace
 }  // namespace tinsmith
