@@ -1999,23 +1999,24 @@ struct Cdt::Impl {
     }
   }
 
-  bool isDomainEdge(std::uint32_t h) const {
+  /// Does half-edge h carry a domain ring: any boundary or hole (`boundary`
+  /// false), or a boundary (`boundary` true)?
+  bool isDomainEdge(std::uint32_t h, bool boundary = false) const {
     if (!cons[h]) return false;
     for (FeatureId f : edgeFeatures.find(edgeKey(tv[h], tv[nxt(h)]))) {
-      if (f < featureRole.size() && featureRole[f] != Role::None) return true;
-      if (f == kDomainFeature) return true;  // domain edges of a loaded TIN
+      if (f < featureRole.size() && featureRole[f] != Role::None) {
+        if (!boundary || featureRole[f] == Role::Boundary) return true;
+      }
+      if (f == kDomainFeature) return true;  // domain edges of a loaded TIN bound it
     }
     return false;
   }
 
-  /// Marks triangles inside the domain: crossing-count parity from the outside.
-  std::vector<std::uint8_t> classifyDomain() const {
+  /// Per triangle: the fewest half-edges with counts(h) crossed on a way in
+  /// from outside the hull (0-1 breadth-first search over the triangles).
+  template <class Counts>
+  std::vector<std::uint32_t> crossingDepth(const Counts& counts) const {
     const std::uint32_t nt = triCount();
-    std::vector<std::uint8_t> inside(nt, 0);
-    if (!hasBoundary && !hasHole) {
-      for (std::uint32_t t = 0; t < nt; ++t) inside[t] = !isGhost(t);
-      return inside;
-    }
     std::vector<std::uint32_t> depth(nt, kNone);
     std::deque<std::uint32_t> dq;
     for (std::uint32_t t = 0; t < nt; ++t) {
@@ -2030,7 +2031,7 @@ struct Cdt::Impl {
       for (std::uint32_t i = 0; i < 3; ++i) {
         const std::uint32_t h = 3 * t + i;
         const std::uint32_t n = opp[h] / 3;
-        const std::uint32_t w = isDomainEdge(h) ? 1 : 0;
+        const std::uint32_t w = counts(h) ? 1 : 0;
         if (depth[t] + w < depth[n]) {
           depth[n] = depth[t] + w;
           if (w == 0) {
@@ -2041,6 +2042,29 @@ struct Cdt::Impl {
         }
       }
     }
+    return depth;
+  }
+
+  /// Marks triangles inside the domain: crossing-count parity from the
+  /// outside, rings nesting by parity. With a boundary, hole edges count only
+  /// inside some boundary ring: a hole outside every boundary (or the part of
+  /// one that is) bounds nothing. (Across a hole edge that is no boundary
+  /// edge the boundary depth is the same on both sides.)
+  std::vector<std::uint8_t> classifyDomain() const {
+    const std::uint32_t nt = triCount();
+    std::vector<std::uint8_t> inside(nt, 0);
+    if (!hasBoundary && !hasHole) {
+      for (std::uint32_t t = 0; t < nt; ++t) inside[t] = !isGhost(t);
+      return inside;
+    }
+    std::vector<std::uint32_t> enclosing;  // boundary edges crossed
+    if (hasBoundary && hasHole) {
+      enclosing = crossingDepth([&](std::uint32_t h) { return isDomainEdge(h, true); });
+    }
+    const std::vector<std::uint32_t> depth = crossingDepth([&](std::uint32_t h) {
+      if (!isDomainEdge(h)) return false;
+      return enclosing.empty() || enclosing[h / 3] > 0 || isDomainEdge(h, true);
+    });
     for (std::uint32_t t = 0; t < nt; ++t) {
       if (isGhost(t)) continue;
       inside[t] = hasBoundary ? (depth[t] % 2 == 1) : (depth[t] % 2 == 0);
@@ -2476,7 +2500,9 @@ Cdt Cdt::fromTinData(const TinData& tin, CdtOptions options) {
         {mesh.origin(h).value, mesh.target(h).value, kDomainFeature});
     any = true;
   }
-  // A convex TIN needs no domain; keep it simple and let parity decide.
+  // Every TIN gets them, a convex one too (its hull): by parity, triangles
+  // outside its outer loop or inside a loop around a hole stay outside, and
+  // so do points added later beyond its edge.
   cdt.impl_->hasBoundary = any;
   return cdt;
 }

@@ -161,7 +161,9 @@ class Cdt {
   /// repeated). Triangles outside every boundary ring are removed at finalize().
   /// Several rings may be given (several islands). Its edges are constraints.
   void addBoundary(std::span<const Point3> ring, FeatureId feature);
-  /// A hole (void): triangles inside are removed. Rings nest by parity.
+  /// A hole (void): triangles inside are removed. Rings nest by parity; with
+  /// a boundary, a hole (or the part of one) outside every boundary ring
+  /// removes nothing.
   void addHole(std::span<const Point3> ring, FeatureId feature);
 
   /// Triangulates everything pending and inserts pending constraints. Throws

@@ -18,6 +18,20 @@ namespace {
 using testing::isValid;
 using testing::randomPoints;
 
+double area(const Mesh& mesh) {
+  double sum = 0;
+  for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+    const auto v = mesh.vertices(TriangleId(t));
+    const Point2 a = mesh.xy(v[0]), b = mesh.xy(v[1]), c = mesh.xy(v[2]);
+    sum += 0.5 * ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+  }
+  return sum;
+}
+
+std::vector<Point3> square(double lo, double hi) {
+  return {{lo, lo, 0}, {hi, lo, 0}, {hi, hi, 0}, {lo, hi, 0}};
+}
+
 ErrorKind kindOf(const auto& call) {
   try {
     call();
@@ -112,6 +126,74 @@ TEST(CdtReview, PolylineWithABadVertexChangesNothing) {
   cdt.finalize();
   EXPECT_TRUE(isValid(cdt));
   EXPECT_EQ(cdt.inputVertexCount(), inputs + 3);
+}
+
+// With a boundary, a hole ring outside every boundary ring got odd depth and
+// its inside became part of the domain.
+TEST(CdtReview, HoleOutsideEveryBoundaryChangesNothing) {
+  auto build = [](bool farHole, bool islandInFarHole, bool innerHole) {
+    Cdt cdt;
+    const FeatureId edge = cdt.addFeature(FeatureKind::Boundary, "edge");
+    const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+    cdt.insertPoints(randomPoints(400, 17, 0, 100));
+    cdt.addBoundary(square(10, 50), edge);
+    if (farHole) cdt.addHole(square(55, 95), lake);
+    if (islandInFarHole) cdt.addBoundary(square(65, 85), edge);
+    if (innerHole) cdt.addHole(square(20, 30), lake);
+    cdt.finalize();
+    EXPECT_TRUE(isValid(cdt));
+    return area(cdt.mesh());
+  };
+  EXPECT_NEAR(build(false, false, false), 1600, 1e-9);
+  EXPECT_NEAR(build(true, false, false), 1600, 1e-9);
+  EXPECT_NEAR(build(true, true, false), 1600 + 400, 1e-9);
+  EXPECT_NEAR(build(false, false, true), 1600 - 100, 1e-9);
+  EXPECT_NEAR(build(true, false, true), 1600 - 100, 1e-9);
+  EXPECT_NEAR(build(true, true, true), 1600 + 400 - 100, 1e-9);
+}
+
+TEST(CdtReview, HolesWithoutABoundaryAndNestedRingsKeepTheirParity) {
+  {
+    Cdt cdt;
+    const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+    cdt.insertPoints(square(0, 100));
+    cdt.addHole(square(10, 50), lake);
+    cdt.addHole(square(20, 30), lake);  // an island in the lake
+    cdt.addHole(square(60, 90), lake);
+    cdt.finalize();
+    EXPECT_TRUE(isValid(cdt));
+    EXPECT_NEAR(area(cdt.mesh()), 10000 - 1600 + 100 - 900, 1e-9);
+  }
+  {
+    Cdt cdt;
+    const FeatureId edge = cdt.addFeature(FeatureKind::Boundary, "edge");
+    const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+    cdt.insertPoints(square(0, 100));
+    cdt.addBoundary(square(10, 90), edge);
+    cdt.addHole(square(20, 80), lake);
+    cdt.addBoundary(square(30, 70), edge);  // an island in the lake
+    cdt.addHole(square(40, 60), lake);      // a pond on the island
+    cdt.finalize();
+    EXPECT_TRUE(isValid(cdt));
+    EXPECT_NEAR(area(cdt.mesh()), 6400 - 3600 + 1600 - 400, 1e-9);
+  }
+}
+
+// What fromTinData's comment says: even a convex TIN's edge bounds the domain.
+TEST(CdtReview, LoadedConvexTinKeepsItsEdgeAsTheDomain) {
+  Cdt first;
+  first.insertPoints(square(0, 100));
+  first.insertPoint({50, 50, 1});
+  first.finalize();
+  Cdt again = Cdt::fromTinData(first.toTinData());
+  const FeatureId lake = again.addFeature(FeatureKind::Hole, "lake");
+  again.insertPoint({150, 50, 0});        // beyond the loaded edge: dropped
+  again.addHole(square(120, 140), lake);  // outside the loaded edge: bounds nothing
+  again.finalize();
+  EXPECT_TRUE(isValid(again));
+  EXPECT_NEAR(area(again.mesh()), 10000, 1e-9);
+  EXPECT_EQ(again.mesh().vertexCount(), 5u);
+  EXPECT_FALSE(again.meshVertex(VertexId(5)).valid());
 }
 
 }  // namespace
