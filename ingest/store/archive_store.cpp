@@ -1,0 +1,450 @@
+// The archive store: one SQLite file with the table 3d-tiles-tools reads,
+// media(key TEXT PRIMARY KEY, content BLOB).
+//
+// Threads: every member of an ArchiveStore may be called from several threads
+// at once. Each call leases a connection from a small pool (a SQLite
+// connection and its prepared statements are used by one thread at a time):
+// a store opened for reading grows to kMaxReaders connections, so get() calls
+// from server threads run side by side; a store opened for writing has one
+// read-write connection, so its calls take turns.
+//
+// A staging archive (openStoreForWriting) is in WAL mode while its store
+// lives, each put its own transaction, so readers in other connections or
+// processes see a tile whole or not at all; closing the store switches it back
+// to a rollback journal when no one else has it open. A final archive (writeStore) is written in
+// one transaction with a fixed page size and no journal, then renamed into place; its bytes depend
+// only on the keys, their order and their bytes (and the SQLite file format version, which is in
+// the header).
+#include <fcntl.h>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <condition_variable>
+#include <mutex>
+#include <vector>
+
+#include "core/base/error.hpp"
+#include "ingest/store/store_detail.hpp"
+
+namespace tinsmith::store::detail {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::size_t kMaxReaders = 16;
+constexpr int kBusyTimeoutMs = 10000;
+constexpr const char* kCreateMedia = "CREATE TABLE media (key TEXT PRIMARY KEY, content BLOB)";
+constexpr const char* kLayout =
+    "PRAGMA page_size = 4096; PRAGMA auto_vacuum = NONE; PRAGMA encoding = 'UTF-8';";
+
+struct DbCloser {
+  void operator()(sqlite3* db) const { sqlite3_close_v2(db); }
+};
+struct StmtFinalizer {
+  void operator()(sqlite3_stmt* stmt) const { sqlite3_finalize(stmt); }
+};
+using Db = std::unique_ptr<sqlite3, DbCloser>;
+using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
+
+// Leaves a statement ready for its next use however the step ended.
+class StepScope {
+ public:
+  explicit StepScope(sqlite3_stmt* stmt) : stmt_(stmt) {}
+  StepScope(const StepScope&) = delete;
+  StepScope& operator=(const StepScope&) = delete;
+  ~StepScope() {
+    sqlite3_reset(stmt_);
+    sqlite3_clear_bindings(stmt_);
+  }
+
+ private:
+  sqlite3_stmt* stmt_;
+};
+
+std::string message(sqlite3* db) {
+  return db ? sqlite3_errmsg(db) : "out of memory";
+}
+
+Db openDb(const fs::path& path, int flags, int& rc) {
+  sqlite3* raw = nullptr;
+  rc = sqlite3_open_v2(path.c_str(), &raw, flags | SQLITE_OPEN_NOMUTEX, nullptr);
+  Db db(raw);
+  if (rc == SQLITE_OK) {
+    sqlite3_extended_result_codes(db.get(), 1);
+    sqlite3_busy_timeout(db.get(), kBusyTimeoutMs);
+  }
+  return db;
+}
+
+Stmt prepare(sqlite3* db, const char* sql, int& rc) {
+  sqlite3_stmt* raw = nullptr;
+  rc = sqlite3_prepare_v2(db, sql, -1, &raw, nullptr);
+  return Stmt(raw);
+}
+
+void bindText(sqlite3_stmt* stmt, int index, std::string_view text) {
+  sqlite3_bind_text64(stmt, index, text.data(), text.size(), SQLITE_STATIC, SQLITE_UTF8);
+}
+
+void bindBlob(sqlite3_stmt* stmt, int index, std::string_view bytes) {
+  // A null pointer would bind NULL; an empty tile is an empty blob.
+  if (bytes.empty())
+    sqlite3_bind_zeroblob(stmt, index, 0);
+  else
+    sqlite3_bind_blob64(stmt, index, bytes.data(), bytes.size(), SQLITE_STATIC);
+}
+
+// One SQLite connection with the statements every store call uses.
+struct Connection {
+  Db db;
+  Stmt get, contains, keys, put;
+};
+
+bool isWritable(Access access) {
+  return access != Access::Read;
+}
+
+// Opens a connection and checks the file is an archive; for a writable store,
+// creates the media table in an empty database. Failures are inputError for a
+// store opened for reading (the archive is the input) and ioError otherwise.
+std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
+  auto fail = [&](const std::string& problem, const std::string& hint) -> Error {
+    return isWritable(access) ? ioError(problem, at(path), hint)
+                              : inputError(problem, at(path), hint);
+  };
+  const int flags =
+      isWritable(access) ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
+  auto connection = std::make_unique<Connection>();
+  int rc = SQLITE_OK;
+  connection->db = openDb(path, flags, rc);
+  sqlite3* db = connection->db.get();
+  if (rc != SQLITE_OK)
+    throw fail("cannot open the archive: " + message(db), "check the path and its permissions");
+
+  // The first statement reads the header: a file that is not SQLite fails here.
+  int tables = 0;
+  int media = 0;
+  {
+    Stmt probe = prepare(
+        db, "SELECT count(*), total(type = 'table' AND name = 'media') FROM sqlite_master", rc);
+    if (rc == SQLITE_OK) rc = sqlite3_step(probe.get());
+    if ((rc & 0xFF) == SQLITE_NOTADB)
+      throw fail("not a .3dtiles archive (the file is not a SQLite database)",
+                 isWritable(access) ? "remove it or choose another output path"
+                                    : "give a .3dtiles file written by tinsmith or 3d-tiles-tools");
+    if (rc != SQLITE_ROW)
+      throw fail("cannot read the archive: " + message(db), "check permissions");
+    tables = sqlite3_column_int(probe.get(), 0);
+    media = sqlite3_column_int(probe.get(), 1);
+  }
+  if (media == 0 && (!isWritable(access) || tables > 0))
+    throw fail("not a .3dtiles archive: the SQLite database has no media table",
+               isWritable(access) ? "remove it or choose another output path"
+                                  : "give a .3dtiles file written by tinsmith or 3d-tiles-tools");
+  if (isWritable(access)) {
+    const std::string setup =
+        (media == 0 ? std::string(kLayout) + kCreateMedia + ";" : std::string()) +
+        "PRAGMA journal_mode = WAL; PRAGMA synchronous = NORMAL;";
+    char* error = nullptr;
+    rc = sqlite3_exec(db, setup.c_str(), nullptr, nullptr, &error);
+    const std::string reason = error ? error : message(db);
+    sqlite3_free(error);
+    if (rc != SQLITE_OK)
+      throw fail("cannot prepare the archive for writing: " + reason, "check permissions");
+  }
+
+  const std::pair<Stmt*, const char*> statements[] = {
+      {&connection->get, "SELECT content FROM media WHERE key = ?1"},
+      {&connection->contains, "SELECT 1 FROM media WHERE key = ?1"},
+      {&connection->keys, "SELECT key FROM media ORDER BY key"},
+      {&connection->put, isWritable(access)
+                             ? "INSERT OR REPLACE INTO media (key, content) VALUES (?1, ?2)"
+                             : nullptr}};
+  for (const auto& [stmt, sql] : statements) {
+    if (!sql) continue;
+    *stmt = prepare(db, sql, rc);
+    if (rc != SQLITE_OK)
+      throw fail(
+          "not a .3dtiles archive: the media table is not media(key, content): " + message(db),
+          "give a .3dtiles file written by tinsmith or 3d-tiles-tools");
+  }
+  return connection;
+}
+
+// Connections handed to one thread at a time; grows on demand up to `capacity`.
+class ConnectionPool {
+ public:
+  ConnectionPool(fs::path path, Access access, std::size_t capacity)
+      : path_(std::move(path)), access_(access), capacity_(capacity) {
+    idle_.push_back(connect(path_, access_));
+    opened_ = 1;
+  }
+
+  class Lease {
+   public:
+    Lease(const ConnectionPool& pool, std::unique_ptr<Connection> connection)
+        : pool_(pool), connection_(std::move(connection)) {}
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    ~Lease() { pool_.giveBack(std::move(connection_)); }
+    Connection* operator->() const { return connection_.get(); }
+
+   private:
+    const ConnectionPool& pool_;
+    std::unique_ptr<Connection> connection_;
+  };
+
+  Lease acquire() const {
+    std::unique_lock lock(mutex_);
+    freed_.wait(lock, [&] { return !idle_.empty() || opened_ < capacity_; });
+    if (!idle_.empty()) {
+      std::unique_ptr<Connection> connection = std::move(idle_.back());
+      idle_.pop_back();
+      return {*this, std::move(connection)};
+    }
+    ++opened_;
+    lock.unlock();
+    try {
+      return {*this, connect(path_, access_)};
+    } catch (...) {
+      lock.lock();
+      --opened_;
+      freed_.notify_one();
+      throw;
+    }
+  }
+
+ private:
+  void giveBack(std::unique_ptr<Connection> connection) const {
+    {
+      std::lock_guard lock(mutex_);
+      idle_.push_back(std::move(connection));
+    }
+    freed_.notify_one();
+  }
+
+  fs::path path_;
+  Access access_;
+  std::size_t capacity_;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable freed_;
+  mutable std::vector<std::unique_ptr<Connection>> idle_;
+  mutable std::size_t opened_ = 0;
+};
+
+class ArchiveStore final : public TileStore {
+ public:
+  ArchiveStore(fs::path path, Access access)
+      : path_(std::move(path)),
+        access_(access),
+        pool_(path_, access, isWritable(access) ? 1 : kMaxReaders) {}
+
+  ArchiveStore(const ArchiveStore&) = delete;
+  ArchiveStore& operator=(const ArchiveStore&) = delete;
+
+  // A staging archive goes back to a rollback journal when its writer is done,
+  // so later read-only openers need no -wal or -shm beside it. While another
+  // connection has it open the switch fails at once (no busy wait) and the
+  // archive stays in WAL mode, which is just as readable.
+  ~ArchiveStore() override {
+    if (!isWritable(access_)) return;
+    try {
+      const auto connection = pool_.acquire();
+      sqlite3_busy_timeout(connection->db.get(), 0);
+      sqlite3_exec(connection->db.get(), "PRAGMA journal_mode = DELETE", nullptr, nullptr, nullptr);
+    } catch (...) {
+      // A destructor must not throw; the archive is complete either way.
+    }
+  }
+
+  [[nodiscard]] StoreKind kind() const override { return StoreKind::Archive; }
+  [[nodiscard]] const fs::path& path() const override { return path_; }
+
+  [[nodiscard]] std::optional<std::string> get(std::string_view key) const override {
+    requireValidKey(key, path_);
+    const auto connection = pool_.acquire();
+    sqlite3_stmt* stmt = connection->get.get();
+    const StepScope scope(stmt);
+    bindText(stmt, 1, key);
+    const int rc = sqlite3_step(stmt);
+    if (rc == SQLITE_DONE) return std::nullopt;
+    if (rc != SQLITE_ROW) throw readFailure(key, connection->db.get());
+    const auto* data = static_cast<const char*>(sqlite3_column_blob(stmt, 0));
+    const int size = sqlite3_column_bytes(stmt, 0);
+    return data ? std::string(data, static_cast<std::size_t>(size)) : std::string();
+  }
+
+  [[nodiscard]] bool contains(std::string_view key) const override {
+    requireValidKey(key, path_);
+    const auto connection = pool_.acquire();
+    sqlite3_stmt* stmt = connection->contains.get();
+    const StepScope scope(stmt);
+    bindText(stmt, 1, key);
+    const int rc = sqlite3_step(stmt);
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw readFailure(key, connection->db.get());
+    return rc == SQLITE_ROW;
+  }
+
+  [[nodiscard]] std::vector<std::string> keys() const override {
+    const auto connection = pool_.acquire();
+    sqlite3_stmt* stmt = connection->keys.get();
+    const StepScope scope(stmt);
+    std::vector<std::string> keys;
+    int rc = SQLITE_OK;
+    while ((rc = sqlite3_step(stmt)) == SQLITE_ROW) {
+      const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
+      keys.emplace_back(text ? text : "", static_cast<std::size_t>(sqlite3_column_bytes(stmt, 0)));
+    }
+    if (rc != SQLITE_DONE)
+      throw ioError("cannot list the archive's keys: " + message(connection->db.get()), at(path_));
+    return keys;
+  }
+
+  void put(std::string_view key, std::string_view bytes) override {
+    if (!isWritable(access_))
+      throw usageError("put into '" + path_.string() + "', which was opened for reading",
+                       "open the store with openStoreForWriting");
+    requireValidKey(key, path_);
+    const auto connection = pool_.acquire();
+    sqlite3_stmt* stmt = connection->put.get();
+    const StepScope scope(stmt);
+    bindText(stmt, 1, key);
+    bindBlob(stmt, 2, bytes);
+    if (sqlite3_step(stmt) != SQLITE_DONE)
+      throw ioError(
+          "cannot write the key '" + std::string(key) + "': " + message(connection->db.get()),
+          at(path_), "check free disk space and permissions");
+  }
+
+ private:
+  Error readFailure(std::string_view key, sqlite3* db) const {
+    return ioError("cannot read the key '" + std::string(key) + "': " + message(db), at(path_));
+  }
+
+  fs::path path_;
+  Access access_;
+  ConnectionPool pool_;
+};
+
+// The files SQLite may keep beside a database. A stale one beside a new file
+// would be replayed into it, so they go before a fresh archive takes the name.
+void removeSidecars(const fs::path& path) {
+  for (const char* suffix : {"-journal", "-wal", "-shm"}) {
+    std::error_code ec;
+    fs::path sidecar = path;
+    sidecar += suffix;
+    fs::remove(sidecar, ec);
+    if (ec)
+      throw ioError(
+          "cannot remove the stale '" + sidecar.filename().string() + "': " + ec.message(),
+          at(path), "check permissions");
+  }
+}
+
+// Removes a half-written temporary archive unless released.
+class TempArchive {
+ public:
+  explicit TempArchive(fs::path path) : path_(std::move(path)) {}
+  TempArchive(const TempArchive&) = delete;
+  TempArchive& operator=(const TempArchive&) = delete;
+  ~TempArchive() {
+    if (path_.empty()) return;
+    std::error_code ec;
+    fs::remove(path_, ec);
+    fs::path journal = path_;
+    journal += "-journal";
+    fs::remove(journal, ec);
+  }
+  [[nodiscard]] const fs::path& path() const { return path_; }
+  void release() { path_.clear(); }
+
+ private:
+  fs::path path_;
+};
+
+void syncPath(const fs::path& path, int flags) {
+  const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+std::unique_ptr<TileStore> openArchive(const fs::path& path, Access access) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    const std::string problem = "is a folder, not a .3dtiles archive";
+    if (isWritable(access))
+      throw ioError(problem, at(path), "remove it or choose another output path");
+    throw inputError(problem, at(path),
+                     "an archive is one file; a folder store's name must not end in .3dtiles");
+  }
+  if (sqlite3_threadsafe() == 0)
+    throw internalError("SQLite was built without thread support, which the archive store needs");
+  if (isWritable(access)) createFolderFor(path.parent_path(), path);
+  if (access == Access::Fresh) {
+    fs::remove(path, ec);
+    if (ec)
+      throw ioError("cannot remove the old archive: " + ec.message(), at(path),
+                    "check permissions");
+    removeSidecars(path);
+  }
+  return std::make_unique<ArchiveStore>(path, access);
+}
+
+void writeArchive(const TileStore& source, std::span<const std::string> keys,
+                  const fs::path& target) {
+  createFolderFor(target.parent_path(), target);
+  std::error_code ec;
+  if (fs::is_directory(target, ec))
+    throw ioError("the target is a folder, not a .3dtiles archive", at(target),
+                  "remove it or choose another output path");
+  TempArchive temp(tempSibling(target));
+  {
+    int rc = SQLITE_OK;
+    Db db = openDb(temp.path(), SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, rc);
+    auto fail = [&](const std::string& what) {
+      return ioError(what + ": " + message(db.get()), at(target),
+                     "check free disk space and permissions");
+    };
+    if (rc != SQLITE_OK) throw fail("cannot create the archive");
+    // No journal: a failed write leaves a temporary file that is removed, never
+    // the target. One transaction, so the change counter in the header is fixed.
+    const std::string setup = std::string(kLayout) +
+                              "PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; BEGIN; " +
+                              kCreateMedia + ";";
+    if (sqlite3_exec(db.get(), setup.c_str(), nullptr, nullptr, nullptr) != SQLITE_OK)
+      throw fail("cannot create the archive");
+    Stmt insert = prepare(db.get(), "INSERT INTO media (key, content) VALUES (?1, ?2)", rc);
+    if (rc != SQLITE_OK) throw fail("cannot create the archive");
+    for (const std::string& key : keys) {
+      const std::string bytes = bytesForCopy(source, key);
+      const StepScope scope(insert.get());
+      bindText(insert.get(), 1, key);
+      bindBlob(insert.get(), 2, bytes);
+      rc = sqlite3_step(insert.get());
+      if (rc == SQLITE_CONSTRAINT_PRIMARYKEY)
+        throw inputError("the key '" + key + "' is listed twice for the archive", at(target),
+                         "list each key once");
+      if (rc != SQLITE_DONE) throw fail("cannot write the key '" + key + "'");
+    }
+    insert.reset();
+    if (sqlite3_exec(db.get(), "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK)
+      throw fail("cannot finish the archive");
+    if (sqlite3_close(db.get()) != SQLITE_OK) throw fail("cannot close the archive");
+    (void)db.release();
+  }
+  syncPath(temp.path(), O_RDONLY);
+  removeSidecars(target);
+  fs::rename(temp.path(), target, ec);
+  if (ec)
+    throw ioError("cannot move the finished archive into place: " + ec.message(), at(target),
+                  "check that the target folder is writable");
+  temp.release();
+  syncPath(target.parent_path().empty() ? fs::path(".") : target.parent_path(),
+           O_RDONLY | O_DIRECTORY);
+}
+
+}  // namespace tinsmith::store::detail

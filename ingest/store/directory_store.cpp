@@ -1,0 +1,263 @@
+// The directory store: one file per key under a root folder.
+//
+// Threads: every member may be called from several threads at once; the
+// store keeps no state beyond its root, and each put writes its own uniquely
+// named temporary file ("<file>.tmp-<pid>-<counter>") and renames it over the
+// target, so readers see the old bytes or the new ones, never a mix. Puts are
+// not fsynced one by one (a tileset has many thousands of files): they are
+// atomic against readers and failures, not against a power cut.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include "core/base/error.hpp"
+#include "ingest/store/store_detail.hpp"
+
+namespace tinsmith::store::detail {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string errnoText() {
+  return std::strerror(errno);
+}
+
+// Closes a file descriptor on every path out.
+class Fd {
+ public:
+  explicit Fd(int fd) : fd_(fd) {}
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  ~Fd() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  [[nodiscard]] int get() const { return fd_; }
+  /// Closes now and reports whether close succeeded.
+  bool close() {
+    const int rc = ::close(fd_);
+    fd_ = -1;
+    return rc == 0;
+  }
+
+ private:
+  int fd_;
+};
+
+class DirectoryStore final : public TileStore {
+ public:
+  DirectoryStore(fs::path root, Access access) : root_(std::move(root)), access_(access) {}
+
+  [[nodiscard]] StoreKind kind() const override { return StoreKind::Directory; }
+  [[nodiscard]] const fs::path& path() const override { return root_; }
+
+  [[nodiscard]] std::optional<std::string> get(std::string_view key) const override {
+    const fs::path file = fileFor(key);
+    Fd fd(::open(file.c_str(), O_RDONLY | O_CLOEXEC));
+    if (fd.get() < 0) {
+      if (errno == ENOENT || errno == ENOTDIR) return std::nullopt;
+      throw readFailure(key, errnoText());
+    }
+    struct stat info {};
+    if (::fstat(fd.get(), &info) != 0) throw readFailure(key, errnoText());
+    if (!S_ISREG(info.st_mode)) return std::nullopt;
+    std::string bytes(static_cast<std::size_t>(info.st_size), '\0');
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+      const ssize_t n = ::read(fd.get(), bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) throw readFailure(key, errnoText());
+      if (n == 0) break;  // shrunk since fstat: keep what is there
+      done += static_cast<std::size_t>(n);
+    }
+    bytes.resize(done);
+    return bytes;
+  }
+
+  [[nodiscard]] bool contains(std::string_view key) const override {
+    const fs::path file = fileFor(key);
+    std::error_code ec;
+    return fs::is_regular_file(file, ec);
+  }
+
+  [[nodiscard]] std::vector<std::string> keys() const override {
+    std::vector<std::string> keys;
+    std::error_code ec;
+    fs::recursive_directory_iterator it(root_, ec);
+    for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      // Files mid-put and folders mid-writeStore are not keys yet.
+      std::error_code entry;
+      if (isTempName(name)) {
+        if (it->is_directory(entry)) it.disable_recursion_pending();
+        continue;
+      }
+      if (!it->is_regular_file(entry)) continue;
+      std::string key = it->path().lexically_relative(root_).generic_string();
+      // A file no key can name (a backslash in its name) cannot be read back.
+      if (isValidKey(key)) keys.push_back(std::move(key));
+    }
+    if (ec)
+      throw ioError("cannot list the folder's files: " + ec.message(), at(root_),
+                    "check permissions");
+    std::sort(keys.begin(), keys.end());
+    return keys;
+  }
+
+  void put(std::string_view key, std::string_view bytes) override {
+    if (access_ == Access::Read)
+      throw usageError("put into '" + root_.string() + "', which was opened for reading",
+                       "open the store with openStoreForWriting");
+    const fs::path file = fileFor(key);
+    if (isTempName(file.filename().string()))
+      throw inputError("the tile key '" + std::string(key) + "' ends like a temporary file's name",
+                       at(root_), "rename the tile; names ending in .tmp-N-N are reserved");
+    createFolderFor(file.parent_path(), root_);
+    const fs::path temp = tempSibling(file);
+    Fd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));
+    if (fd.get() < 0) throw writeFailure(key, "cannot create a file: " + errnoText());
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+      const ssize_t n = ::write(fd.get(), bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) {
+        const std::string reason = errnoText();
+        discard(temp);
+        throw writeFailure(key, "writing failed: " + reason);
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    if (!fd.close()) {
+      const std::string reason = errnoText();
+      discard(temp);
+      throw writeFailure(key, "closing failed: " + reason);
+    }
+    if (::rename(temp.c_str(), file.c_str()) != 0) {
+      const std::string reason = errnoText();
+      discard(temp);
+      throw writeFailure(key, "cannot move the file into place: " + reason);
+    }
+  }
+
+ private:
+  // The one place a key becomes a path, after the check.
+  [[nodiscard]] fs::path fileFor(std::string_view key) const {
+    requireValidKey(key, root_);
+    return root_ / fs::path(std::string(key));
+  }
+
+  static void discard(const fs::path& temp) {
+    std::error_code ec;
+    fs::remove(temp, ec);
+  }
+
+  [[nodiscard]] Error readFailure(std::string_view key, const std::string& reason) const {
+    return ioError("cannot read the key '" + std::string(key) + "': " + reason, at(root_),
+                   "check permissions");
+  }
+  [[nodiscard]] Error writeFailure(std::string_view key, const std::string& reason) const {
+    return ioError("cannot write the key '" + std::string(key) + "': " + reason, at(root_),
+                   "check free disk space and permissions");
+  }
+
+  fs::path root_;
+  Access access_;
+};
+
+// Removes a half-written folder unless released.
+class TempFolder {
+ public:
+  explicit TempFolder(fs::path path) : path_(std::move(path)) {}
+  TempFolder(const TempFolder&) = delete;
+  TempFolder& operator=(const TempFolder&) = delete;
+  ~TempFolder() {
+    if (path_.empty()) return;
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  [[nodiscard]] const fs::path& path() const { return path_; }
+  void release() { path_.clear(); }
+
+ private:
+  fs::path path_;
+};
+
+}  // namespace
+
+std::unique_ptr<TileStore> openDirectory(const fs::path& path, Access access) {
+  std::error_code ec;
+  const bool folder = fs::is_directory(path, ec);
+  if (access == Access::Read) {
+    if (!folder)
+      throw inputError("is a file, not a tile folder", at(path),
+                       "an archive's name ends in .3dtiles; a folder store is a folder");
+    return std::make_unique<DirectoryStore>(path, access);
+  }
+  if (!folder && fs::exists(fs::symlink_status(path, ec)))
+    throw ioError("the tile folder's path is taken by a file", at(path),
+                  "remove it or choose another output path (an archive's name ends in .3dtiles)");
+  if (folder && access == Access::Fresh) {
+    fs::remove_all(path, ec);
+    if (ec)
+      throw ioError("cannot empty the old tile folder: " + ec.message(), at(path),
+                    "check permissions");
+  }
+  createFolderFor(path, path);
+  return std::make_unique<DirectoryStore>(path, access);
+}
+
+void writeDirectory(const TileStore& source, std::span<const std::string> keys,
+                    const fs::path& target) {
+  createFolderFor(target.parent_path(), target);
+  std::error_code ec;
+  const bool exists = fs::exists(fs::symlink_status(target, ec));
+  if (exists && !fs::is_directory(fs::symlink_status(target, ec)))
+    throw ioError("the target is a file, not a tile folder", at(target),
+                  "remove it or choose another output path (an archive's name ends in .3dtiles)");
+
+  TempFolder staged(tempSibling(target));
+  {
+    DirectoryStore out(staged.path(), Access::Fresh);
+    createFolderFor(staged.path(), target);
+    for (const std::string& key : keys) {
+      if (out.contains(key))
+        throw inputError("the key '" + key + "' is listed twice for the folder", at(target),
+                         "list each key once");
+      out.put(key, bytesForCopy(source, key));
+    }
+  }
+  if (!exists) {
+    fs::rename(staged.path(), target, ec);
+    if (ec)
+      throw ioError("cannot move the finished folder into place: " + ec.message(), at(target),
+                    "check that the target's folder is writable");
+    staged.release();
+    return;
+  }
+  // A folder cannot be renamed over a non-empty one: the old one moves aside
+  // first, and comes back if the new one cannot take its place.
+  TempFolder old(tempSibling(target));
+  fs::rename(target, old.path(), ec);
+  if (ec) {
+    old.release();
+    throw ioError("cannot move the old folder aside: " + ec.message(), at(target),
+                  "check that the target's folder is writable");
+  }
+  fs::rename(staged.path(), target, ec);
+  if (ec) {
+    const fs::path aside = old.path();
+    old.release();
+    std::error_code back;
+    fs::rename(aside, target, back);
+    throw ioError("cannot move the finished folder into place: " + ec.message() +
+                      (back ? "; the old folder is now '" + aside.string() + "'" : std::string()),
+                  at(target), "check that the target's folder is writable");
+  }
+  staged.release();
+}
+
+}  // namespace tinsmith::store::detail

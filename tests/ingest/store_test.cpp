@@ -1,0 +1,432 @@
+// Tile stores, both kinds: keys in and out, keys that could escape the root
+// refused, stores that are not stores named in the error, deterministic
+// writeStore output, resume, failed writes that leave nothing behind, and
+// reads from several threads at once.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "core/base/error.hpp"
+#include "ingest/store/tile_store.hpp"
+#include "tests/support/run_command.hpp"
+
+namespace tinsmith::store {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Bytes that are not text: every byte value, a NUL in the middle, and sizes
+// around a SQLite page so that overflow pages are used.
+std::string tileBytes(int seed, std::size_t size) {
+  std::string bytes(size, '\0');
+  std::uint32_t state = 2463534242u + static_cast<std::uint32_t>(seed);
+  for (char& c : bytes) {
+    state ^= state << 13;
+    state ^= state >> 17;
+    state ^= state << 5;
+    c = static_cast<char>(state & 0xFF);
+  }
+  return bytes;
+}
+
+struct Sample {
+  std::vector<std::string> keys;
+  std::vector<std::string> bytes;
+};
+
+// Deliberately not sorted: writeStore keeps the given order.
+Sample sampleTiles() {
+  Sample s;
+  s.keys = {"tileset.json",         "tiles/0/0/0.glb", "tiles/1/1/0.glb",     "tiles/1/0/0.glb",
+            "tinsmith/terrain.tin", "empty.bin",       "tiles/10/5/7%20x.glb"};
+  const std::size_t sizes[] = {120, 5000, 4096, 1, 70000, 0, 333};
+  for (std::size_t i = 0; i < s.keys.size(); ++i)
+    s.bytes.push_back(tileBytes(static_cast<int>(i), sizes[i]));
+  s.bytes[0] = R"({"asset":{"version":"1.1"}})";
+  return s;
+}
+
+void fill(TileStore& store, const Sample& s) {
+  for (std::size_t i = 0; i < s.keys.size(); ++i) store.put(s.keys[i], s.bytes[i]);
+}
+
+// Kind of an error thrown by `f`, and its message.
+struct Thrown {
+  std::optional<ErrorKind> kind;
+  std::string message;
+};
+template <class F>
+Thrown thrownBy(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return {e.kind(), e.what()};
+  }
+  return {};
+}
+
+// Every path under `dir`, relative, sorted.
+std::vector<std::string> treeOf(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+    out.push_back(entry.path().lexically_relative(dir).generic_string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string nameFor(StoreKind kind) {
+  return kind == StoreKind::Archive ? "t.3dtiles" : "t";
+}
+
+class TileStoreTest : public ::testing::TestWithParam<StoreKind> {
+ protected:
+  fs::path scratch(const std::string& name) {
+    return test::scratchDir(std::string("store-") + name + "-" +
+                            (GetParam() == StoreKind::Archive ? "archive" : "directory"));
+  }
+};
+
+TEST(StoreKey, TheKeyRule) {
+  for (const char* good : {"tileset.json", "tiles/3/2/5.glb", "a", "a/b/c", "%2e%2e/x", "a..b",
+                           ".hidden", "a/.b", "a b/ü.glb"})
+    EXPECT_TRUE(isValidKey(good)) << good;
+  for (const std::string& bad :
+       std::vector<std::string>({"../x", "a/../b", "/abs", "a\\b", "a//b", "", "a/./b", ".", "..",
+                                 "a/", "a/..", std::string("a\0b", 3)}))
+    EXPECT_FALSE(isValidKey(bad)) << bad;
+}
+
+TEST(StoreKind, ComesFromTheSuffix) {
+  EXPECT_EQ(storeKindFor("out/site.3dtiles"), StoreKind::Archive);
+  EXPECT_EQ(storeKindFor("SITE.3DTiles"), StoreKind::Archive);
+  EXPECT_EQ(storeKindFor("out/site"), StoreKind::Directory);
+  EXPECT_EQ(storeKindFor("site.3dtiles.d"), StoreKind::Directory);
+  EXPECT_EQ(storeKindFor("site.mbtiles"), StoreKind::Directory);
+}
+
+TEST_P(TileStoreTest, PutGetContainsKeys) {
+  const fs::path path = scratch("basic") / nameFor(GetParam());
+  const Sample s = sampleTiles();
+  {
+    auto store = openStoreForWriting(path, false);
+    EXPECT_EQ(store->kind(), GetParam());
+    EXPECT_EQ(store->path(), path);
+    EXPECT_TRUE(store->keys().empty());
+    fill(*store, s);
+    store->put("tiles/1/0/0.glb", "replaced");
+    EXPECT_EQ(store->get("tiles/1/0/0.glb"), "replaced");
+    EXPECT_EQ(store->get("tileset.json"), s.bytes[0]);
+    EXPECT_FALSE(store->get("tiles/9/9/9.glb"));
+    EXPECT_FALSE(store->get("tiles"));  // a folder in a directory store, not a key
+  }
+  auto store = openStoreForReading(path);
+  EXPECT_EQ(store->kind(), GetParam());
+  std::vector<std::string> sorted = s.keys;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(store->keys(), sorted);
+  for (std::size_t i = 0; i < s.keys.size(); ++i) {
+    EXPECT_TRUE(store->contains(s.keys[i])) << s.keys[i];
+    const auto bytes = store->get(s.keys[i]);
+    ASSERT_TRUE(bytes) << s.keys[i];
+    EXPECT_EQ(*bytes, s.keys[i] == "tiles/1/0/0.glb" ? "replaced" : s.bytes[i]) << s.keys[i];
+  }
+  EXPECT_FALSE(store->contains("tiles/0/0"));
+  EXPECT_FALSE(store->contains("nothing"));
+}
+
+TEST_P(TileStoreTest, InvalidKeysAreRefusedAndNothingIsWrittenOutsideTheRoot) {
+  const fs::path dir = scratch("keys");
+  const fs::path path = dir / "inner" / nameFor(GetParam());
+  auto store = openStoreForWriting(path, false);
+  const auto before = treeOf(dir);
+  for (const std::string& key :
+       std::vector<std::string>({"../x", "a/../b", "/abs", "a\\b", "a//b", "", "a/./b",
+                                 std::string("a\0b", 3), "../../escaped", "/tmp/escaped"})) {
+    const Thrown put = thrownBy([&] { store->put(key, "bytes"); });
+    EXPECT_EQ(put.kind, ErrorKind::Input) << key << ": " << put.message;
+    EXPECT_NE(put.message.find(path.string()), std::string::npos) << put.message;
+    EXPECT_EQ(thrownBy([&] { (void)store->get(key); }).kind, ErrorKind::Input) << key;
+    EXPECT_EQ(thrownBy([&] { (void)store->contains(key); }).kind, ErrorKind::Input) << key;
+  }
+  EXPECT_EQ(treeOf(dir), before);
+  EXPECT_FALSE(fs::exists("/abs"));
+  EXPECT_TRUE(store->keys().empty());
+}
+
+TEST_P(TileStoreTest, KeepExistingResumesAndFalseEmpties) {
+  const fs::path path = scratch("resume") / nameFor(GetParam());
+  openStoreForWriting(path, false)->put("a.glb", "first");
+  {
+    auto resumed = openStoreForWriting(path, true);
+    EXPECT_EQ(resumed->get("a.glb"), "first");
+    resumed->put("b/c.glb", "second");
+  }
+  EXPECT_EQ(openStoreForReading(path)->keys(), (std::vector<std::string>{"a.glb", "b/c.glb"}));
+  EXPECT_TRUE(openStoreForWriting(path, false)->keys().empty());
+  EXPECT_TRUE(openStoreForReading(path)->keys().empty());
+}
+
+TEST_P(TileStoreTest, KeepExistingCreatesAMissingStoreAndItsParents) {
+  const fs::path path = scratch("create") / "x" / "y" / nameFor(GetParam());
+  openStoreForWriting(path, true)->put("k", "v");
+  EXPECT_EQ(openStoreForReading(path)->get("k"), "v");
+}
+
+TEST_P(TileStoreTest, PutOnAStoreOpenedForReadingIsAUsageError) {
+  const fs::path path = scratch("readonly") / nameFor(GetParam());
+  openStoreForWriting(path, false)->put("k", "v");
+  auto store = openStoreForReading(path);
+  EXPECT_EQ(thrownBy([&] { store->put("k", "w"); }).kind, ErrorKind::Usage);
+  EXPECT_EQ(store->get("k"), "v");
+}
+
+TEST_P(TileStoreTest, WritingUnderARegularFileIsAnIoError) {
+  const fs::path dir = scratch("under-file");
+  std::ofstream(dir / "plain.txt") << "a file, not a folder\n";
+  const fs::path path = dir / "plain.txt" / "sub" / nameFor(GetParam());
+  const Thrown open = thrownBy([&] { (void)openStoreForWriting(path, false); });
+  EXPECT_EQ(open.kind, ErrorKind::Io) << open.message;
+  EXPECT_NE(open.message.find(path.string()), std::string::npos) << open.message;
+
+  const fs::path source = dir / "source.3dtiles";
+  openStoreForWriting(source, false)->put("k", "v");
+  const std::vector<std::string> keys = {"k"};
+  const Thrown write = thrownBy([&] { writeStore(*openStoreForReading(source), keys, path); });
+  EXPECT_EQ(write.kind, ErrorKind::Io) << write.message;
+  EXPECT_NE(write.message.find(path.string()), std::string::npos) << write.message;
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"plain.txt", "source.3dtiles"}));
+}
+
+TEST_P(TileStoreTest, WriteStoreIsDeterministicAndKeepsTheGivenKeys) {
+  const fs::path dir = scratch("write");
+  const Sample s = sampleTiles();
+  // Two sources of either kind, filled in different orders, with an extra key
+  // that is not copied.
+  const fs::path sourceA = dir / "a.3dtiles";
+  const fs::path sourceB = dir / "b";
+  {
+    auto a = openStoreForWriting(sourceA, false);
+    fill(*a, s);
+    a->put("extra", "not copied");
+    auto b = openStoreForWriting(sourceB, false);
+    for (std::size_t i = s.keys.size(); i-- > 0;) b->put(s.keys[i], s.bytes[i]);
+  }
+  const fs::path first = dir / ("first-" + nameFor(GetParam()));
+  const fs::path second = dir / "out" / ("second-" + nameFor(GetParam()));
+  writeStore(*openStoreForReading(sourceA), s.keys, first);
+  writeStore(*openStoreForReading(sourceB), s.keys, second);
+
+  auto out = openStoreForReading(first);
+  std::vector<std::string> sorted = s.keys;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(out->keys(), sorted);
+  for (std::size_t i = 0; i < s.keys.size(); ++i) EXPECT_EQ(out->get(s.keys[i]), s.bytes[i]);
+  if (GetParam() == StoreKind::Archive) {
+    EXPECT_EQ(test::readFile(first), test::readFile(second));
+  } else {
+    EXPECT_EQ(treeOf(first), treeOf(second));
+    for (const std::string& key : s.keys)
+      EXPECT_EQ(test::readFile(first / key), test::readFile(second / key)) << key;
+  }
+  // Nothing but the outputs and the sources: no temporary files or folders,
+  // no SQLite journals.
+  const auto namesIn = [](const fs::path& folder) {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(folder))
+      names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  EXPECT_EQ(namesIn(dir),
+            (std::vector<std::string>{"a.3dtiles", "b", first.filename().string(), "out"}));
+  EXPECT_EQ(namesIn(dir / "out"), (std::vector<std::string>{second.filename().string()}));
+}
+
+TEST_P(TileStoreTest, WriteStoreReplacesAnExistingTarget) {
+  const fs::path dir = scratch("replace");
+  const fs::path source = dir / "s.3dtiles";
+  openStoreForWriting(source, false)->put("new.glb", "new");
+  const fs::path target = dir / nameFor(GetParam());
+  openStoreForWriting(target, false)->put("old.glb", "old");
+  const std::vector<std::string> keys = {"new.glb"};
+  writeStore(*openStoreForReading(source), keys, target);
+  EXPECT_EQ(openStoreForReading(target)->keys(), keys);
+  EXPECT_EQ(treeOf(dir).size(), GetParam() == StoreKind::Archive ? 2u : 3u);
+}
+
+TEST_P(TileStoreTest, WriteStoreWithAMissingKeyIsAnInputErrorAndLeavesNoTarget) {
+  const fs::path dir = scratch("missing-key");
+  const fs::path source = dir / "s";
+  openStoreForWriting(source, false)->put("here.glb", "x");
+  const fs::path target = dir / nameFor(GetParam());
+  const std::vector<std::string> keys = {"here.glb", "gone.glb"};
+  const Thrown thrown = thrownBy([&] { writeStore(*openStoreForReading(source), keys, target); });
+  EXPECT_EQ(thrown.kind, ErrorKind::Input) << thrown.message;
+  EXPECT_NE(thrown.message.find("gone.glb"), std::string::npos) << thrown.message;
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"s", "s/here.glb"}));
+
+  const std::vector<std::string> twice = {"here.glb", "here.glb"};
+  EXPECT_EQ(thrownBy([&] { writeStore(*openStoreForReading(source), twice, target); }).kind,
+            ErrorKind::Input);
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"s", "s/here.glb"}));
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinds, TileStoreTest,
+                         ::testing::Values(StoreKind::Archive, StoreKind::Directory),
+                         [](const auto& info) {
+                           return info.param == StoreKind::Archive ? "Archive" : "Directory";
+                         });
+
+TEST(OpenStore, AMissingPathIsAnInputErrorNamingIt) {
+  const fs::path dir = test::scratchDir("store-open-missing");
+  for (const fs::path& path : {dir / "none.3dtiles", dir / "none"}) {
+    const Thrown thrown = thrownBy([&] { (void)openStoreForReading(path); });
+    EXPECT_EQ(thrown.kind, ErrorKind::Input);
+    EXPECT_NE(thrown.message.find(path.string()), std::string::npos) << thrown.message;
+    EXPECT_NE(thrown.message.find("does not exist"), std::string::npos) << thrown.message;
+  }
+  EXPECT_TRUE(treeOf(dir).empty());  // reading creates nothing
+}
+
+TEST(OpenStore, ATextFileNamedLikeAnArchiveIsAnInputError) {
+  const fs::path dir = test::scratchDir("store-open-text");
+  const fs::path path = dir / "x.3dtiles";
+  std::ofstream(path) << "this is a text file, long enough to have a header's worth of bytes in "
+                         "it, and then some more text to be sure.\n";
+  const Thrown thrown = thrownBy([&] { (void)openStoreForReading(path); });
+  EXPECT_EQ(thrown.kind, ErrorKind::Input);
+  EXPECT_NE(thrown.message.find(path.string()), std::string::npos) << thrown.message;
+  EXPECT_NE(thrown.message.find("not a SQLite database"), std::string::npos) << thrown.message;
+  // Resuming onto it is refused too, and the file is untouched.
+  EXPECT_EQ(thrownBy([&] { (void)openStoreForWriting(path, true); }).kind, ErrorKind::Io);
+  EXPECT_EQ(test::readFile(path).substr(0, 9), "this is a");
+}
+
+TEST(OpenStore, ASqliteFileWithoutMediaIsAnInputError) {
+  const fs::path dir = test::scratchDir("store-open-nomedia");
+  const fs::path path = dir / "other.3dtiles";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE tiles (x INTEGER)", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  const Thrown thrown = thrownBy([&] { (void)openStoreForReading(path); });
+  EXPECT_EQ(thrown.kind, ErrorKind::Input);
+  EXPECT_NE(thrown.message.find(path.string()), std::string::npos) << thrown.message;
+  EXPECT_NE(thrown.message.find("no media table"), std::string::npos) << thrown.message;
+  EXPECT_EQ(thrownBy([&] { (void)openStoreForWriting(path, true); }).kind, ErrorKind::Io);
+}
+
+TEST(OpenStore, AFileWhereAFolderStoreIsExpectedIsAnInputError) {
+  const fs::path dir = test::scratchDir("store-open-file");
+  std::ofstream(dir / "tiles.zip") << "zip?";
+  const Thrown thrown = thrownBy([&] { (void)openStoreForReading(dir / "tiles.zip"); });
+  EXPECT_EQ(thrown.kind, ErrorKind::Input);
+  EXPECT_NE(thrown.message.find("tiles.zip"), std::string::npos) << thrown.message;
+}
+
+// The final archive: the schema 3d-tiles-tools reads, rows in the given order,
+// a rollback-journal header (not WAL), and no files beside it.
+TEST(ArchiveStore, WriteStoreMakesAPlainArchive) {
+  const fs::path dir = test::scratchDir("store-archive-plain");
+  const Sample s = sampleTiles();
+  const fs::path staging = dir / "staging.3dtiles";
+  fill(*openStoreForWriting(staging, false), s);
+  const fs::path target = dir / "final.3dtiles";
+  writeStore(*openStoreForReading(staging), s.keys, target);
+
+  const std::string bytes = test::readFile(target);
+  ASSERT_GE(bytes.size(), 100u);
+  EXPECT_EQ(bytes.substr(0, 16), std::string("SQLite format 3\0", 16));
+  EXPECT_EQ(static_cast<unsigned char>(bytes[16]) * 256 + static_cast<unsigned char>(bytes[17]),
+            4096);
+  EXPECT_EQ(bytes[18], 1);  // write version: legacy, not WAL
+  EXPECT_EQ(bytes[19], 1);
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"final.3dtiles", "staging.3dtiles"}));
+
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(target.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* stmt = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT sql FROM sqlite_master WHERE name = 'media'", -1, &stmt,
+                               nullptr),
+            SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(stmt), SQLITE_ROW);
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0)),
+               "CREATE TABLE media (key TEXT PRIMARY KEY, content BLOB)");
+  sqlite3_finalize(stmt);
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT key, typeof(content) FROM media ORDER BY rowid", -1,
+                               &stmt, nullptr),
+            SQLITE_OK);
+  std::vector<std::string> order;
+  while (sqlite3_step(stmt) == SQLITE_ROW) {
+    order.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0)));
+    EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 1)), "blob");
+  }
+  sqlite3_finalize(stmt);
+  sqlite3_close(db);
+  EXPECT_EQ(order, s.keys);
+}
+
+TEST(ArchiveStore, EightThreadsReadOneStoreAtOnce) {
+  const fs::path path = test::scratchDir("store-archive-threads") / "t.3dtiles";
+  const Sample s = sampleTiles();
+  fill(*openStoreForWriting(path, false), s);
+  const auto store = openStoreForReading(path);
+  std::atomic<int> wrong{0};
+  std::atomic<int> reads{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 8; ++t)
+    threads.emplace_back([&, t] {
+      for (int round = 0; round < 200; ++round) {
+        const std::size_t i = static_cast<std::size_t>(t + round) % s.keys.size();
+        const auto bytes = store->get(s.keys[i]);
+        if (!bytes || *bytes != s.bytes[i]) ++wrong;
+        if (store->get("absent/key")) ++wrong;
+        ++reads;
+      }
+    });
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(wrong.load(), 0);
+  EXPECT_EQ(reads.load(), 8 * 200);
+}
+
+TEST(ArchiveStore, AReaderSeesPutsOfAStagingArchiveAsTheyCommit) {
+  const fs::path dir = test::scratchDir("store-archive-staging");
+  const fs::path path = dir / "t.3dtiles";
+  {
+    auto writer = openStoreForWriting(path, false);
+    writer->put("a", "1");
+    auto reader = openStoreForReading(path);
+    EXPECT_EQ(reader->get("a"), "1");
+    writer->put("b", std::string(100000, 'b'));
+    EXPECT_EQ(reader->get("b"), std::string(100000, 'b'));
+    writer->put("a", "2");
+    EXPECT_EQ(reader->get("a"), "2");
+  }
+  // Closed cleanly: no -wal or -shm left, and it still opens read-only.
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"t.3dtiles"}));
+  EXPECT_EQ(openStoreForReading(path)->keys(), (std::vector<std::string>{"a", "b"}));
+}
+
+TEST(DirectoryStore, KeysSkipTemporaryFiles) {
+  const fs::path root = test::scratchDir("store-directory-temp") / "t";
+  auto store = openStoreForWriting(root, false);
+  store->put("tiles/a.glb", "a");
+  std::ofstream(root / "tiles" / "b.glb.tmp-123-4") << "half";
+  fs::create_directories(root / "t.tmp-9-9" / "x");
+  std::ofstream(root / "t.tmp-9-9" / "x" / "c.glb") << "staged";
+  EXPECT_EQ(store->keys(), (std::vector<std::string>{"tiles/a.glb"}));
+  EXPECT_EQ(thrownBy([&] { store->put("z.glb.tmp-1-2", "x"); }).kind, ErrorKind::Input);
+  // A put leaves only its file.
+  store->put("tiles/b.glb", "b");
+  EXPECT_EQ(treeOf(root / "tiles"),
+            (std::vector<std::string>{"a.glb", "b.glb", "b.glb.tmp-123-4"}));
+}
+
+}  // namespace
+}  // namespace tinsmith::store
