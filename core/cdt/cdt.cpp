@@ -9,12 +9,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdio>
 #include <deque>
 #include <exception>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -323,7 +325,11 @@ struct Cdt::Impl {
   bool finalized = false;
   // Input (points, constraints, domain rings) came since the last finalize().
   bool changed = false;
-  bool meshBuilt = false;
+  // The const readers (mesh(), report(), meshVertex()) build the mesh on first
+  // use, possibly on several threads at once: one builds it under the lock,
+  // the others wait for it (buildMesh).
+  std::atomic<bool> meshBuilt = false;
+  std::mutex meshMutex;
 
   // After buildMesh() the working triangle arrays live in `mesh` (compacted);
   // the triangles left out (ghosts, outside the domain) are kept here with
@@ -2216,7 +2222,9 @@ void Cdt::finalize() {
 
 void Cdt::buildMesh() const {
   Impl& m = *impl_;
-  if (m.meshBuilt) return;
+  if (m.meshBuilt.load(std::memory_order_acquire)) return;
+  const std::lock_guard lock(m.meshMutex);
+  if (m.meshBuilt.load(std::memory_order_relaxed)) return;
   // The output mesh takes over the working arrays: triangles inside the domain
   // are compacted in place (their order kept) and moved into the Mesh; ghosts
   // and triangles outside the domain are set aside so that unpack() can restore
@@ -2337,7 +2345,7 @@ void Cdt::buildMesh() const {
     }
   }
   m.meshOf = std::move(used);
-  m.meshBuilt = true;
+  m.meshBuilt.store(true, std::memory_order_release);
 }
 
 const Mesh& Cdt::mesh() const {

@@ -175,7 +175,9 @@ class Cdt {
   /// throws usageError): only triangles inside the domain;
   /// vertex ids are compacted (see meshVertex()). Built on the first call after
   /// each finalize() (domain classification + compaction, about a fifth of the
-  /// triangulation time); not thread-safe on that first call.
+  /// triangulation time) of mesh(), toTinData(), meshVertex(), report() or
+  /// validate(); these may be called from several threads at once (the first
+  /// builds, the others wait), not while input is added or finalize() runs.
   [[nodiscard]] const Mesh& mesh() const;
   /// mesh() as TinData (vertices, CCW triangles, constrained edges per feature,
   /// features, crs).

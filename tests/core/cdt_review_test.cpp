@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <latch>
+#include <thread>
 #include <vector>
 
 #include "core/base/error.hpp"
@@ -194,6 +196,64 @@ TEST(CdtReview, LoadedConvexTinKeepsItsEdgeAsTheDomain) {
   EXPECT_NEAR(area(again.mesh()), 10000, 1e-9);
   EXPECT_EQ(again.mesh().vertexCount(), 5u);
   EXPECT_FALSE(again.meshVertex(VertexId(5)).valid());
+}
+
+// mesh(), report() and meshVertex() are const but built the mesh on first
+// use: two first readers built it at once.
+TEST(CdtReview, ConcurrentFirstReadersSeeOneMesh) {
+  const std::size_t n = testing::kSanitized ? 20000 : 100000;
+  constexpr int kReaders = 4;
+  for (int round = 0; round < 3; ++round) {
+    Cdt cdt;
+    const FeatureId edge = cdt.addFeature(FeatureKind::Boundary, "edge");
+    const FeatureId lake = cdt.addFeature(FeatureKind::Hole, "lake");
+    const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+    cdt.insertPoints(randomPoints(n, 19 + round));
+    cdt.insertPoints(randomPoints(n / 10, 19 + round));  // duplicates: merges
+    cdt.addBoundary(std::vector<Point3>{{5, 5, 0}, {995, 20, 0}, {980, 990, 0}, {10, 970, 0}},
+                    edge);
+    cdt.addHole(square(300, 600), lake);
+    cdt.insertConstraint(std::vector<Point3>{{-50, 500, 0}, {1050, 510, 0}}, road);
+    cdt.finalize();
+
+    std::latch start(kReaders);
+    std::vector<TinData> tins(kReaders);
+    std::vector<std::size_t> merges(kReaders), dropped(kReaders);
+    std::vector<std::uint32_t> vertexOf(kReaders);
+    std::vector<std::thread> readers;
+    for (int k = 0; k < kReaders; ++k) {
+      readers.emplace_back([&, k] {
+        start.arrive_and_wait();
+        switch (k % 3) {
+          case 0:
+            tins[k] = cdt.mesh().toTinData();
+            break;
+          case 1:
+            dropped[k] = cdt.report().dropped.size();
+            break;
+          default:
+            vertexOf[k] = cdt.meshVertex(VertexId(7)).value;
+            break;
+        }
+        tins[k] = cdt.toTinData();
+        merges[k] = cdt.report().merges.size();
+        dropped[k] = cdt.report().dropped.size();
+        vertexOf[k] = cdt.meshVertex(VertexId(7)).value;
+      });
+    }
+    for (auto& t : readers) t.join();
+    ASSERT_TRUE(isValid(cdt));
+    const TinData expected = cdt.toTinData();
+    EXPECT_GT(expected.triangles.size(), n / 2);
+    for (int k = 0; k < kReaders; ++k) {
+      EXPECT_EQ(tins[k].vertices, expected.vertices) << "reader " << k;
+      EXPECT_EQ(tins[k].triangles, expected.triangles) << "reader " << k;
+      EXPECT_EQ(tins[k].constrainedEdges, expected.constrainedEdges) << "reader " << k;
+      EXPECT_EQ(merges[k], cdt.report().merges.size());
+      EXPECT_EQ(dropped[k], cdt.report().dropped.size());
+      EXPECT_EQ(vertexOf[k], cdt.meshVertex(VertexId(7)).value);
+    }
+  }
 }
 
 }  // namespace
