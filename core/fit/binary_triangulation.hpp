@@ -28,7 +28,8 @@
 namespace tinsmith::fit {
 
 /// A map from 64-bit keys to dense 32-bit ids with linear probing; the key
-/// ~0 is reserved. Deterministic (no hashing randomness).
+/// ~0 (kEmpty) is reserved: it is never found, and inserting it stores
+/// nothing. Deterministic (no hashing randomness).
 class KeyIndexMap {
  public:
   static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
@@ -37,7 +38,7 @@ class KeyIndexMap {
   void reserve(std::size_t count);
   /// The id of `key`, or kNone.
   [[nodiscard]] std::uint32_t find(std::uint64_t key) const {
-    if (slots_.empty()) return kNone;
+    if (slots_.empty() || key == kEmpty) return kNone;  // kEmpty would match an empty slot
     std::size_t h = hash(key) & mask_;
     while (true) {
       const Slot& s = slots_[h];
@@ -46,7 +47,7 @@ class KeyIndexMap {
       h = (h + 1) & mask_;
     }
   }
-  /// Inserts key → id unless present; returns true when inserted.
+  /// Inserts key → id unless present or kEmpty; returns true when inserted.
   bool insert(std::uint64_t key, std::uint32_t id);
   [[nodiscard]] std::size_t size() const { return size_; }
   void clear();

@@ -209,6 +209,22 @@ TEST(FitBinaryTriangulation, TriangleStripCoversEveryTriangleOnce) {
   }
 }
 
+TEST(FitBinaryTriangulation, KeyIndexMapDoesNotFindTheReservedEmptyKey) {
+  // Regression: find(kEmpty) met an empty slot, took it for a match and
+  // returned that slot's id (0) instead of kNone.
+  KeyIndexMap map;
+  EXPECT_EQ(map.find(KeyIndexMap::kEmpty), KeyIndexMap::kNone);
+  for (std::uint32_t id = 0; id < 100; ++id) EXPECT_TRUE(map.insert(3 * std::uint64_t{id} + 1, id));
+  EXPECT_EQ(map.find(KeyIndexMap::kEmpty), KeyIndexMap::kNone);
+  EXPECT_EQ(map.find(1), 0u);
+  EXPECT_EQ(map.find(298), 99u);
+  EXPECT_EQ(map.find(2), KeyIndexMap::kNone);
+  // The reserved key is never stored.
+  EXPECT_FALSE(map.insert(KeyIndexMap::kEmpty, 7));
+  EXPECT_EQ(map.size(), 100u);
+  EXPECT_EQ(map.find(KeyIndexMap::kEmpty), KeyIndexMap::kNone);
+}
+
 TEST(FitBinaryTriangulation, MemoryFollowsTheActiveVertices) {
   // The finest grid of level 30 has 2^60 vertices; one deep vertex (depth 59)
   // needs only its ancestors, a number linear in the depth.
