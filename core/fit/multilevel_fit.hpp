@@ -85,8 +85,11 @@ class MultilevelFit {
   [[nodiscard]] std::span<const double> vertexZ() const { return z_; }
   [[nodiscard]] std::span<const LevelStats> levels() const { return levels_; }
   /// Whether the fit stopped at MultilevelOptions::maxLevel with cells that
-  /// still fail the criterion (otherwise it stopped because none did).
-  [[nodiscard]] bool stoppedAtMaxLevel() const { return levels_.back().cellsFailing > 0; }
+  /// still fail the criterion (otherwise it stopped because none did). False
+  /// for a fit without levels (made from its parts): it stopped nowhere.
+  [[nodiscard]] bool stoppedAtMaxLevel() const {
+    return !levels_.empty() && levels_.back().cellsFailing > 0;
+  }
 
   /// f(p); throws inputError when p is outside the domain.
   [[nodiscard]] double evaluate(Point2 p) const;

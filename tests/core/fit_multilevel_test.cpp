@@ -3,8 +3,11 @@
 // in fit_book_table.txt (the test's working directory) and printed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/base/error.hpp"
@@ -77,38 +80,86 @@ TEST(FitMultilevel, FrankeBookExample) {
   exact.directLevels = 100;
   const MultilevelFit direct = fitMultilevel(pts, exact);
   std::ostringstream out;
-  out << "Franke, 3000 points (seed 2006), error 0.25 % of z range and count > 2, lambda = lambda_d, thin-plate\n"
-      << levelTable(fit) << "  book: stops after subdividing Psi7 (Delta8): 1476 vertices, 2866 triangles, 9-12 GS iterations a level\n"
-      << "  ours: stops at Delta" << last.level << ": " << last.vertices << " vertices, " << last.triangles
-      << " triangles; direct solves at every level: Delta" << direct.levels().back().level << ", "
-      << direct.levels().back().vertices << " vertices\n\n";
+  out << "Franke, 3000 points (seed 2006), error 0.25 % of z range and count > 2, lambda = "
+         "lambda_d, thin-plate\n"
+      << levelTable(fit)
+      << "  book: stops after subdividing Psi7 (Delta8): 1476 vertices, 2866 triangles, 9-12 GS "
+         "iterations a level\n"
+      << "  ours: stops at Delta" << last.level << ": " << last.vertices << " vertices ("
+      << std::lround(100.0 * static_cast<double>(last.vertices) / 1476.0) << " % of the book's), "
+      << last.triangles << " triangles; direct solves at every level: Delta"
+      << direct.levels().back().level << ", " << direct.levels().back().vertices << " vertices\n";
   appendToBookTable(out.str());
   EXPECT_EQ(direct.levels().back().level, last.level);
   EXPECT_NEAR(static_cast<double>(direct.levels().back().vertices), static_cast<double>(last.vertices),
               0.05 * static_cast<double>(last.vertices));
 
   EXPECT_EQ(meshProblem(fit), "");
-  EXPECT_GE(last.level, 7);  // within a level of Δ8
-  EXPECT_LE(last.level, 9);
-  // The issue asks for 1476 ± 30 %. With λ = λ_d recomputed from (8.19) for
-  // the system of every level (8.18) we reach the tolerance one level early
-  // with about half the book's vertices: ≈ 750–800 for seeds 2006, 7 and 11,
-  // for point densities following the gradient, the curvature or both, and
-  // with exact solves at every level or Gauss–Seidel stopped after 1–4 sweeps.
-  // Only more smoothing at the fine levels raises the count (30 λ_d: ≈ 1340 at
-  // Δ8), but then Gauss–Seidel needs 12–73 sweeps a level where the book
-  // reports 9–12 at λ_d. Asserted here: 45 % to 130 % of the book's count.
-  EXPECT_GE(last.vertices, static_cast<std::size_t>(1476 * 0.45));
-  EXPECT_LE(last.vertices, static_cast<std::size_t>(1476 * 1.3));
+  // What the book specifies, not what we get today. The vertex count is
+  // reported above (and in the README), not asserted: the book's 1476 comes
+  // from its own point set, which is not published, and on ours the same
+  // criteria keep about half as many (README, "Multilevel fitting: the book's
+  // Franke example").
+  // The last triangulation within one level of the book's Δ8, reached because
+  // no cell fails any more, not because of the maximum level.
+  constexpr int kBookLastLevel = 8;
+  EXPECT_GE(last.level, kBookLastLevel - 1);
+  EXPECT_LE(last.level, kBookLastLevel + 1);
+  EXPECT_FALSE(fit.stoppedAtMaxLevel());
+  EXPECT_EQ(last.cellsFailing, 0u);
+  // Gauss–Seidel sweeps a level: the book reports 9–12 but not its stopping
+  // thresholds (relative improvement, residual), so half its least to twice
+  // its most.
+  constexpr int kBookFewestSweeps = 9, kBookMostSweeps = 12;
+  int gaussSeidelLevels = 0;
   for (const auto& s : fit.levels()) {
     if (s.solver != SolverKind::GaussSeidel) continue;
-    EXPECT_GE(s.iterations, 5) << "level " << s.level;
-    EXPECT_LE(s.iterations, 25) << "level " << s.level;
+    ++gaussSeidelLevels;
+    EXPECT_GE(s.iterations, kBookFewestSweeps / 2) << "level " << s.level;
+    EXPECT_LE(s.iterations, 2 * kBookMostSweeps) << "level " << s.level;
   }
-  // The criterion holds where it can: every cell of the last level with more
-  // than two points has all its errors within the tolerance, so the max error
-  // is small compared with the z range.
-  EXPECT_LT(last.maxError, 0.05 * 1.22);
+  EXPECT_GT(gaussSeidelLevels, 0);
+  // Stopping by the criterion means every cell of the last Ψ_k that holds
+  // more than two points has the error within ε at each of them (cells with
+  // two or fewer fail the count part and may keep larger errors). Checked
+  // with the fit's own evaluation, to rounding.
+  double zmin = pts.front().z, zmax = zmin;
+  for (const auto& p : pts) zmin = std::min(zmin, p.z), zmax = std::max(zmax, p.z);
+  const double epsilon = 0.25 / 100.0 * (zmax - zmin);
+  const auto cellsASide = std::size_t{1} << last.level;
+  auto cellIndex = [&](double t) {
+    return std::min(static_cast<std::size_t>(std::floor(t * static_cast<double>(cellsASide))),
+                    cellsASide - 1);
+  };
+  std::map<std::size_t, std::vector<double>> errorsByCell;
+  for (const auto& p : pts) {
+    errorsByCell[cellIndex(p.y) * cellsASide + cellIndex(p.x)].push_back(
+        std::abs(fit.evaluate(p.xy()) - p.z));
+  }
+  std::size_t checkedPoints = 0;
+  for (const auto& [cell, errors] : errorsByCell) {
+    if (errors.size() <= 2) continue;
+    for (double e : errors) EXPECT_LE(e, epsilon + 1e-12) << "cell " << cell;
+    checkedPoints += errors.size();
+  }
+  EXPECT_GT(checkedPoints, 0u);
+  // The error criterion alone (Algorithm 8.1 as written) stops only when
+  // |f(p_i) − z_i| ≤ ε at every data point.
+  MultilevelOptions errorOnly = opt;
+  errorOnly.criteria.countAbove.reset();
+  const MultilevelFit exactAtData = fitMultilevel(pts, errorOnly);
+  EXPECT_FALSE(exactAtData.stoppedAtMaxLevel());
+  EXPECT_LE(exactAtData.levels().back().maxError, epsilon);
+  double worst = 0.0;
+  for (const auto& p : pts) worst = std::max(worst, std::abs(exactAtData.evaluate(p.xy()) - p.z));
+  EXPECT_LE(worst, epsilon + 1e-12);
+  std::ostringstream more;
+  more << "  " << checkedPoints << " points lie in cells of Psi" << last.level
+       << " with more than two points; all within the tolerance " << epsilon << "\n"
+       << "  error criterion alone: stops at Delta" << exactAtData.levels().back().level << ": "
+       << exactAtData.levels().back().vertices << " vertices, max error at the data " << worst
+       << "\n\n";
+  appendToBookTable(more.str());
 }
 
 TEST(FitMultilevel, FrankeNoisyExample) {
@@ -337,6 +388,21 @@ TEST(FitMultilevel, EvaluationAndExport) {
   EXPECT_NEAR(grid[1 * 6 + 2], fit.evaluate({0.5, 0.25}), 1e-15);
   EXPECT_TRUE(std::isnan(grid[5]));  // x = 1.25 is outside the domain
   EXPECT_THROW((void)fit.evaluate({2.0, 0.5}), Error);
+}
+
+TEST(FitMultilevel, StoppedAtMaxLevelOfAFitWithoutLevelsIsFalse) {
+  // Regression: stoppedAtMaxLevel() read levels().back() of an empty vector.
+  // A fit made from its parts with no levels did not stop anywhere.
+  const MultilevelFit empty(BinaryTriangulation({0.0, 0.0}, 1.0, 1), std::vector<double>(5, 0.0),
+                            {});
+  EXPECT_TRUE(empty.levels().empty());
+  EXPECT_FALSE(empty.stoppedAtMaxLevel());
+  LevelStats failing;
+  failing.level = 1;
+  failing.cellsFailing = 3;
+  EXPECT_TRUE(
+      MultilevelFit(BinaryTriangulation({0.0, 0.0}, 1.0, 1), std::vector<double>(5, 0.0), {failing})
+          .stoppedAtMaxLevel());
 }
 
 TEST(FitMultilevel, BadInputIsReported) {
