@@ -164,6 +164,34 @@ TEST(FitCli, WeightsColumnAndFixedPoints) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.tin"));
 }
 
+TEST(FitCli, OverlongWholeNumbersAreUsageErrorsNamingTheOption) {
+  // Regression: --weights-column with a column index beyond int (std::stoi
+  // threw std::out_of_range) came out as an internal error (exit 70), and a
+  // count too large for its type was cast regardless.
+  if (!std::filesystem::exists(binary())) GTEST_SKIP() << "tinsmith binary not built";
+  const auto dir = test::scratchDir("fit_cli_overlong");
+  {
+    std::ofstream out(dir / "points.xyz");
+    for (int i = 0; i < 20; ++i)
+      out << (i % 5) * 0.25 << " " << (i / 5) * 0.3 << " " << i * 0.1 << " 1\n";
+  }
+  const std::string fit = binary() + " fit " + (dir / "points.xyz").string() +
+                          " --tolerance 1 -o " + (dir / "x.tin").string();
+  const std::string column = "99999999999999999999";
+  auto r = test::runCommand(fit + " --weights-column " + column);
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("--weights-column"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(column), std::string::npos) << r.err;
+  r = test::runCommand(fit + " --criterion error,count:1e30");
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("--criterion count"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1e30"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.tin"));
+  // In range they still work.
+  r = test::runCommand(fit + " --weights-column 3 --criterion error,count:2 -q");
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+}
+
 TEST(FitCli, FitsTheValidCellsOfARasterAndKeepsItsCrs) {
   if (!std::filesystem::exists(binary())) GTEST_SKIP() << "tinsmith binary not built";
   const auto dir = test::scratchDir("fit_cli_raster");

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -78,6 +79,20 @@ double parseNumber(const std::string& text, const std::string& option) {
   return v;
 }
 
+/// A whole number from 0 to `max` (a column index, a count) as the value of
+/// `option`, or a usage error naming both. (Digits beyond int made std::stoi
+/// throw std::out_of_range, reported as an internal error.)
+std::uint64_t parseWholeNumber(const std::string& text, const std::string& option,
+                               std::uint64_t max, const std::string& example) {
+  const double v = parseNumber(text, option);
+  if (!(v >= 0.0) || v != std::floor(v) || v > static_cast<double>(max)) {
+    throw usageError(
+        option + ": '" + text + "' is not a whole number from 0 to " + std::to_string(max),
+        "e.g. " + example);
+  }
+  return static_cast<std::uint64_t>(v);
+}
+
 fit::Smoothing parseSmoothing(const std::string& s) {
   if (s == "thin-plate") return fit::Smoothing::ThinPlate;
   if (s == "membrane") return fit::Smoothing::Membrane;
@@ -110,9 +125,11 @@ fit::RefinementCriteria parseCriteria(const FitCliOptions& o) {
       if (name == "error") {
         wantError = true;
       } else if (name == "count") {
-        const double n = value.empty() ? -1 : parseNumber(value, "--criterion count");
-        if (n < 0 || n != std::floor(n)) throw usageError("--criterion count:N needs a whole number N >= 0", "e.g. count:2");
-        c.countAbove = static_cast<std::size_t>(n);
+        if (value.empty())
+          throw usageError("--criterion count:N needs a whole number N >= 0", "e.g. count:2");
+        constexpr std::uint64_t kLargestExactCount =
+            std::uint64_t{1} << 53;  // every whole number to here is a double
+        c.countAbove = parseWholeNumber(value, "--criterion count", kLargestExactCount, "count:2");
       } else if (name == "curvature") {
         if (value.empty()) throw usageError("--criterion curvature:T needs a threshold T", "e.g. curvature:0.05");
         c.curvatureAbove = parseNumber(value, "--criterion curvature");
@@ -208,7 +225,8 @@ std::vector<double> readWeights(const std::string& path, const std::string& colu
   wopt.yIndex = points.yIndex;
   const bool isIndex = !column.empty() && column.find_first_not_of("0123456789") == std::string::npos;
   if (isIndex) {
-    wopt.zIndex = std::stoi(column);
+    wopt.zIndex = static_cast<int>(parseWholeNumber(
+        column, "--weights-column", std::numeric_limits<int>::max(), "--weights-column 3"));
   } else {
     if (!points.hasHeader) {
       throw usageError("--weights-column '" + column + "' names a column but " + path + " has no header",
