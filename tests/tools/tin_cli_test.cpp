@@ -174,13 +174,41 @@ TEST(TinCli, InfoAndQueryDescribeTheTin) {
   EXPECT_TRUE(many[1]["z"].is_null());
   EXPECT_NEAR(many[2]["z"].get<double>(), plane(100, 300), 1e-6);
 
-  // A single point outside is a clear input error.
+  // A single point outside is a clear input error (QueryOfOnePointOutsideExitsThreeAlsoWithJson).
   r = runTinsmith("query " + tin.string() + " 0 0");
   EXPECT_EQ(r.exitCode, 3);
   EXPECT_NE(r.err.find("outside the TIN"), std::string::npos) << r.err;
+}
+
+TEST(TinCli, QueryOfOnePointOutsideExitsThreeAlsoWithJson) {
+  // Regression: with --json a single point outside the TIN exited 0 (z null)
+  // where the text mode exits 3. Now both exit 3; the JSON record is still
+  // printed, and a --points run with outside points still exits 0.
+  const auto in = makePlainInputs("cli-query-outside");
+  const fs::path tin = in.dir / "out.tin";
+  ASSERT_EQ(runTinsmith("tin -q --points " + in.points.string() + " -o " + tin.string()).exitCode,
+            0);
+  auto r = runTinsmith("query " + tin.string() + " 0 0");
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("outside the TIN"), std::string::npos) << r.err;
   r = runTinsmith("query " + tin.string() + " 0 0 --json");
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("outside the TIN"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out,
+            "{\"x\": 0, \"y\": 0, \"z\": null, \"normal\": null, \"slope\": null, "
+            "\"slope_degrees\": null}\n");
+  const fs::path qp = in.dir / "q.txt";
+  writeText(qp, "0 0\n");
+  r = runTinsmith("query " + tin.string() + " --points " + qp.string() + " --json");
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)[0]["z"].is_null());
+  r = runTinsmith("query " + tin.string() + " --points " + qp.string());
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.out, "0 0 outside\n");
+  r = runTinsmith("query --help");
   EXPECT_EQ(r.exitCode, 0);
-  EXPECT_TRUE(nlohmann::json::parse(r.out)["z"].is_null());
+  EXPECT_NE(r.out.find("exit 3), also with --json"), std::string::npos) << r.out;
 }
 
 TEST(TinCli, ExportFormats) {

@@ -1,8 +1,9 @@
 // `tinsmith query`: elevation, normal and slope of a TIN at points.
 //   tinsmith query X.tin X Y [--json]
 //   tinsmith query X.tin --points FILE [--json]   (x y per line; more columns ignored)
-// A single point outside the TIN is an input error (exit 3); with --points,
-// outside points print "outside" (JSON: null) and the run goes on.
+// A single point outside the TIN is an input error (exit 3) with or without
+// --json; with --points, outside points print "outside" (JSON: null) and the
+// run goes on (exit 0).
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -93,6 +94,11 @@ void addQueryCommand(CLI::App& app) {
   cmd->add_option("y", opt->y, "Northing in the TIN's CRS");
   cmd->add_option("--points", opt->points, "A file of query points, x y per line");
   cmd->add_flag("--json", opt->json, "Print JSON");
+  cmd->footer(
+      "A single point outside the TIN is an input error (exit 3), also with --json, which\n"
+      "still prints its record (z, normal and slope null) to stdout. With --points, points\n"
+      "outside print \"outside\" (JSON: null) and the run goes on (exit 0).\n\n" +
+      cmd->get_footer());  // the exit codes, from tinsmith's own footer
   cmd->callback([opt] {
     const bool single = opt->x.has_value() || opt->y.has_value();
     if (single && !opt->points.empty()) throw usageError("give X Y or --points FILE, not both");
@@ -105,10 +111,17 @@ void addQueryCommand(CLI::App& app) {
     if (single) {
       const Point2 p{*opt->x, *opt->y};
       const auto s = surface.sample(p);
-      if (!s && !opt->json)
+      // One rule for both modes: the one point asked for has no elevation, so
+      // the query failed (exit 3) and a script testing only the exit status
+      // cannot take it for an answer. The JSON record (z null) still goes to
+      // stdout for a reader that parses it. A --points run is different: a
+      // batch crossing the TIN's edge is ordinary use, so its outside points
+      // are data.
+      if (opt->json) std::cout << jsonSample(p, s) << "\n";
+      if (!s)
         throw inputError("the point " + num(p.x) + ", " + num(p.y) + " is outside the TIN",
                          {opt->tin, {}, {}, {}}, "query inside its extent (see `tinsmith info`)");
-      std::cout << (opt->json ? jsonSample(p, s) : textSample(p, s)) << "\n";
+      if (!opt->json) std::cout << textSample(p, s) << "\n";
       return;
     }
     const auto pts = readQueryPoints(opt->points);
