@@ -24,6 +24,7 @@
 #include <utility>
 
 #include "core/base/error.hpp"
+#include "core/cdt/cdt_test_access.hpp"
 #include "core/geometry/hilbert.hpp"
 #include "core/geometry/predicates.hpp"
 
@@ -2383,6 +2384,18 @@ std::string formatCoord(double v) {
 }  // namespace
 
 ValidationReport Cdt::validate(const ValidationOptions& options) const {
+  std::size_t chainSteps = 0;
+  return validateCounting(options, chainSteps);
+}
+
+ValidationReport CdtTestAccess::validate(const Cdt& cdt, std::size_t& chainSteps,
+                                         const ValidationOptions& options) {
+  chainSteps = 0;
+  return cdt.validateCounting(options, chainSteps);
+}
+
+ValidationReport Cdt::validateCounting(const ValidationOptions& options,
+                                       std::size_t& chainSteps) const {
   ValidationReport r = tinsmith::validate(mesh(), options);
   const Impl& m = *impl_;
   if (m.meshOf.size() != m.xy.size()) throw internalError("the input vertex map is out of date");
@@ -2438,6 +2451,8 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       }
     }
     for (std::size_t g = 0; g < m.bend.size() && g < moved.size(); ++g) moved[g] += m.bend[g];
+    std::vector<std::uint8_t> visited(me.vertexCount(), 0);  // by the chain search, per segment
+    std::vector<std::uint32_t> queue;
     for (const Segment& s : m.segments) {
       const std::uint32_t a = m.meshOf[s.a], b = m.meshOf[s.b];
       if (a == b || s.feature >= m.features.size()) continue;
@@ -2461,23 +2476,27 @@ ValidationReport Cdt::validate(const ValidationOptions& options) const {
       };
       // Breadth-first over the feature's edges between vertices near the
       // segment (crossings of nearly parallel lines may come out of order
-      // along it, so the chain need not be monotone).
-      std::vector<std::uint32_t> todo{a}, seen{a};
+      // along it, so the chain need not be monotone). `visited` is cleared
+      // again for the vertices this search queued only: linear in what it
+      // reached.
+      queue.assign(1, a);
+      visited[a] = 1;
       bool reached = false;
-      while (!todo.empty() && !reached) {
-        const std::uint32_t v = todo.back();
-        todo.pop_back();
+      for (std::size_t head = 0; head < queue.size() && !reached; ++head) {
+        const std::uint32_t v = queue[head];
         for (const auto& [w, f] : adj[v]) {
-          if (f != s.feature || std::find(seen.begin(), seen.end(), w) != seen.end()) continue;
+          ++chainSteps;
+          if (f != s.feature || visited[w]) continue;
           if (w == b) {
             reached = true;
             break;
           }
           if (!bent[s.feature] && !near(w)) continue;
-          seen.push_back(w);
-          todo.push_back(w);
+          visited[w] = 1;
+          queue.push_back(w);
         }
       }
+      for (const std::uint32_t v : queue) visited[v] = 0;
       if (!reached) {
         add(name + " is not a chain of mesh edges carrying its feature within " + formatCoord(tol) +
             " m of it");

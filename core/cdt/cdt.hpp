@@ -124,6 +124,8 @@ struct CdtReport {
   std::vector<Dropped> dropped;
 };
 
+struct CdtTestAccess;
+
 class Cdt {
  public:
   explicit Cdt(CdtOptions options = {});
@@ -203,7 +205,10 @@ class Cdt {
   static Cdt fromTinData(const TinData& tin, CdtOptions options = {});
 
  private:
+  friend struct CdtTestAccess;  // core/cdt/cdt_test_access.hpp
   void buildMesh() const;
+  [[nodiscard]] ValidationReport validateCounting(const ValidationOptions& options,
+                                                  std::size_t& chainSteps) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -12,6 +12,7 @@
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
+#include "core/cdt/cdt_test_access.hpp"
 #include "tests/core/cdt_test_util.hpp"
 
 namespace tinsmith {
@@ -254,6 +255,37 @@ TEST(CdtReview, ConcurrentFirstReadersSeeOneMesh) {
       EXPECT_EQ(vertexOf[k], cdt.meshVertex(VertexId(7)).value);
     }
   }
+}
+
+// The validator's chain search looked each vertex up in a list of those seen:
+// a constraint running through n vertices took O(n^2) steps (and a feature
+// bent by a forced crossing, searched without the distance bound, up to
+// O(n^3) over its segments). Counted in steps, not timed.
+TEST(CdtReview, ChainSearchOfALongConstraintIsLinear) {
+  constexpr int n = 20000;
+  Cdt cdt;
+  const FeatureId contour = cdt.addFeature(FeatureKind::Contour, "contour");
+  const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+  std::vector<Point3> line;  // a contour of n vertices on y = 0
+  for (int i = 0; i < n; ++i) line.push_back({static_cast<double>(i), 0, 100});
+  std::vector<Point3> beside;  // points off the line, so the triangles are many
+  for (int i = 0; i < n; i += 97) {
+    beside.push_back({i + 0.5, 3, 90});
+    beside.push_back({i + 0.25, -2, 110});
+  }
+  cdt.insertPoints(beside);
+  cdt.insertConstraint(line, contour);
+  // One road segment along the whole contour: a chain of n edges.
+  cdt.insertConstraint(std::vector<Point3>{{-1, 0, 100}, {n, 0, 100}}, road);
+  cdt.finalize();
+  std::size_t steps = 0;
+  const ValidationReport r = CdtTestAccess::validate(cdt, steps);
+  EXPECT_TRUE(r.ok) << r.summary();
+  EXPECT_EQ(cdt.mesh().vertexCount(), n + 2 + beside.size());
+  // Each vertex of a chain is reached once and its 8 adjacency entries (2
+  // edges, 2 half-edges, 2 features) are looked at: at most 16 n in all.
+  EXPECT_GT(steps, 8u * n);
+  EXPECT_LT(steps, 64u * n);
 }
 
 }  // namespace

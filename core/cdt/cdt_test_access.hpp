@@ -1,0 +1,21 @@
+// Test-only access to the CDT's internals: the counters and limits that let a
+// test check how much work the CDT did, or reach a bound that natural input
+// does not. Production code has no use for it.
+#pragma once
+
+#include <cstddef>
+
+#include "core/cdt/cdt.hpp"
+#include "core/mesh/validate.hpp"
+
+namespace tinsmith {
+
+struct CdtTestAccess {
+  /// cdt.validate(options), also giving the steps its constraint-chain
+  /// searches took: the adjacency entries they examined (each with an O(1)
+  /// look-up of whether its vertex was reached already).
+  static ValidationReport validate(const Cdt& cdt, std::size_t& chainSteps,
+                                   const ValidationOptions& options = {});
+};
+
+}  // namespace tinsmith
