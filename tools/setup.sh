@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything tinsmith needs to build, test and run, from Debian
-# bookworm packages only. Idempotent: installs only what is missing. Needs root
-# (or sudo) when something is missing.
+# bookworm packages, plus the pinned npm packages of the JavaScript tile
+# checkers (tests/js/package-lock.json). Idempotent: installs only what is
+# missing. Needs root (or sudo) when a Debian package is missing.
 #
 #   bash tools/setup.sh           # build, test and run
 #   bash tools/setup.sh --bench   # also the tools the benchmarks compare against
@@ -25,7 +26,11 @@ packages=(
   libcpp-httplib-dev nlohmann-json3-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev
+  chromium                           # tests/js/cesium_smoke.mjs renders in it
 )
+# tests/js runs on node; Debian's only when the machine has none (an image's
+# own, newer node is kept).
+command -v node >/dev/null 2>&1 || packages+=(nodejs npm)
 if [ "$bench" -eq 1 ]; then
   packages+=(
     # benchmark-only references (tests/bench/): GRASS GIS v.surf.rst, and
@@ -39,15 +44,28 @@ for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "setup: all ${#packages[@]} Debian packages already installed"
-  exit 0
+did=()
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  did+=("installed ${#missing[@]} Debian packages (${missing[*]})")
 fi
 
-echo "setup: installing ${#missing[@]} Debian packages: ${missing[*]}"
-sudo=""
-[ "$(id -u)" -eq 0 ] || sudo="sudo"
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
-echo "setup: done"
+# The tile checkers' npm packages, exactly as locked; again only when
+# node_modules is missing or older than the lock.
+js="$(cd "$(dirname "$0")/.." && pwd)/tests/js"
+if [ ! -d "$js/node_modules" ] || [ "$js/node_modules/.package-lock.json" -ot "$js/package-lock.json" ]; then
+  npm ci --prefix "$js" --no-audit --no-fund --loglevel=error >/dev/null
+  did+=("ran npm ci in tests/js")
+fi
+
+if [ ${#did[@]} -eq 0 ]; then
+  echo "setup: nothing to do (all ${#packages[@]} Debian packages installed, tests/js/node_modules up to date)"
+else
+  line=""
+  for d in "${did[@]}"; do line+="${line:+; }$d"; done
+  echo "setup: $line"
+fi
