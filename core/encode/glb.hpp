@@ -1,0 +1,73 @@
+// glTF 2.0 binary (.glb) tile content: one mesh, one primitive of triangles
+// with POSITION and NORMAL, written with nlohmann::json (glb.cpp says why not
+// tinygltf); compressed with Draco (KHR_draco_mesh_compression, a required
+// extension) or left plain. The encoder knows nothing of tiles or frames: the
+// caller hands positions already in the content frame and the root node's
+// matrix (core/encode/frames.hpp).
+//
+// Draco: positions are quantized on the bounding cube of the positions with
+// the fewest bits (≤ 30) whose rounding error is at most maxPositionError per
+// coordinate (the bound is reported); normals with normalBits (octahedral).
+// Draco keeps the triangle set but may reorder vertices and triangles, and
+// drops positions no triangle uses (the accessor counts say what it kept).
+// Output is deterministic: the same mesh and options give the same bytes.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/encode/frames.hpp"
+
+namespace tinsmith::encode {
+
+enum class Compression { None, Draco };
+
+/// A triangle mesh in the content frame (metres, relative to the root node's
+/// origin). Triangles are counter-clockwise seen from outside (from above the
+/// terrain); normals are unit length, one per position.
+struct MeshBuffers {
+  std::vector<std::array<float, 3>> positions;
+  std::vector<std::array<float, 3>> normals;
+  std::vector<std::uint32_t> indices;  ///< 3 per triangle
+};
+
+struct GlbOptions {
+  Compression compression = Compression::Draco;
+  /// Largest rounding error per position coordinate Draco may introduce (m).
+  double maxPositionError = 0.01;
+  int normalBits = 10;
+  /// A JSON object (text) stored as the glTF `asset.extras`; empty for none.
+  std::string assetExtras;
+};
+
+struct GlbResult {
+  std::string bytes;
+  int positionBits = 0;             ///< Draco quantization bits (0 when plain)
+  double positionErrorBound = 0.0;  ///< its largest rounding error per coordinate (m)
+};
+
+/// Encodes the mesh as a .glb whose single root node has `rootMatrix`.
+/// Index width: unsigned short below 65 536 positions, else unsigned int.
+/// Throws inputError for an empty mesh, an index out of range, an index count
+/// not a multiple of 3, a normal count that differs from the position count, a
+/// non-finite coordinate, or assetExtras that are not a JSON object;
+/// usageError for a maxPositionError that is not positive or normalBits
+/// outside [2, 30] (Draco only).
+GlbResult encodeGlb(const MeshBuffers& mesh, const Matrix4& rootMatrix, const GlbOptions& options);
+
+/// A .glb read back: its mesh (Draco decoded with Draco's C++ decoder), the root
+/// node's matrix (identity when absent) and asset.extras as JSON text (empty
+/// when absent). For tests, `tinsmith info` and the store's resume. Throws
+/// inputError naming `name` for bytes that are not such a .glb.
+struct DecodedGlb {
+  MeshBuffers mesh;
+  Matrix4 rootMatrix{};
+  std::string assetExtras;
+  bool draco = false;
+};
+DecodedGlb decodeGlb(std::string_view bytes, std::string_view name);
+
+}  // namespace tinsmith::encode
