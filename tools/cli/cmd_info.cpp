@@ -1,5 +1,6 @@
 // `tinsmith info`: describe a .tin file (CRS, counts, extent, z range,
-// features per kind). Tile stores are described once the tiler exists.
+// features per kind), or a tile store (zooms, tiles, sizes, errors, break-line
+// vertices per zoom).
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -8,7 +9,9 @@
 #include "core/base/error.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "ingest/tinfile/tin_summary.hpp"
+#include "ingest/tiles/tile_job.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/tile_summary.hpp"
 
 namespace tinsmith::cli {
 
@@ -27,8 +30,17 @@ void addInfoCommand(CLI::App& app) {
   cmd->callback([opt] {
     const std::filesystem::path path(opt->file);
     const std::string ext = path.extension().string();
-    if (ext == ".3dtiles" || std::filesystem::is_directory(path))
-      throw notImplemented("tinsmith info on a tile store (the tiler)");
+    if (ext == ".3dtiles" || std::filesystem::is_directory(path)) {
+      const auto info = ingest::describeTileStore(path);
+      if (opt->json) {
+        std::cout << tileSummaryJson(info.summary, opt->file);
+      } else {
+        std::cout << opt->file << (info.complete ? "" : " (incomplete: no tileset.json; finish it with --resume)")
+                  << "\n"
+                  << tileSummaryText(info.summary);
+      }
+      return;
+    }
     const TinData tin = ingest::readTinFile(path);
     auto summary = ingest::summariseTin(tin);
     summary.file = opt->file;

@@ -1,17 +1,136 @@
 // `tinsmith tile`: cut a TIN into level-of-detail 3D Tiles (Draco glTF).
+//   tinsmith tile SITE.tin -o SITE.3dtiles [--tolerance M] [--threads N] [--resume]
+//   tinsmith tile SITE.tin -o PART.3dtiles --subtree Z/X/Y     (one shard)
+//   tinsmith tile SITE.tin -o TOP.3dtiles --until-zoom Z       (the tiles above the shards)
+//   tinsmith merge TOP.3dtiles PART*.3dtiles -o SITE.3dtiles
+// A summary goes to stderr (or JSON to stdout with --json); a progress bar
+// when stderr is a terminal.
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "core/base/error.hpp"
+#include "ingest/tiles/tile_job.hpp"
+#include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/progress_bar.hpp"
+#include "tools/cli/tile_summary.hpp"
 
 namespace tinsmith::cli {
 
+namespace {
+
+struct TileCliOptions {
+  std::string tin;
+  std::string output;
+  double tolerance = 1.0;
+  std::size_t maxTriangles = 32768;
+  int maxZoom = 20;
+  double lambda = 1.0;
+  std::string compression = "draco";
+  std::string frame = "ecef";
+  std::string geoid;
+  std::string subtree;
+  std::optional<int> untilZoom;
+  bool resume = false;
+  int threads = 0;
+  bool quiet = false;
+  bool json = false;
+};
+
+struct MergeCliOptions {
+  std::vector<std::string> inputs;
+  std::string output;
+  bool json = false;
+  bool quiet = false;
+};
+
+void report(const ingest::TileJobSummary& summary, const std::string& output, bool json, bool quiet) {
+  if (json) {
+    std::cout << tileSummaryJson(summary, output);
+  } else if (!quiet) {
+    std::cerr << "wrote " << output << "\n" << tileSummaryText(summary);
+  }
+}
+
+}  // namespace
+
+ingest::TileJobOptions tileJobOptions(double tolerance, std::size_t maxTriangles, int maxZoom, double lambda,
+                                      const std::string& compression, const std::string& frame,
+                                      const std::string& geoid) {
+  ingest::TileJobOptions o;
+  o.tiler.tolerance = tolerance;
+  o.tiler.maxTriangles = maxTriangles;
+  o.tiler.maxZoom = maxZoom;
+  o.tiler.lambdaFactor = lambda;
+  if (compression == "draco") {
+    o.compression = encode::Compression::Draco;
+  } else if (compression == "none") {
+    o.compression = encode::Compression::None;
+  } else {
+    throw usageError("--compression must be draco or none (got '" + compression + "')");
+  }
+  if (frame == "ecef") {
+    o.frame = tiles::ContentFrame::Ecef;
+  } else if (frame == "local") {
+    o.frame = tiles::ContentFrame::Local;
+  } else {
+    throw usageError("--frame must be ecef or local (got '" + frame + "')");
+  }
+  o.geoid = geoid;
+  return o;
+}
+
 void addTileCommand(CLI::App& app) {
+  auto opt = std::make_shared<TileCliOptions>();
   auto* cmd = app.add_subcommand("tile", "Cut a TIN into level-of-detail 3D Tiles (Draco glTF)");
-  cmd->add_option("tin", "The .tin file to tile")->required();
-  cmd->add_option("-o,--output", "Tile store: .3dtiles archive (default) or directory")->required();
-  cmd->add_option("--max-zoom", "Deepest tile zoom");
-  cmd->add_option("--threads", "Worker threads (default: all cores)");
-  cmd->add_flag("--resume")->description("Keep tiles already in the store");
-  cmd->callback([] { throw notImplemented("tinsmith tile (level-of-detail 3D Tiles)"); });
+  cmd->add_option("tin", opt->tin, "The .tin file to tile")->required();
+  cmd->add_option("-o,--output", opt->output, "Tile store: a .3dtiles archive, or a directory")->required();
+  cmd->add_option("--tolerance", opt->tolerance, "Metres the finest zoom meets against the TIN (default 1)");
+  cmd->add_option("--max-triangles", opt->maxTriangles, "Triangles a tile may hold, about (default 32768)");
+  cmd->add_option("--max-zoom", opt->maxZoom, "Deepest tile zoom (default 20)");
+  cmd->add_option("--lambda", opt->lambda, "Thin-plate smoothing as a multiple of the default λ_d (default 1)");
+  cmd->add_option("--compression", opt->compression, "draco (default) or none");
+  cmd->add_option("--frame", opt->frame, "ecef (3D Tiles on the globe, default) or local (ENU metres)");
+  cmd->add_option("--geoid", opt->geoid, "egm96: the TIN's z are EGM96 heights (default: ellipsoidal)");
+  cmd->add_option("--subtree", opt->subtree, "Build only this tile and its descendants (Z/X/Y): a shard");
+  cmd->add_option("--until-zoom", opt->untilZoom, "Build only the tiles above this zoom: the shards' top");
+  cmd->add_option("--threads", opt->threads, "Worker threads (default 0: all cores); same bytes for any");
+  cmd->add_flag("--resume", opt->resume, "Keep tiles already in the store and build only the missing ones");
+  cmd->add_flag("-q,--quiet", opt->quiet, "No summary, no progress bar");
+  cmd->add_flag("--json", opt->json, "Print the summary as JSON on stdout");
+  cmd->callback([opt] {
+    ingest::TileJobOptions o = tileJobOptions(opt->tolerance, opt->maxTriangles, opt->maxZoom, opt->lambda,
+                                              opt->compression, opt->frame, opt->geoid);
+    if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
+    o.untilZoom = opt->untilZoom;
+    if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
+    if (o.subtree && o.untilZoom) throw usageError("--subtree and --until-zoom make different shards: give one");
+    o.resume = opt->resume;
+    o.threads = opt->threads;
+    if (opt->threads < 0) throw usageError("--threads must be 0 (all cores) or more");
+    const TinData tin = ingest::readTinFile(opt->tin);
+    auto bar = terminalProgress(opt->quiet || opt->json);
+    const auto summary = ingest::runTileJob(tin, opt->tin, opt->output, o, bar.get());
+    bar.bar.reset();
+    report(summary, opt->output, opt->json, opt->quiet);
+  });
+
+  auto merge = std::make_shared<MergeCliOptions>();
+  auto* mcmd = app.add_subcommand("merge", "Join tile stores built as shards of one job into one");
+  mcmd->add_option("stores", merge->inputs, "Shard stores (from tinsmith tile --subtree / --until-zoom)")
+      ->required();
+  mcmd->add_option("-o,--output", merge->output, "The joined store (.3dtiles or a directory)")->required();
+  mcmd->add_flag("-q,--quiet", merge->quiet, "No summary");
+  mcmd->add_flag("--json", merge->json, "Print the summary as JSON on stdout");
+  mcmd->callback([merge] {
+    std::vector<std::filesystem::path> inputs(merge->inputs.begin(), merge->inputs.end());
+    const auto summary = ingest::mergeTileStores(inputs, merge->output);
+    report(summary, merge->output, merge->json, merge->quiet);
+  });
 }
 
 }  // namespace tinsmith::cli

@@ -31,6 +31,7 @@
 #include "ingest/tinfile/atomic_file.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/progress_bar.hpp"
 
 namespace tinsmith::cli {
 
@@ -49,41 +50,6 @@ struct TinOptions {
   bool fullValidation = false;
   unsigned threads = 0;
   bool quiet = false;
-};
-
-// A one-line progress bar on stderr, redrawn in place; only for terminals.
-class ProgressBar {
- public:
-  ingest::Progress progress() {
-    ingest::Progress p;
-    p.callback = [this](std::string_view stage, std::string_view detail, std::uint64_t done,
-                        std::uint64_t total) { draw(stage, detail, done, total); };
-    return p;
-  }
-  ~ProgressBar() {
-    if (drawn_) std::fputs("\r\033[K", stderr);
-  }
-
- private:
-  void draw(std::string_view stage, std::string_view detail, std::uint64_t done, std::uint64_t total) {
-    const auto now = std::chrono::steady_clock::now();
-    if (drawn_ && done != total && now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
-    drawn_ = true;
-    std::string line = "\r\033[K" + std::string(stage);
-    if (!detail.empty()) line += " " + std::string(detail);
-    if (total > 0) {
-      const int width = 30;
-      const int filled = static_cast<int>(width * static_cast<double>(done) / static_cast<double>(total));
-      line += " [" + std::string(static_cast<std::size_t>(filled), '#') +
-              std::string(static_cast<std::size_t>(width - filled), ' ') + "] " +
-              std::to_string(100 * done / total) + "%";
-    }
-    std::fputs(line.c_str(), stderr);
-    std::fflush(stderr);
-  }
-  std::chrono::steady_clock::time_point last_{};
-  bool drawn_ = false;
 };
 
 void checkOutputDirectory(const std::string& path, const char* option) {

@@ -1,0 +1,119 @@
+#include "core/tiles/pyramid_build.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <thread>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::tiles {
+
+double skirtDepth(const Tiler& tiler, const TileId& id, double error) {
+  return std::max(2.0 * error, tiler.zoomTolerance(id.z));
+}
+
+PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root, int threads,
+                            const PyramidCallbacks& callbacks, int untilZoom) {
+  if (!tiler.geometry().inside(root)) throw usageError("tile " + root.name() + " is outside the pyramid");
+  // A subtree's root must be in the pyramid: every ancestor refines.
+  for (TileId a = root; a.z > 0;) {
+    a = a.parent();
+    const TileSurface s = tiler.buildTile(a);
+    if (s.empty() || !tiler.refines(a, s.error)) {
+      throw usageError("tile " + root.name() + " is not in the pyramid: its ancestor " + a.name() +
+                           (s.empty() ? " holds no terrain" : " meets the tolerance and has no children"),
+                       "choose a subtree under a refined tile (tinsmith info lists them)");
+    }
+  }
+  const unsigned workers =
+      threads > 0 ? static_cast<unsigned>(threads) : std::max(1u, std::thread::hardware_concurrency());
+
+  PyramidSummary summary;
+  std::vector<TileId> level;
+  if (root.z < untilZoom) level.push_back(root);
+  while (!level.empty()) {
+    const int z = level.front().z;
+    std::sort(level.begin(), level.end(), [](const TileId& a, const TileId& b) {
+      return a.y < b.y || (a.y == b.y && a.x < b.x);
+    });
+    std::vector<std::optional<TileRecord>> records(level.size());
+    std::vector<std::optional<TileContent>> built(level.size());
+    std::vector<std::size_t> todo;
+    for (std::size_t i = 0; i < level.size(); ++i) {
+      if (callbacks.existing) records[i] = callbacks.existing(level[i]);
+      if (records[i]) {
+        ++summary.reused;
+      } else {
+        todo.push_back(i);
+      }
+    }
+    // Build on workers; emit in order as soon as the prefix is done.
+    std::atomic<std::size_t> next{0};
+    std::vector<std::atomic<bool>> ready(level.size());
+    for (std::size_t i = 0; i < level.size(); ++i) ready[i] = records[i].has_value();
+    std::exception_ptr failure;
+    std::mutex failureMutex;
+    std::atomic<bool> stop{false};
+    auto work = [&] {
+      while (!stop) {
+        const std::size_t k = next++;
+        if (k >= todo.size()) return;
+        const std::size_t i = todo[k];
+        try {
+          const TileSurface s = tiler.buildTile(level[i]);
+          if (!s.empty()) built[i] = encodeTile(s, skirtDepth(tiler, s.id, s.error), content);
+        } catch (...) {
+          std::lock_guard lock(failureMutex);
+          if (!failure) failure = std::current_exception();
+          stop = true;
+        }
+        ready[i] = true;
+        ready[i].notify_all();
+      }
+    };
+    std::vector<std::jthread> pool;
+    const unsigned n = std::min<unsigned>(workers, static_cast<unsigned>(std::max<std::size_t>(todo.size(), 1)));
+    for (unsigned w = 1; w < n; ++w) pool.emplace_back(work);
+    std::jthread last(work);  // the calling thread emits; one more worker builds
+    std::vector<TileId> nextLevel;
+    std::size_t done = 0;
+    for (std::size_t i = 0; i < level.size(); ++i) {
+      ready[i].wait(false);
+      {
+        std::lock_guard lock(failureMutex);
+        if (failure) break;
+      }
+      if (built[i]) {
+        records[i] = built[i]->record;
+        try {
+          if (callbacks.emit) callbacks.emit(*built[i]);
+        } catch (...) {
+          std::lock_guard lock(failureMutex);
+          failure = std::current_exception();
+          stop = true;
+          break;
+        }
+        built[i].reset();
+        ++summary.built;
+      }
+      if (callbacks.progress) callbacks.progress(z, ++done, level.size());
+      if (!records[i]) continue;  // an empty tile
+      summary.records.push_back(*records[i]);
+      if (tiler.refines(level[i], records[i]->error)) {
+        for (int c = 0; c < 4; ++c) nextLevel.push_back(level[i].child(c));
+      }
+    }
+    stop = stop.load() || failure != nullptr;
+    if (failure) {
+      // Wake workers' waits are not needed: they only wait on `next`.
+      for (auto& t : pool) t.join();
+      last.join();
+      std::rethrow_exception(failure);
+    }
+    level = z + 1 < untilZoom ? std::move(nextLevel) : std::vector<TileId>{};
+  }
+  return summary;
+}
+
+}  // namespace tinsmith::tiles

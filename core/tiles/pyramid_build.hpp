@@ -1,0 +1,42 @@
+// Walks the pyramid from a root tile zoom by zoom: the tiles of a zoom are
+// built on worker threads (each a pure function of its id), handed to the
+// caller in (z, y, x) order on the calling thread, and their errors decide
+// the next zoom's tiles (the four children of a refined tile, those that hold
+// part of the TIN). Tiles the caller already has (a resumed run) are not
+// rebuilt: their records stand in.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "core/tiles/tile_content.hpp"
+#include "core/tiles/tiler.hpp"
+
+namespace tinsmith::tiles {
+
+struct PyramidCallbacks {
+  /// The record of a tile the store already holds, or nullopt.
+  std::function<std::optional<TileRecord>(const TileId&)> existing;
+  /// A finished tile, in (z, y, x) order; may throw (the walk stops).
+  std::function<void(const TileContent&)> emit;
+  /// Progress within a zoom: done of total tiles.
+  std::function<void(int z, std::size_t done, std::size_t total)> progress;
+};
+
+struct PyramidSummary {
+  std::vector<TileRecord> records;  ///< every tile of the (sub)pyramid, in (z, y, x) order
+  std::size_t built = 0, reused = 0;
+};
+
+/// The skirt depth of a tile: twice its error, at least its zoom's tolerance.
+double skirtDepth(const Tiler& tiler, const TileId& id, double error);
+
+/// Builds the pyramid under `root` (the whole pyramid for 0/0/0). A root
+/// below zoom 0 must be a tile of the pyramid: its ancestors are built (not
+/// emitted) to check that each refines; throws usageError otherwise. Tiles
+/// at `untilZoom` and below are left out (the walk stops above them).
+PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root, int threads,
+                            const PyramidCallbacks& callbacks, int untilZoom = 1 << 20);
+
+}  // namespace tinsmith::tiles

@@ -1,0 +1,54 @@
+// The exact vertical distance between two piecewise-linear surfaces: a tile's
+// mesh and the TIN. Their difference is linear on every cell of their overlay
+// (each piece of a mesh triangle cut by the TIN triangles under it), so its
+// largest absolute value is taken at a vertex of the overlay: a TIN vertex
+// inside a mesh triangle, a mesh vertex inside a TIN triangle, or a crossing of
+// a TIN edge with a mesh edge. Each mesh triangle is intersected with every TIN
+// triangle it overlaps (convex polygons: Sutherland–Hodgman) and both planes are
+// evaluated at the vertices of the intersection. The result is a bound up to
+// the rounding of those crossings (about 1e-12 of the tile's size), not a
+// sample. Only the overlap of the two domains counts.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/base/point.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith::tiles {
+
+/// A uniform grid over a TIN's triangles for overlap queries. Keeps a
+/// reference to `tin`; immutable, so any number of threads may query it.
+class TinIndex {
+ public:
+  explicit TinIndex(const TinData& tin);
+  [[nodiscard]] const TinData& tin() const { return tin_; }
+  /// The triangles whose bounding boxes meet `box`, each once, ascending.
+  void overlapping(const Rect& box, std::vector<std::uint32_t>& out) const;
+
+ private:
+  const TinData& tin_;
+  double x0_ = 0, y0_ = 0, cell_ = 1;
+  std::size_t nx_ = 1, ny_ = 1;
+  std::vector<std::uint32_t> begin_;
+  std::vector<std::uint32_t> items_;
+};
+
+struct SurfaceDifference {
+  double maxAbs = 0.0;     ///< max |mesh − TIN| over the overlap (m)
+  Point2 at;               ///< where it is reached
+  double meshZ = 0.0, tinZ = 0.0;
+  std::size_t pieces = 0;  ///< overlay cells visited
+};
+
+/// The difference of a triangle mesh (CCW triangles over `vertices`) and the
+/// indexed TIN.
+SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
+                                        std::span<const std::array<std::uint32_t, 3>> triangles,
+                                        const TinIndex& tin);
+
+}  // namespace tinsmith::tiles

@@ -1,0 +1,56 @@
+// The lines a tile mesh must keep: break lines (roads, rivers, lake shores and
+// plain break lines — the TIN's constrained edges of those features) and the
+// rings of the TIN's domain boundary (its edges with one triangle: the outer
+// boundary and the holes). Extracted once from the TIN, then simplified per
+// zoom by Douglas–Peucker in 3-D and clipped to each tile.
+//
+// Chains run between nodes — vertices where the line graph does not simply
+// continue (ends, junctions, a vertex shared by two features) — so
+// simplification never disconnects a confluence or a road crossing: nodes are
+// always kept. A river chain keeps its vertices' order, so a descending river
+// stays descending after simplification (a subset of its vertices).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/base/point.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith::tiles {
+
+struct TerrainLine {
+  std::vector<Point3> points;  ///< ≥ 2 (rings: first point not repeated, ≥ 3)
+  FeatureKind kind = FeatureKind::Other;
+  bool ring = false;           ///< a domain-boundary ring (always closed)
+  bool closed = false;         ///< the last point joins the first (rings, lake shores)
+};
+
+/// Whether the TIN's constrained edges of this kind are break lines in tiles.
+bool isBreakLineKind(FeatureKind kind);
+
+/// The break-line chains and domain-boundary rings of a TIN, deterministic.
+std::vector<TerrainLine> extractTerrainLines(const TinData& tin);
+
+/// Douglas–Peucker in 3-D: keeps the ends (for a ring, the first vertex and
+/// the vertex farthest from it) and every vertex farther than `tolerance` from
+/// the simplified line; a ring keeps at least 3 vertices.
+TerrainLine simplify(const TerrainLine& line, double tolerance);
+
+/// A line cut to a closed rectangle. Where a segment crosses a side the
+/// crossing is computed from the segment's ends in a canonical order
+/// (lexicographic), with the side's coordinate exact and the other clamped to
+/// the side, so the two tiles sharing the side get the same point bit for bit;
+/// z is interpolated along the segment. A crossing within `snap` of a corner
+/// becomes the corner. Pieces keep the line's kind.
+struct ClippedPiece {
+  std::vector<Point3> points;
+  FeatureKind kind = FeatureKind::Other;
+  bool ring = false;    ///< the piece came from a domain-boundary ring
+  bool closed = false;  ///< a closed line wholly inside the rectangle
+};
+std::vector<ClippedPiece> clipToRect(const TerrainLine& line, const Rect& rect, double snap);
+
+}  // namespace tinsmith::tiles

@@ -1,0 +1,106 @@
+// Level-of-detail tiles of a TIN (DESIGN.md "Tiles"): for each zoom z the
+// multilevel least-squares fit (Algorithm 8.1) of the TIN's data to that
+// zoom's tolerance, then per tile a constrained triangulation of the fit's
+// binary vertices in the tile, the break lines and domain boundary simplified
+// to the zoom's tolerance, and the tile's sides; its z is the constrained least
+// squares fit (8.9) over that mesh with break-line and boundary vertices held
+// at the TIN's z and the tile's side vertices held at the zoom fit's z.
+//
+// Tolerances: the finest zoom Z meets `tolerance`; zoom z's is tolerance ·
+// 2^(Z − z). Z is the smallest zoom whose fit, refined at most `levelsPerTile`
+// levels below the zoom, reaches the level the finest fit needs, so a tile
+// holds at most about 2·4^(levelsPerTile + 1) binary triangles. A tile gets
+// children when its measured error is above `tolerance` (and z < maxZoom).
+//
+// Every tile is a pure function of the TIN, the options and its id: tiles can
+// be built in any order, on any thread, in separate processes, and give the same
+// result. Crack-free within a zoom: the vertices on a tile's side are computed
+// only from what both tiles sharing it see (the grid, the zoom fit, the
+// simplified lines, each crossing from its segment's ends in a canonical
+// order), and held fixed in both.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "core/base/point.hpp"
+#include "core/fit/multilevel_fit.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "core/tiles/surface_difference.hpp"
+#include "core/tiles/terrain_lines.hpp"
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith::tiles {
+
+struct TilerOptions {
+  double tolerance = 1.0;             ///< metres; what the finest zoom meets
+  std::size_t maxTriangles = 32768;   ///< per tile, sets levelsPerTile
+  int maxZoom = 20;                   ///< no tile below this zoom
+  double lambdaFactor = 1.0;          ///< thin-plate λ = factor · λ_d, per fit
+  int threads = 0;                    ///< for the zoom fits (0 = all cores)
+};
+
+/// One tile's surface, in the project CRS.
+struct TileSurface {
+  TileId id;
+  Rect bounds;
+  std::vector<Point3> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< CCW
+  /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed.
+  std::vector<std::uint8_t> flags;
+  double error = 0.0;             ///< measured max |surface − TIN| (m)
+  Point2 errorAt;
+  std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
+  std::size_t dataPoints = 0;         ///< data points the tile's fit used
+  [[nodiscard]] bool empty() const { return triangles.empty(); }
+};
+
+inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8, kHeld = 16;
+
+class Tiler {
+ public:
+  /// Plans the pyramid (the finest fit decides the finest zoom). Throws
+  /// usageError for a tolerance ≤ 0 or maxTriangles < 64, inputError for a
+  /// TIN with no triangles.
+  Tiler(const TinData& tin, TilerOptions options);
+  ~Tiler();
+
+  [[nodiscard]] const PyramidGeometry& geometry() const { return geometry_; }
+  [[nodiscard]] const TilerOptions& options() const { return options_; }
+  [[nodiscard]] int finestZoom() const { return finestZoom_; }
+  [[nodiscard]] int levelsPerTile() const { return levelsPerTile_; }
+  [[nodiscard]] double zoomTolerance(int z) const;
+  [[nodiscard]] const TinData& tin() const { return tin_; }
+  [[nodiscard]] std::size_t dataPointCount() const { return data_.size(); }
+  /// Whether a tile with this error gets children.
+  [[nodiscard]] bool refines(const TileId& id, double error) const {
+    return error > options_.tolerance && id.z < options_.maxZoom;
+  }
+  /// Break-line and ring vertices kept at a zoom (for reports).
+  [[nodiscard]] std::size_t keptLineVertices(int z) const;
+
+  /// The tile's surface (empty when the tile holds none of the TIN). Thread-safe.
+  [[nodiscard]] TileSurface buildTile(const TileId& id) const;
+
+ private:
+  struct Zoom;
+  const Zoom& zoom(int z) const;
+
+  const TinData& tin_;
+  TilerOptions options_;
+  PyramidGeometry geometry_{{0, 0}, 1};
+  std::vector<Point3> data_;       // TIN vertices and points sampled from its triangles
+  std::vector<TerrainLine> lines_;
+  TinIndex index_;
+  int finestZoom_ = 0;
+  int levelsPerTile_ = 5;
+  mutable std::mutex mutex_;
+  mutable std::map<int, std::shared_ptr<Zoom>> zooms_;
+  mutable std::map<int, std::shared_ptr<std::once_flag>> zoomOnce_;
+};
+
+}  // namespace tinsmith::tiles

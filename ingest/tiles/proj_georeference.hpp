@@ -1,0 +1,38 @@
+// Project coordinates → WGS84 geodetic (EPSG:4979: lon, lat in degrees,
+// ellipsoidal height in metres) through PROJ, for tile content.
+//
+// Heights: by default the TIN's z is taken as height above the ellipsoid
+// (a projected CRS such as EPSG:26912 carries no vertical datum to convert
+// from). With a geoid ("egm96"), z is an EGM96 orthometric height and PROJ's
+// egm96_15.gtx grid (Debian's proj-data, offline) adds the geoid undulation.
+// Thread-safe: each thread gets its own PROJ transformation.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/tiles/tile_content.hpp"
+
+namespace tinsmith::ingest {
+
+class ProjGeoReference : public tiles::GeoReference {
+ public:
+  /// `crs`: the TIN's CRS ("EPSG:n" or WKT); `geoid`: "" or "egm96". Throws
+  /// inputError for an empty or unknown CRS or a geoid PROJ cannot use, with
+  /// what to do.
+  ProjGeoReference(std::string crs, std::string geoid);
+  ~ProjGeoReference() override;
+  void toGeodetic(std::span<const Point3> in, std::span<encode::Geodetic> out) const override;
+  [[nodiscard]] const std::string& crs() const { return crs_; }
+  [[nodiscard]] const std::string& geoid() const { return geoid_; }
+
+ private:
+  struct Transform;
+  [[nodiscard]] Transform& forThisThread() const;
+  std::string crs_;
+  std::string geoid_;
+  std::string sourceDefinition_;
+  std::uint64_t serial_ = 0;
+};
+
+}  // namespace tinsmith::ingest

@@ -1,0 +1,77 @@
+// The tiling job: a TIN into a tile store (DESIGN.md "Tiles"). Runs the
+// pyramid walk (core/tiles) and writes what it makes:
+//   tinsmith/build.json   what was built from what (TIN checksum, options)
+//   tinsmith/terrain.tin  the TIN itself (the server answers elevations from it)
+//   tiles/{z}/{x}/{y}.glb one per tile; asset.extras carries the tile's record
+//   tileset.json (+ tilesets/…) written last, from the records
+// An archive output is staged in "<output>.partial" (resumable) and written
+// out at the end in one canonical key order, atomically, so one run, a resumed
+// run and merged shards give the same bytes and a half-done archive never
+// appears under the output's name. A directory output is written in place,
+// each file atomically, tileset.json last.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/encode/glb.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "core/tiles/tile_content.hpp"
+#include "core/tiles/tiler.hpp"
+#include "core/tin/tin_data.hpp"
+#include "ingest/base/progress.hpp"
+
+namespace tinsmith::ingest {
+
+struct TileJobOptions {
+  tiles::TilerOptions tiler;
+  encode::Compression compression = encode::Compression::Draco;
+  tiles::ContentFrame frame = tiles::ContentFrame::Ecef;
+  std::string geoid;                      ///< "" (ellipsoidal) or "egm96"
+  std::optional<tiles::TileId> subtree;   ///< only this tile and its descendants
+  std::optional<int> untilZoom;           ///< only tiles above this zoom
+  bool resume = false;
+  int threads = 0;
+};
+
+struct ZoomSummary {
+  int z = 0;
+  double tolerance = 0;
+  std::size_t tiles = 0, triangles = 0, vertices = 0, bytes = 0, breakLineVertices = 0;
+  double maxError = 0;
+};
+
+struct TileJobSummary {
+  std::vector<ZoomSummary> zooms;
+  std::size_t tiles = 0, built = 0, reused = 0, bytes = 0;
+  int finestZoom = 0;
+  int levelsPerTile = 0;
+  std::size_t dataPoints = 0;
+  double seconds = 0;
+};
+
+/// Tiles `tin` (read from `tinName`, for messages and the build record) into
+/// `output`. Throws usageError for bad options (a --resume whose store was
+/// built from other input or options), ioError when the store cannot be
+/// written (nothing half-written is left under the output's name).
+TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const std::filesystem::path& output,
+                          const TileJobOptions& options, const Progress* progress = nullptr);
+
+/// Joins stores built from the same TIN and options (shards: subtrees and the
+/// tiles above them) into one, as one run would have written it. Throws
+/// usageError when they disagree (other input or options, a tile with
+/// different bytes) or a refined tile's children are missing from all.
+TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output);
+
+/// What `tinsmith info` tells of a store: its build record (JSON text) and the
+/// per-zoom summary from the tiles' records.
+struct StoreInfo {
+  std::string build;  ///< tinsmith/build.json, or empty
+  bool complete = false;  ///< tileset.json present
+  TileJobSummary summary;
+};
+StoreInfo describeTileStore(const std::filesystem::path& path);
+
+}  // namespace tinsmith::ingest
