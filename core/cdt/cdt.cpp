@@ -37,6 +37,11 @@ using geometry::orient2d;
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr std::uint32_t kInf = 0xfffffffeu;
+// How deep reroutes of crossed constraints may nest (rerouteThrough inserts
+// segments, whose crossings may reroute again): far beyond what input needs
+// (the tests and two minutes of fuzzing never nest a second one), far below a
+// stack overflow (a level takes about 1.2 KB of stack in an optimised build).
+constexpr std::size_t kRerouteDepthLimit = 256;
 // Feature id of the boundary edges of a TIN loaded by fromTinData: bounds the
 // domain, never exported.
 constexpr FeatureId kDomainFeature = 0xfffffffeu;
@@ -320,6 +325,8 @@ struct Cdt::Impl {
   // them, beyond what report.intersections records (crossingVertex); the
   // validator allows that much more.
   std::vector<double> bend;
+  // Reroutes under way (rerouteThrough), their bound and the deepest so far.
+  std::size_t rerouteDepth = 0, rerouteDepthLimit = kRerouteDepthLimit, deepestReroute = 0;
   Mesh mesh;
   std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
   // finalize() has run and no input came after it: the mesh may be read.
@@ -1121,6 +1128,7 @@ struct Cdt::Impl {
     std::vector<std::uint32_t>().swap(localOf);
     right.options.snapTolerance = options.snapTolerance;
     right.options.splitMinPoints = 0;
+    right.rerouteDepthLimit = rerouteDepthLimit;
     right.features = features;
     right.xy.resize(rightGlobal.size());
     right.z.resize(rightGlobal.size());
@@ -1195,6 +1203,7 @@ struct Cdt::Impl {
       ev.vertex = VertexId(rightGlobal[ev.vertex.value]);
       report.intersections.push_back(ev);
     }
+    deepestReroute = std::max(deepestReroute, right.deepestReroute);
     if (bend.size() < right.bend.size()) bend.resize(right.bend.size(), 0.0);
     for (std::size_t g = 0; g < right.bend.size(); ++g) bend[g] += right.bend[g];
     report.dropped.insert(report.dropped.end(), right.report.dropped.begin(),
@@ -1523,9 +1532,26 @@ struct Cdt::Impl {
   /// The constrained edge R–L is replaced by R→w→L, w a vertex the segments
   /// from R and L to which cross no constrained edge and pass through no
   /// vertex (an apex beside R–L, or see clearPathEnd): they are edges already
-  /// or are recovered by flips alone.
+  /// or are recovered by flips alone. Throws internalError when R–L is no
+  /// edge, or when reroutes nest deeper than rerouteDepthLimit (each reroute
+  /// inserts segments that may cross constraints and reroute again; the
+  /// guards of insertSegment are per call).
   [[gnu::noinline]] void rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w) {
     const std::uint32_t h = findHalfedge(R, L);
+    if (h == kNone) throw internalError("the constrained edge to reroute is missing");
+    if (rerouteDepth >= rerouteDepthLimit) {
+      throw internalError("constraint reroutes nested more than " +
+                          std::to_string(rerouteDepthLimit) + " deep (at " +
+                          std::to_string(xy[R].x) + ", " + std::to_string(xy[R].y) + ")");
+    }
+    struct Nesting {
+      std::size_t& depth;
+      explicit Nesting(std::size_t& d) : depth(d) { ++depth; }
+      ~Nesting() { --depth; }
+      Nesting(const Nesting&) = delete;
+      Nesting& operator=(const Nesting&) = delete;
+    } nesting(rerouteDepth);
+    deepestReroute = std::max(deepestReroute, rerouteDepth);
     const auto view = edgeFeatures.find(edgeKey(R, L));
     const std::vector<FeatureId> fs(view.begin(), view.end());
     cons[h] = cons[opp[h]] = 0;
@@ -2386,6 +2412,14 @@ std::string formatCoord(double v) {
 ValidationReport Cdt::validate(const ValidationOptions& options) const {
   std::size_t chainSteps = 0;
   return validateCounting(options, chainSteps);
+}
+
+void CdtTestAccess::setRerouteDepthLimit(Cdt& cdt, std::size_t limit) {
+  cdt.impl_->rerouteDepthLimit = limit;
+}
+
+std::size_t CdtTestAccess::deepestReroute(const Cdt& cdt) {
+  return cdt.impl_->deepestReroute;
 }
 
 ValidationReport CdtTestAccess::validate(const Cdt& cdt, std::size_t& chainSteps,

@@ -11,6 +11,12 @@
 namespace tinsmith {
 
 struct CdtTestAccess {
+  /// Bounds how deep reroutes of crossed constraints may nest in cdt's next
+  /// finalize() calls (beyond it they throw internalError); the default is
+  /// far beyond what input needs.
+  static void setRerouteDepthLimit(Cdt& cdt, std::size_t limit);
+  /// The deepest nesting of reroutes so far (0: none).
+  static std::size_t deepestReroute(const Cdt& cdt);
   /// cdt.validate(options), also giving the steps its constraint-chain
   /// searches took: the adjacency entries they examined (each with an O(1)
   /// look-up of whether its vertex was reached already).

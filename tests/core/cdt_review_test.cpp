@@ -288,5 +288,49 @@ TEST(CdtReview, ChainSearchOfALongConstraintIsLinear) {
   EXPECT_LT(steps, 64u * n);
 }
 
+// rerouteThrough did not check that the edge it reroutes exists, nor bound
+// how deep reroutes nest (each inserts segments whose crossings may reroute
+// again; insertSegment's guards are per call), so adversarial input could
+// overflow the stack. Natural input nests a reroute or two deep; with the
+// bound lowered below what an input needs, finalize() throws internalError.
+// (The crossing of CdtConstraintRegression.CrossingBesideASliverStaysOnBothLines:
+// it goes in beside a sliver and R–L's constraint is rerouted through it.)
+TEST(CdtReview, RerouteNestingIsBoundedByAnInternalError) {
+  auto build = [](Cdt& cdt) {
+    cdt.insertPoints(std::vector<Point3>{{6999980.0000000000, 6999980.0000000000, 20.0},
+                                         {6999980.0000000000, 6999980.0000000009, 0.0},
+                                         {6999980.9999999991, 7000017.0000000000, 10.0},
+                                         {6999990.0, 6999990.0, 0.0},
+                                         {6999970.0, 6999990.0, 0.0},
+                                         {6999990.0, 7000020.0, 0.0},
+                                         {6999970.0, 7000020.0, 0.0}});
+    const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+    const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
+    cdt.insertConstraintSegment(VertexId(2), VertexId(0), road);
+    cdt.insertConstraint(std::vector<Point3>{{6999981.7548746532, 7000013.3426183844, 30.0},
+                                             {6999980.0000000000, 7000015.0000000009, 40.0}},
+                         river);
+  };
+  Cdt natural;
+  build(natural);
+  natural.finalize();
+  EXPECT_TRUE(isValid(natural));
+  const std::size_t depth = CdtTestAccess::deepestReroute(natural);
+  ASSERT_GE(depth, 1u);
+  EXPECT_LE(depth, 4u);
+
+  Cdt enough;
+  CdtTestAccess::setRerouteDepthLimit(enough, depth);
+  build(enough);
+  enough.finalize();
+  EXPECT_TRUE(isValid(enough));
+  EXPECT_EQ(enough.toTinData().triangles, natural.toTinData().triangles);
+
+  Cdt bounded;
+  CdtTestAccess::setRerouteDepthLimit(bounded, depth - 1);
+  build(bounded);
+  EXPECT_EQ(kindOf([&] { bounded.finalize(); }), ErrorKind::Internal);
+}
+
 }  // namespace
 }  // namespace tinsmith
