@@ -23,9 +23,10 @@ TileId parseTileId(const std::string& text, const std::string& what) {
     }
     p = next + (i < 2 ? 1 : 0);
   }
-  if (p != end) throw usageError(what + " '" + text + "' is not a tile id", "write it as Z/X/Y, e.g. 3/2/5");
-  if (parts[0] < 0 || parts[0] > 30 || parts[1] < 0 || parts[2] < 0 || parts[1] >= (1LL << parts[0]) ||
-      parts[2] >= (1LL << parts[0])) {
+  if (p != end)
+    throw usageError(what + " '" + text + "' is not a tile id", "write it as Z/X/Y, e.g. 3/2/5");
+  if (parts[0] < 0 || parts[0] > 30 || parts[1] < 0 || parts[2] < 0 ||
+      parts[1] >= (1LL << parts[0]) || parts[2] >= (1LL << parts[0])) {
     throw usageError(what + " '" + text + "' is outside the pyramid",
                      "zoom z has tiles x, y in 0 .. 2^z - 1, z at most 30");
   }

@@ -22,7 +22,8 @@ struct TileId {
   std::uint32_t y = 0;
   friend auto operator<=>(const TileId&, const TileId&) = default;
   [[nodiscard]] TileId child(int i) const {  ///< i = 0..3: (0,0) (1,0) (0,1) (1,1)
-    return {z + 1, 2 * x + static_cast<std::uint32_t>(i & 1), 2 * y + static_cast<std::uint32_t>(i >> 1)};
+    return {z + 1, 2 * x + static_cast<std::uint32_t>(i & 1),
+            2 * y + static_cast<std::uint32_t>(i >> 1)};
   }
   [[nodiscard]] TileId parent() const { return {z - 1, x / 2, y / 2}; }
   /// "z/x/y".
@@ -36,7 +37,9 @@ TileId parseTileId(const std::string& text, const std::string& what);
 /// An axis-aligned rectangle (closed).
 struct Rect {
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  [[nodiscard]] bool contains(Point2 p) const { return p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1; }
+  [[nodiscard]] bool contains(Point2 p) const {
+    return p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1;
+  }
   [[nodiscard]] double width() const { return x1 - x0; }
   [[nodiscard]] double height() const { return y1 - y0; }
 };

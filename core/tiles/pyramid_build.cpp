@@ -13,21 +13,23 @@ double skirtDepth(const Tiler& tiler, const TileId& id, double error) {
   return std::max(2.0 * error, tiler.zoomTolerance(id.z));
 }
 
-PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root, int threads,
-                            const PyramidCallbacks& callbacks, int untilZoom) {
-  if (!tiler.geometry().inside(root)) throw usageError("tile " + root.name() + " is outside the pyramid");
+PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
+                            int threads, const PyramidCallbacks& callbacks, int untilZoom) {
+  if (!tiler.geometry().inside(root))
+    throw usageError("tile " + root.name() + " is outside the pyramid");
   // A subtree's root must be in the pyramid: every ancestor refines.
   for (TileId a = root; a.z > 0;) {
     a = a.parent();
     const TileSurface s = tiler.buildTile(a);
     if (s.empty() || !tiler.refines(a, s.error)) {
-      throw usageError("tile " + root.name() + " is not in the pyramid: its ancestor " + a.name() +
-                           (s.empty() ? " holds no terrain" : " meets the tolerance and has no children"),
-                       "choose a subtree under a refined tile (tinsmith info lists them)");
+      throw usageError(
+          "tile " + root.name() + " is not in the pyramid: its ancestor " + a.name() +
+              (s.empty() ? " holds no terrain" : " meets the tolerance and has no children"),
+          "choose a subtree under a refined tile (tinsmith info lists them)");
     }
   }
-  const unsigned workers =
-      threads > 0 ? static_cast<unsigned>(threads) : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned workers = threads > 0 ? static_cast<unsigned>(threads)
+                                       : std::max(1u, std::thread::hardware_concurrency());
 
   PyramidSummary summary;
   std::vector<TileId> level;
@@ -73,7 +75,8 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
       }
     };
     std::vector<std::jthread> pool;
-    const unsigned n = std::min<unsigned>(workers, static_cast<unsigned>(std::max<std::size_t>(todo.size(), 1)));
+    const unsigned n =
+        std::min<unsigned>(workers, static_cast<unsigned>(std::max<std::size_t>(todo.size(), 1)));
     for (unsigned w = 1; w < n; ++w) pool.emplace_back(work);
     std::jthread last(work);  // the calling thread emits; one more worker builds
     std::vector<TileId> nextLevel;

@@ -36,7 +36,8 @@ double skirtDepth(const Tiler& tiler, const TileId& id, double error);
 /// below zoom 0 must be a tile of the pyramid: its ancestors are built (not
 /// emitted) to check that each refines; throws usageError otherwise. Tiles
 /// at `untilZoom` and below are left out (the walk stops above them).
-PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root, int threads,
-                            const PyramidCallbacks& callbacks, int untilZoom = 1 << 20);
+PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
+                            int threads, const PyramidCallbacks& callbacks,
+                            int untilZoom = 1 << 20);
 
 }  // namespace tinsmith::tiles

@@ -16,7 +16,8 @@ struct Plane {
   P2 a, b, c;
   double za, zb, zc;
   double inv = 0.0;
-  Plane(P2 a_, P2 b_, P2 c_, double za_, double zb_, double zc_) : a(a_), b(b_), c(c_), za(za_), zb(zb_), zc(zc_) {
+  Plane(P2 a_, P2 b_, P2 c_, double za_, double zb_, double zc_)
+      : a(a_), b(b_), c(c_), za(za_), zb(zb_), zc(zc_) {
     const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
     inv = det != 0.0 ? 1.0 / det : 0.0;
   }
@@ -29,7 +30,9 @@ struct Plane {
 
 /// Inexact side test, used only to cut convex polygons (the result is within
 /// rounding of the exact overlay, which is all a bound on a difference needs).
-double sideOf(P2 a, P2 b, P2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+double sideOf(P2 a, P2 b, P2 p) {
+  return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
 
 /// Clips `poly` to the left half-plane of a → b.
 void clipLeft(const std::vector<P2>& poly, P2 a, P2 b, std::vector<P2>& out) {
@@ -62,10 +65,11 @@ TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
   cell_ = std::max(std::sqrt(area / static_cast<double>(tin.triangles.size())) * 2.0, 1e-9);
   nx_ = std::min<std::size_t>(static_cast<std::size_t>((x1 - x0_) / cell_) + 1, 1u << 14);
   ny_ = std::min<std::size_t>(static_cast<std::size_t>((y1 - y0_) / cell_) + 1, 1u << 14);
-  cell_ = std::max((x1 - x0_) / static_cast<double>(nx_), (y1 - y0_) / static_cast<double>(ny_)) * (1 + 1e-12);
+  cell_ = std::max((x1 - x0_) / static_cast<double>(nx_), (y1 - y0_) / static_cast<double>(ny_)) *
+          (1 + 1e-12);
   if (cell_ <= 0) cell_ = 1;
-  auto cellRange = [&](const std::array<std::uint32_t, 3>& t, std::size_t& i0, std::size_t& i1, std::size_t& j0,
-                       std::size_t& j1) {
+  auto cellRange = [&](const std::array<std::uint32_t, 3>& t, std::size_t& i0, std::size_t& i1,
+                       std::size_t& j0, std::size_t& j1) {
     double lx = HUGE_VAL, ly = HUGE_VAL, hx = -HUGE_VAL, hy = -HUGE_VAL;
     for (auto v : t) {
       lx = std::min(lx, tin.vertices[v].x);
@@ -102,8 +106,10 @@ void TinIndex::overlapping(const Rect& box, std::vector<std::uint32_t>& out) con
   auto clampCell = [](double v, std::size_t n) {
     return static_cast<std::size_t>(std::clamp(v, 0.0, static_cast<double>(n - 1)));
   };
-  const std::size_t i0 = clampCell((box.x0 - x0_) / cell_, nx_), i1 = clampCell((box.x1 - x0_) / cell_, nx_);
-  const std::size_t j0 = clampCell((box.y0 - y0_) / cell_, ny_), j1 = clampCell((box.y1 - y0_) / cell_, ny_);
+  const std::size_t i0 = clampCell((box.x0 - x0_) / cell_, nx_),
+                    i1 = clampCell((box.x1 - x0_) / cell_, nx_);
+  const std::size_t j0 = clampCell((box.y0 - y0_) / cell_, ny_),
+                    j1 = clampCell((box.y1 - y0_) / cell_, ny_);
   for (std::size_t j = j0; j <= j1; ++j) {
     for (std::size_t i = i0; i <= i1; ++i) {
       const std::size_t c = j * nx_ + i;
@@ -139,18 +145,20 @@ SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
   for (const auto& m : triangles) {
     const P2 a = local(vertices[m[0]]), b = local(vertices[m[1]]), c = local(vertices[m[2]]);
     const Plane meshPlane(a, b, c, vertices[m[0]].z, vertices[m[1]].z, vertices[m[2]].z);
-    Rect box{std::min({a.x, b.x, c.x}) + ox, std::min({a.y, b.y, c.y}) + oy, std::max({a.x, b.x, c.x}) + ox,
-             std::max({a.y, b.y, c.y}) + oy};
+    Rect box{std::min({a.x, b.x, c.x}) + ox, std::min({a.y, b.y, c.y}) + oy,
+             std::max({a.x, b.x, c.x}) + ox, std::max({a.y, b.y, c.y}) + oy};
     index.overlapping(box, candidates);
     for (std::uint32_t k : candidates) {
       const auto& t = tin.triangles[k];
-      const P2 ta = local(tin.vertices[t[0]]), tb = local(tin.vertices[t[1]]), tc = local(tin.vertices[t[2]]);
+      const P2 ta = local(tin.vertices[t[0]]), tb = local(tin.vertices[t[1]]),
+               tc = local(tin.vertices[t[2]]);
       poly = {ta, tb, tc};
       clipLeft(poly, a, b, next);
       clipLeft(next, b, c, poly);
       clipLeft(poly, c, a, next);
       if (next.empty()) continue;
-      const Plane tinPlane(ta, tb, tc, tin.vertices[t[0]].z, tin.vertices[t[1]].z, tin.vertices[t[2]].z);
+      const Plane tinPlane(ta, tb, tc, tin.vertices[t[0]].z, tin.vertices[t[1]].z,
+                           tin.vertices[t[2]].z);
       ++result.pieces;
       for (const P2& p : next) {
         const double zm = meshPlane.at(p), zt = tinPlane.at(p);

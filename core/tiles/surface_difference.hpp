@@ -39,8 +39,8 @@ class TinIndex {
 };
 
 struct SurfaceDifference {
-  double maxAbs = 0.0;     ///< max |mesh − TIN| over the overlap (m)
-  Point2 at;               ///< where it is reached
+  double maxAbs = 0.0;  ///< max |mesh − TIN| over the overlap (m)
+  Point2 at;            ///< where it is reached
   double meshZ = 0.0, tinZ = 0.0;
   std::size_t pieces = 0;  ///< overlay cells visited
 };

@@ -15,7 +15,8 @@ double distanceToSegment(const Point3& p, const Point3& a, const Point3& b) {
   const double dx = b.x - a.x, dy = b.y - a.y, dz = b.z - a.z;
   const double len2 = dx * dx + dy * dy + dz * dz;
   double t = 0.0;
-  if (len2 > 0.0) t = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy + (p.z - a.z) * dz) / len2, 0.0, 1.0);
+  if (len2 > 0.0)
+    t = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy + (p.z - a.z) * dz) / len2, 0.0, 1.0);
   const double ex = a.x + t * dx - p.x, ey = a.y + t * dy - p.y, ez = a.z + t * dz - p.z;
   return std::sqrt(ex * ex + ey * ey + ez * ez);
 }
@@ -46,7 +47,9 @@ void markKept(std::span<const Point3> points, std::size_t first, std::size_t las
   }
 }
 
-bool lexLess(const Point3& a, const Point3& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
+bool lexLess(const Point3& a, const Point3& b) {
+  return a.x < b.x || (a.x == b.x && a.y < b.y);
+}
 
 }  // namespace
 
@@ -74,7 +77,8 @@ std::vector<TerrainLine> extractTerrainLines(const TinData& tin) {
     adjacent[e.first].push_back({e.second, kind});
     adjacent[e.second].push_back({e.first, kind});
   }
-  for (auto& a : adjacent) std::sort(a.begin(), a.end(), [](auto& p, auto& q) { return p.first < q.first; });
+  for (auto& a : adjacent)
+    std::sort(a.begin(), a.end(), [](auto& p, auto& q) { return p.first < q.first; });
   auto isNode = [&](std::uint32_t v) {
     return adjacent[v].size() != 2 || adjacent[v][0].second != adjacent[v][1].second;
   };
@@ -213,8 +217,12 @@ std::vector<ClippedPiece> clipToRect(const TerrainLine& line, const Rect& rect, 
   }
 
   auto snapToCorner = [&](Point3 p) {
-    const double cx = std::abs(p.x - rect.x0) <= snap ? rect.x0 : (std::abs(p.x - rect.x1) <= snap ? rect.x1 : p.x);
-    const double cy = std::abs(p.y - rect.y0) <= snap ? rect.y0 : (std::abs(p.y - rect.y1) <= snap ? rect.y1 : p.y);
+    const double cx = std::abs(p.x - rect.x0) <= snap
+                          ? rect.x0
+                          : (std::abs(p.x - rect.x1) <= snap ? rect.x1 : p.x);
+    const double cy = std::abs(p.y - rect.y0) <= snap
+                          ? rect.y0
+                          : (std::abs(p.y - rect.y1) <= snap ? rect.y1 : p.y);
     if ((cx == rect.x0 || cx == rect.x1) && (cy == rect.y0 || cy == rect.y1)) {
       p.x = cx;
       p.y = cy;
@@ -258,7 +266,8 @@ std::vector<ClippedPiece> clipToRect(const TerrainLine& line, const Rect& rect, 
     crossing(true, rect.x1);
     crossing(false, rect.y0);
     crossing(false, rect.y1);
-    std::sort(along.begin(), along.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+    std::sort(along.begin(), along.end(),
+              [](const auto& p, const auto& q) { return p.first < q.first; });
     for (std::size_t k = 0; k + 1 < along.size(); ++k) {
       const Point3& p = along[k].second;
       const Point3& q = along[k + 1].second;
@@ -277,7 +286,8 @@ std::vector<ClippedPiece> clipToRect(const TerrainLine& line, const Rect& rect, 
   if (line.closed && pieces.size() >= 2 && rect.contains(pts[0].xy())) {
     auto& first = pieces.front();
     auto& last = pieces.back();
-    if (last.points.back().x == first.points.front().x && last.points.back().y == first.points.front().y) {
+    if (last.points.back().x == first.points.front().x &&
+        last.points.back().y == first.points.front().y) {
       last.points.insert(last.points.end(), first.points.begin() + 1, first.points.end());
       pieces.front() = std::move(last);
       pieces.pop_back();

@@ -24,8 +24,8 @@ namespace tinsmith::tiles {
 struct TerrainLine {
   std::vector<Point3> points;  ///< ≥ 2 (rings: first point not repeated, ≥ 3)
   FeatureKind kind = FeatureKind::Other;
-  bool ring = false;           ///< a domain-boundary ring (always closed)
-  bool closed = false;         ///< the last point joins the first (rings, lake shores)
+  bool ring = false;    ///< a domain-boundary ring (always closed)
+  bool closed = false;  ///< the last point joins the first (rings, lake shores)
 };
 
 /// Whether the TIN's constrained edges of this kind are break lines in tiles.

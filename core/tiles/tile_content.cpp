@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numbers>
-
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 #include "core/base/error.hpp"
 
@@ -15,7 +14,9 @@ namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
 
-Point3 sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Point3 sub(const Point3& a, const Point3& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
 Point3 cross(const Point3& a, const Point3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
@@ -77,7 +78,8 @@ std::optional<TileRecord> recordFromGlb(std::string_view glb) {
   const std::size_t length = u32(12);
   if (20 + length > glb.size()) return std::nullopt;
   const auto doc = nlohmann::json::parse(glb.substr(20, length), nullptr, false);
-  if (doc.is_discarded() || !doc.contains("asset") || !doc["asset"].contains("extras")) return std::nullopt;
+  if (doc.is_discarded() || !doc.contains("asset") || !doc["asset"].contains("extras"))
+    return std::nullopt;
   return recordFromExtras(doc["asset"]["extras"].dump());
 }
 
@@ -90,7 +92,8 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   const std::size_t top = project.size();
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> edgeUse;
   for (const auto& t : tile.triangles) {
-    for (int i = 0; i < 3; ++i) edgeUse[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}] += 1;
+    for (int i = 0; i < 3; ++i)
+      edgeUse[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}] += 1;
   }
   std::vector<std::uint32_t> below(top, std::numeric_limits<std::uint32_t>::max());
   std::vector<std::array<std::uint32_t, 3>> triangles = tile.triangles;
@@ -102,7 +105,8 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
       for (std::uint32_t v : {a, b}) {
         if (below[v] == std::numeric_limits<std::uint32_t>::max()) {
           below[v] = static_cast<std::uint32_t>(project.size());
-          project.push_back({tile.vertices[v].x, tile.vertices[v].y, tile.vertices[v].z - skirtDepth});
+          project.push_back(
+              {tile.vertices[v].x, tile.vertices[v].y, tile.vertices[v].z - skirtDepth});
         }
       }
       // Interior on the left of a → b; the skirt faces outward.
@@ -145,8 +149,8 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   }
   const Point3 centre{0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)};
   if (record.local) {
-    record.box = {centre.x, centre.y, centre.z, 0.5 * (hi.x - lo.x), 0, 0, 0, 0.5 * (hi.y - lo.y), 0, 0, 0,
-                  0.5 * (hi.z - lo.z)};
+    record.box = {centre.x, centre.y, centre.z, 0.5 * (hi.x - lo.x), 0, 0, 0, 0.5 * (hi.y - lo.y),
+                  0,        0,        0,        0.5 * (hi.z - lo.z)};
   }
 
   // Normals: area-weighted face normals of the surface in the output frame;
@@ -154,7 +158,8 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   std::vector<Point3> normals(project.size(), Point3{0, 0, 0});
   for (const auto& t : tile.triangles) {
     const Point3 nrm = cross(sub(frame[t[1]], frame[t[0]]), sub(frame[t[2]], frame[t[0]]));
-    for (auto v : t) normals[v] = {normals[v].x + nrm.x, normals[v].y + nrm.y, normals[v].z + nrm.z};
+    for (auto v : t)
+      normals[v] = {normals[v].x + nrm.x, normals[v].y + nrm.y, normals[v].z + nrm.z};
   }
   for (std::size_t v = 0; v < top; ++v) {
     if (below[v] != std::numeric_limits<std::uint32_t>::max()) normals[below[v]] = normals[v];
@@ -163,13 +168,14 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   buffers.positions.reserve(frame.size());
   buffers.normals.reserve(frame.size());
   for (std::size_t i = 0; i < frame.size(); ++i) {
-    buffers.positions.push_back({static_cast<float>(frame[i].x - centre.x), static_cast<float>(frame[i].y - centre.y),
+    buffers.positions.push_back({static_cast<float>(frame[i].x - centre.x),
+                                 static_cast<float>(frame[i].y - centre.y),
                                  static_cast<float>(frame[i].z - centre.z)});
     const Point3& nrm = normals[i];
     const double len = std::sqrt(nrm.x * nrm.x + nrm.y * nrm.y + nrm.z * nrm.z);
     if (len > 0) {
-      buffers.normals.push_back(
-          {static_cast<float>(nrm.x / len), static_cast<float>(nrm.y / len), static_cast<float>(nrm.z / len)});
+      buffers.normals.push_back({static_cast<float>(nrm.x / len), static_cast<float>(nrm.y / len),
+                                 static_cast<float>(nrm.z / len)});
     } else {
       buffers.normals.push_back({0.0f, 0.0f, 1.0f});
     }
@@ -182,7 +188,8 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   glb.maxPositionError = std::clamp(0.1 * tile.error, 0.0005, 0.01);
   // The record states the requested bound, which the encoder's actual one
   // never exceeds (the checkers compare decoded tiles against it).
-  record.positionErrorBound = options.compression == encode::Compression::Draco ? glb.maxPositionError : 0.0;
+  record.positionErrorBound =
+      options.compression == encode::Compression::Draco ? glb.maxPositionError : 0.0;
   glb.assetExtras = recordToJson(record);
   encode::GlbResult result = encode::encodeGlb(buffers, encode::zUpContentRootMatrix(centre), glb);
   record.positionBits = result.positionBits;

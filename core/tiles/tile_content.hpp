@@ -43,10 +43,10 @@ struct ContentOptions {
 /// What tileset.json says of a tile.
 struct TileRecord {
   TileId id;
-  double error = 0.0;                  ///< measured max |tile − TIN| (m)
-  std::array<double, 6> region{};      ///< west, south, east, north (rad), min, max height (m)
-  std::array<double, 12> box{};        ///< local frame: centre, then three half-axes (m)
-  bool local = false;                  ///< which of region / box is meaningful
+  double error = 0.0;              ///< measured max |tile − TIN| (m)
+  std::array<double, 6> region{};  ///< west, south, east, north (rad), min, max height (m)
+  std::array<double, 12> box{};    ///< local frame: centre, then three half-axes (m)
+  bool local = false;              ///< which of region / box is meaningful
   std::size_t vertices = 0, triangles = 0, bytes = 0;
   std::size_t breakLineVertices = 0;
   int positionBits = 0;

@@ -29,44 +29,72 @@ struct Tiler::Zoom {
 
 namespace {
 
-/// Points sampled from the TIN's triangles where its vertices are sparse: a
-/// triangle whose longest edge exceeds twice the median edge gets the interior
-/// points of a barycentric grid at about the median edge's spacing, z on the
-/// triangle's plane. Deterministic.
-std::vector<Point3> fitData(const TinData& tin) {
-  std::vector<Point3> data = tin.vertices;
+/// The data the fits see: the TIN's vertices, plus points sampled from its
+/// triangles where its vertices are sparse (a triangle whose longest edge
+/// exceeds twice the median edge gets the interior points of a barycentric
+/// grid at about the median edge's spacing, z on the triangle's plane).
+/// `zoomFit` leaves out what the tile meshes hold exactly — vertices of break
+/// lines, and samples of the triangles at them —
+/// so a zoom's binary fit is not driven to tiny cells by the steps a break
+/// line makes (a river lowered below its banks); the tiles' own fits use it all.
+struct FitData {
+  std::vector<Point3> all;
+  std::vector<Point3> zoomFit;
+};
+
+FitData fitData(const TinData& tin) {
+  FitData data;
+  data.all = tin.vertices;
+  std::vector<char> held(tin.vertices.size(), 0);
+  for (const auto& e : tin.constrainedEdges) {
+    if (e.feature < tin.features.size() && isBreakLineKind(tin.features[e.feature].kind))
+      held[e.a] = held[e.b] = 1;
+  }
+  for (std::size_t v = 0; v < tin.vertices.size(); ++v)
+    if (!held[v]) data.zoomFit.push_back(tin.vertices[v]);
   std::vector<double> lengths;
   lengths.reserve(tin.triangles.size());
-  for (std::size_t k = 0; k < tin.triangles.size(); k += std::max<std::size_t>(1, tin.triangles.size() / 20000)) {
+  for (std::size_t k = 0; k < tin.triangles.size();
+       k += std::max<std::size_t>(1, tin.triangles.size() / 20000)) {
     const auto& t = tin.triangles[k];
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
     lengths.push_back(std::hypot(b.x - a.x, b.y - a.y));
   }
   if (lengths.empty()) return data;
-  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+  std::nth_element(lengths.begin(),
+                   lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2),
+                   lengths.end());
   const double spacing = lengths[lengths.size() / 2];
   if (!(spacing > 0)) return data;
   for (const auto& t : tin.triangles) {
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
     const Point3& c = tin.vertices[t[2]];
-    const double longest = std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
-                                     std::hypot(a.x - c.x, a.y - c.y)});
+    const double longest =
+        std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
+                  std::hypot(a.x - c.x, a.y - c.y)});
     if (longest <= 2 * spacing) continue;
+    const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
     const int n = static_cast<int>(std::min(64.0, std::ceil(longest / spacing)));
     for (int i = 1; i < n; ++i) {
       for (int j = 1; i + j < n; ++j) {
-        const double u = static_cast<double>(i) / n, v = static_cast<double>(j) / n, w = 1.0 - u - v;
-        data.push_back({w * a.x + u * b.x + v * c.x, w * a.y + u * b.y + v * c.y, w * a.z + u * b.z + v * c.z});
+        const double u = static_cast<double>(i) / n, v = static_cast<double>(j) / n,
+                     w = 1.0 - u - v;
+        const Point3 p{w * a.x + u * b.x + v * c.x, w * a.y + u * b.y + v * c.y,
+                       w * a.z + u * b.z + v * c.z};
+        data.all.push_back(p);
+        if (!nearHeld) data.zoomFit.push_back(p);
       }
     }
   }
+  // A TIN that is all break lines still needs something to fit.
+  if (data.zoomFit.size() < 3) data.zoomFit = data.all;
   return data;
 }
 
-fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, const PyramidGeometry& g, double tolerance,
-                                      int maxLevel) {
+fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, const PyramidGeometry& g,
+                                      double tolerance, int maxLevel) {
   fit::MultilevelOptions m;
   m.smoothing = fit::Smoothing::ThinPlate;
   m.lambdaFactor = o.lambdaFactor;
@@ -112,7 +140,8 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
                      "set [tiles] tolerance or --tolerance to e.g. 1");
   }
   if (options_.maxTriangles < 64) {
-    throw usageError("max_triangles must be at least 64 (got " + std::to_string(options_.maxTriangles) + ")");
+    throw usageError("max_triangles must be at least 64 (got " +
+                     std::to_string(options_.maxTriangles) + ")");
   }
   if (tin.triangles.empty() || tin.vertices.size() < 3) {
     throw inputError("the TIN has no triangles to tile", {}, "build it with tinsmith tin first");
@@ -130,15 +159,26 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   int d = 0;
   while (2.0 * std::pow(4.0, d + 2) <= static_cast<double>(options_.maxTriangles) / 2) ++d;
   levelsPerTile_ = std::max(d, 1);
-  data_ = fitData(tin);
+  FitData data = fitData(tin);
+  data_ = std::move(data.all);
+  zoomData_ = std::move(data.zoomFit);
   lines_ = extractTerrainLines(tin);
 
-  // The finest zoom: the first whose fit can reach the level the finest fit needs.
-  const int cap = std::min(options_.maxZoom + levelsPerTile_, fit::BinaryTriangulation::kMaxGridLevels - 1);
+  // The finest planned zoom: the first whose tiles hold the finest fit's
+  // triangles within a quarter of the budget each, on average over the
+  // square. Zooms below it keep the finest tolerance: they exist only where a
+  // tile of the planned finest zoom cannot meet it within levelsPerTile levels.
+  const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
+                           fit::BinaryTriangulation::kMaxGridLevels - 1);
   auto planning = std::make_unique<fit::MultilevelFit>(
-      fit::fitMultilevel(data_, zoomFitOptions(options_, geometry_, options_.tolerance, cap)));
-  const int reached = planning->levels().back().level;
-  finestZoom_ = std::clamp(reached - levelsPerTile_, 0, options_.maxZoom);
+      fit::fitMultilevel(zoomData_, zoomFitOptions(options_, geometry_, options_.tolerance, cap)));
+  const double finestTriangles = static_cast<double>(planning->levels().back().triangles);
+  const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
+  int zmax = 0;
+  while (zmax < options_.maxZoom.value_or(20) && finestTriangles > perTile * std::pow(4.0, zmax))
+    ++zmax;
+  finestZoom_ = zmax;
+  maxZoom_ = std::min(options_.maxZoom.value_or(finestZoom_ + 6), 30);
   if (finestZoom_ + levelsPerTile_ == cap) {
     auto zoom = std::make_shared<Zoom>();
     zoom->z = finestZoom_;
@@ -151,9 +191,13 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
 
 Tiler::~Tiler() = default;
 
-double Tiler::zoomTolerance(int z) const { return std::ldexp(options_.tolerance, finestZoom_ - z); }
+double Tiler::zoomTolerance(int z) const {
+  return std::ldexp(options_.tolerance, std::max(0, finestZoom_ - z));
+}
 
-std::size_t Tiler::keptLineVertices(int z) const { return zoom(z).keptLineVertices; }
+std::size_t Tiler::keptLineVertices(int z) const {
+  return zoom(z).keptLineVertices;
+}
 
 const Tiler::Zoom& Tiler::zoom(int z) const {
   std::shared_ptr<std::once_flag> once;
@@ -181,8 +225,8 @@ const Tiler::Zoom& Tiler::zoom(int z) const {
       if (planned) {
         zd.fit = std::move(planned->fit);
       } else {
-        zd.fit = std::make_unique<fit::MultilevelFit>(
-            fit::fitMultilevel(data_, zoomFitOptions(options_, geometry_, zd.tolerance, maxLevel)));
+        zd.fit = std::make_unique<fit::MultilevelFit>(fit::fitMultilevel(
+            zoomData_, zoomFitOptions(options_, geometry_, zd.tolerance, maxLevel)));
       }
     }
     const auto& mesh = zd.fit->mesh();
@@ -191,7 +235,8 @@ const Tiler::Zoom& Tiler::zoom(int z) const {
     const std::uint64_t step = 1ULL << shift, tilesASide = 1ULL << z;
     for (std::uint64_t key : mesh.activeKeys()) {
       const std::uint64_t col = mesh.column(key), row = mesh.row(key);
-      std::uint64_t xs[2] = {std::min(col >> shift, tilesASide - 1), 0}, ys[2] = {std::min(row >> shift, tilesASide - 1), 0};
+      std::uint64_t xs[2] = {std::min(col >> shift, tilesASide - 1), 0},
+                    ys[2] = {std::min(row >> shift, tilesASide - 1), 0};
       int nx = 1, ny = 1;
       if (col % step == 0 && col > 0 && (col >> shift) < tilesASide) xs[nx++] = (col >> shift) - 1;
       if (row % step == 0 && row > 0 && (row >> shift) < tilesASide) ys[ny++] = (row >> shift) - 1;
@@ -227,6 +272,7 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   const auto& mesh = fit.mesh();
   const Rect rect = geometry_.bounds(id);
   const double snap = rect.width() * 1e-9;
+
   TileSurface tile;
   tile.id = id;
   tile.bounds = rect;
@@ -241,11 +287,12 @@ TileSurface Tiler::buildTile(const TileId& id) const {
 
   // The binary vertices of the zoom fit in and on the tile.
   const std::uint64_t tileIndex = static_cast<std::uint64_t>(id.y) * (1ULL << id.z) + id.x;
-  auto lo = std::lower_bound(zd.keysByTile.begin(), zd.keysByTile.end(), std::pair<std::uint64_t, std::uint64_t>{tileIndex, 0});
+  auto lo = std::lower_bound(zd.keysByTile.begin(), zd.keysByTile.end(),
+                             std::pair<std::uint64_t, std::uint64_t>{tileIndex, 0});
   const auto zValues = fit.vertexZ();
   auto binaryPoint = [&](std::uint64_t key) {
-    return Point3{geometry_.lineX(zd.gridLevels, mesh.column(key)), geometry_.lineY(zd.gridLevels, mesh.row(key)),
-                  zValues[mesh.vertexId(key)]};
+    return Point3{geometry_.lineX(zd.gridLevels, mesh.column(key)),
+                  geometry_.lineY(zd.gridLevels, mesh.row(key)), zValues[mesh.vertexId(key)]};
   };
 
   // Side vertices: corners, binary vertices on a side, line points on a side.
@@ -268,12 +315,56 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   }
   std::vector<Point3> interior;
   for (auto it = lo; it != zd.keysByTile.end() && it->first == tileIndex; ++it) {
-    const Point3 p = binaryPoint(it->second);
+    Point3 p = binaryPoint(it->second);
     if (p.x == rect.x0 || p.x == rect.x1 || p.y == rect.y0 || p.y == rect.y1) {
       addToSides(p, false);
     } else {
       interior.push_back(p);
     }
+  }
+  // The zoom fit's triangles in the tile, cut at its sides: their edges go in
+  // as constraints, so the tile reproduces the zoom's surface exactly before
+  // its own fit (a tile smaller than the fit's triangles would otherwise miss
+  // the creases between them).
+  std::vector<ClippedPiece> binaryEdges;
+  {
+    const double scale = static_cast<double>(1ULL << shift);
+    const double gx0 = static_cast<double>(id.x) * scale, gy0 = static_cast<double>(id.y) * scale;
+    const double gx1 = gx0 + scale, gy1 = gy0 + scale;
+    std::vector<fit::BinaryTriangle> stack;
+    for (const auto& r : mesh.rootTriangles()) stack.push_back(r);
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> edges;
+    while (!stack.empty()) {
+      const fit::BinaryTriangle t = stack.back();
+      stack.pop_back();
+      const Point2 a = mesh.gridPosition(t.l), b = mesh.gridPosition(t.a),
+                   c = mesh.gridPosition(t.r);
+      if (std::max({a.x, b.x, c.x}) < gx0 || std::min({a.x, b.x, c.x}) > gx1 ||
+          std::max({a.y, b.y, c.y}) < gy0 || std::min({a.y, b.y, c.y}) > gy1) {
+        continue;
+      }
+      if (mesh.isSplit(t)) {
+        const std::uint64_t j = (t.l + t.r) / 2;
+        // SubmeshRefine (2.10): (l, a, r) splits into (a, j, l) and (r, j, a).
+        stack.push_back({t.a, j, t.l, 0, t.depth + 1});
+        stack.push_back({t.r, j, t.a, 0, t.depth + 1});
+        continue;
+      }
+      for (auto [u, v] : {std::pair{t.l, t.r}, std::pair{t.r, t.a}, std::pair{t.a, t.l}}) {
+        edges.push_back({std::min(u, v), std::max(u, v)});
+      }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    for (const auto& [u, v] : edges) {
+      TerrainLine e;
+      e.kind = FeatureKind::Raster;
+      e.points = {binaryPoint(u), binaryPoint(v)};
+      for (auto& piece : clipToRect(e, rect, snap)) binaryEdges.push_back(std::move(piece));
+    }
+  }
+  for (const auto& piece : binaryEdges) {
+    for (const auto& p : piece.points) addToSides(p, false);
   }
   for (const auto& piece : pieces) {
     for (const auto& p : piece.points) addToSides(p, true);
@@ -290,7 +381,8 @@ TileSurface Tiler::buildTile(const TileId& id) const {
       ring.push_back(side[k].p);
     }
   }
-  if (ring.size() > 1 && ring.front().x == ring.back().x && ring.front().y == ring.back().y) ring.pop_back();
+  if (ring.size() > 1 && ring.front().x == ring.back().x && ring.front().y == ring.back().y)
+    ring.pop_back();
 
   // The tile's constrained triangulation.
   Cdt cdt(CdtOptions{});
@@ -305,6 +397,7 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     cdt.insertConstraint(pieces[i].points, pieceFeature[i], pieces[i].closed);
   }
   cdt.insertPoints(interior, binaryFeature);
+  for (const auto& piece : binaryEdges) cdt.insertConstraint(piece.points, binaryFeature);
   cdt.finalize();
   TinData td = cdt.toTinData();
 
@@ -314,7 +407,7 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   std::map<std::pair<std::uint32_t, std::uint32_t>, bool> ringEdges;
   for (const auto& e : td.constrainedEdges) {
     const FeatureKind kind = td.features[e.feature].kind;
-    if (kind == FeatureKind::Raster) continue;
+    if (kind == FeatureKind::Raster || kind == FeatureKind::SpotHeight) continue;
     flags[e.a] |= kHeld;
     flags[e.b] |= kHeld;
     if (kind == FeatureKind::Boundary) ringEdges[{e.a, e.b}] = true;
@@ -397,6 +490,10 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     samples.push_back({loc->triangle.value, loc->weights, p.z, 1.0});
   }
   tile.dataPoints = samples.size();
+  // Each free vertex also carries the zoom fit's value as a weak sample, so
+  // a vertex with no data in its triangles (slivers beside a break line make
+  // λ_d small) stays near the zoom's surface instead of being undetermined.
+  constexpr double kPriorWeight = 0.25;
   // Surface may renumber nothing: its mesh keeps TinData's triangle order.
   std::vector<Point2> xy;
   xy.reserve(local.vertices.size());
@@ -412,11 +509,17 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     } else {
       ++freeCount;
       tile.vertices[v].z = fit.evaluate(tile.vertices[v].xy());
+      const auto loc = surface.locate(xy[v], hint);
+      if (loc) {
+        hint = loc->triangle;
+        samples.push_back({loc->triangle.value, loc->weights, tile.vertices[v].z, kPriorWeight});
+      }
     }
     initial[v] = tile.vertices[v].z;
   }
   if (freeCount > 0 && !samples.empty()) {
-    ls.solver = tile.vertices.size() <= 40000 ? fit::SolverKind::Direct : fit::SolverKind::ConjugateGradient;
+    ls.solver = tile.vertices.size() <= 40000 ? fit::SolverKind::Direct
+                                              : fit::SolverKind::ConjugateGradient;
     const auto result = fit::fitLeastSquares(xy, local.triangles, samples, ls, initial);
     for (std::uint32_t v = 0; v < tile.vertices.size(); ++v) {
       if (!(tile.flags[v] & kHeld)) tile.vertices[v].z = result.coefficients[v];

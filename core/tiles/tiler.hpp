@@ -6,11 +6,14 @@
 // squares fit (8.9) over that mesh with break-line and boundary vertices held
 // at the TIN's z and the tile's side vertices held at the zoom fit's z.
 //
-// Tolerances: the finest zoom Z meets `tolerance`; zoom z's is tolerance ·
-// 2^(Z − z). Z is the smallest zoom whose fit, refined at most `levelsPerTile`
-// levels below the zoom, reaches the level the finest fit needs, so a tile
-// holds at most about 2·4^(levelsPerTile + 1) binary triangles. A tile gets
-// children when its measured error is above `tolerance` (and z < maxZoom).
+// Tolerances: the finest planned zoom Z meets `tolerance`; zoom z's is
+// tolerance · 2^(Z − z), and zooms below Z keep `tolerance`. Z is the first
+// zoom whose tiles would hold the finest fit's triangles within a quarter of
+// `maxTriangles` each on average; a zoom's fit refines at most
+// `levelsPerTile` levels below the zoom, so a tile holds at most about
+// 2·4^(levelsPerTile + 1) binary triangles, and where the terrain needs more
+// (steep ground) the tiles of Z are refined further. A tile gets children
+// when its measured error is above `tolerance` (and z < maxZoom).
 //
 // Every tile is a pure function of the TIN, the options and its id: tiles can
 // be built in any order, on any thread, in separate processes, and give the same
@@ -25,6 +28,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -37,11 +41,14 @@
 namespace tinsmith::tiles {
 
 struct TilerOptions {
-  double tolerance = 1.0;             ///< metres; what the finest zoom meets
-  std::size_t maxTriangles = 32768;   ///< per tile, sets levelsPerTile
-  int maxZoom = 20;                   ///< no tile below this zoom
-  double lambdaFactor = 1.0;          ///< thin-plate λ = factor · λ_d, per fit
-  int threads = 0;                    ///< for the zoom fits (0 = all cores)
+  double tolerance = 1.0;            ///< metres; what the finest zoom meets
+  std::size_t maxTriangles = 32768;  ///< per tile, sets levelsPerTile
+  /// No tile below this zoom; by default the planned finest zoom + 6.
+  std::optional<int> maxZoom;
+  /// Thin-plate λ = factor · λ_d in every fit. Light: the tiles approximate a
+  /// TIN (no noise), and the samples fill its large triangles.
+  double lambdaFactor = 0.01;
+  int threads = 0;  ///< for the zoom fits (0 = all cores)
 };
 
 /// One tile's surface, in the project CRS.
@@ -52,14 +59,15 @@ struct TileSurface {
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< CCW
   /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed.
   std::vector<std::uint8_t> flags;
-  double error = 0.0;             ///< measured max |surface − TIN| (m)
+  double error = 0.0;  ///< measured max |surface − TIN| (m)
   Point2 errorAt;
   std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
   std::size_t dataPoints = 0;         ///< data points the tile's fit used
   [[nodiscard]] bool empty() const { return triangles.empty(); }
 };
 
-inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8, kHeld = 16;
+inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8,
+                              kHeld = 16;
 
 class Tiler {
  public:
@@ -72,13 +80,14 @@ class Tiler {
   [[nodiscard]] const PyramidGeometry& geometry() const { return geometry_; }
   [[nodiscard]] const TilerOptions& options() const { return options_; }
   [[nodiscard]] int finestZoom() const { return finestZoom_; }
+  [[nodiscard]] int maxZoom() const { return maxZoom_; }
   [[nodiscard]] int levelsPerTile() const { return levelsPerTile_; }
   [[nodiscard]] double zoomTolerance(int z) const;
   [[nodiscard]] const TinData& tin() const { return tin_; }
   [[nodiscard]] std::size_t dataPointCount() const { return data_.size(); }
   /// Whether a tile with this error gets children.
   [[nodiscard]] bool refines(const TileId& id, double error) const {
-    return error > options_.tolerance && id.z < options_.maxZoom;
+    return error > options_.tolerance && id.z < maxZoom_;
   }
   /// Break-line and ring vertices kept at a zoom (for reports).
   [[nodiscard]] std::size_t keptLineVertices(int z) const;
@@ -93,10 +102,12 @@ class Tiler {
   const TinData& tin_;
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
-  std::vector<Point3> data_;       // TIN vertices and points sampled from its triangles
+  std::vector<Point3> data_;      // TIN vertices and points sampled from its triangles
+  std::vector<Point3> zoomData_;  // the part of data_ the zoom fits refine for
   std::vector<TerrainLine> lines_;
   TinIndex index_;
   int finestZoom_ = 0;
+  int maxZoom_ = 0;
   int levelsPerTile_ = 5;
   mutable std::mutex mutex_;
   mutable std::map<int, std::shared_ptr<Zoom>> zooms_;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <functional>
 #include <map>
-
 #include <nlohmann/json.hpp>
 
 #include "core/base/error.hpp"
@@ -21,7 +20,8 @@ struct Node {
 };
 
 std::string externalKey(const TileId& id) {
-  return "tilesets/" + std::to_string(id.z) + "/" + std::to_string(id.x) + "/" + std::to_string(id.y) + ".json";
+  return "tilesets/" + std::to_string(id.z) + "/" + std::to_string(id.x) + "/" +
+         std::to_string(id.y) + ".json";
 }
 
 Json boundingVolume(const TileRecord& r) {
@@ -56,7 +56,8 @@ void grow(TileRecord& a, const TileRecord& b) {
 }  // namespace
 
 std::string tileContentKey(const TileId& id) {
-  return "tiles/" + std::to_string(id.z) + "/" + std::to_string(id.x) + "/" + std::to_string(id.y) + ".glb";
+  return "tiles/" + std::to_string(id.z) + "/" + std::to_string(id.x) + "/" + std::to_string(id.y) +
+         ".glb";
 }
 
 std::vector<std::pair<std::string, std::string>> tilesetFiles(std::span<const TileRecord> records,
@@ -67,15 +68,18 @@ std::vector<std::pair<std::string, std::string>> tilesetFiles(std::span<const Ti
   const TileId root = nodes.begin()->first;  // the lowest zoom comes first
   for (auto& [id, node] : nodes) {
     if (id == root) continue;
-    if (id.z <= root.z) throw internalError("tilesetFiles: two roots, " + root.name() + " and " + id.name());
+    if (id.z <= root.z)
+      throw internalError("tilesetFiles: two roots, " + root.name() + " and " + id.name());
     auto parent = nodes.find(id.parent());
-    if (parent == nodes.end()) throw internalError("tilesetFiles: tile " + id.name() + " has no parent");
+    if (parent == nodes.end())
+      throw internalError("tilesetFiles: tile " + id.name() + " has no parent");
     parent->second.children.push_back(id);
   }
   // Bottom-up: declared errors and volumes (the deepest zoom first).
   std::vector<TileId> order;
   for (const auto& [id, node] : nodes) order.push_back(id);
-  std::stable_sort(order.begin(), order.end(), [](const TileId& a, const TileId& b) { return a.z > b.z; });
+  std::stable_sort(order.begin(), order.end(),
+                   [](const TileId& a, const TileId& b) { return a.z > b.z; });
   for (const TileId& id : order) {
     Node& node = nodes[id];
     node.declaredError = std::max(node.declaredError, node.record.error);
@@ -88,9 +92,8 @@ std::vector<std::pair<std::string, std::string>> tilesetFiles(std::span<const Ti
   const bool split = nodes.size() > options.maxTilesPerFile && options.externalEvery > 0;
   std::vector<std::pair<std::string, std::string>> files;
   // Builds the JSON of `id`'s subtree; `prefix` leads from the file back to the root folder.
-  std::function<Json(const TileId&, const std::string&, bool)> tileJson = [&](const TileId& id,
-                                                                            const std::string& prefix,
-                                                                            bool fileRoot) -> Json {
+  std::function<Json(const TileId&, const std::string&, bool)> tileJson =
+      [&](const TileId& id, const std::string& prefix, bool fileRoot) -> Json {
     const Node& node = nodes[id];
     Json t;
     t["boundingVolume"] = boundingVolume(node.record);

@@ -1,9 +1,9 @@
 #include "ingest/tiles/proj_georeference.hpp"
 
+#include <ogr_spatialref.h>
+
 #include <atomic>
 #include <unordered_map>
-
-#include <ogr_spatialref.h>
 
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
@@ -50,8 +50,9 @@ ProjGeoReference::ProjGeoReference(std::string crs, std::string geoid)
     : crs_(std::move(crs)), geoid_(std::move(geoid)), serial_(nextSerial++) {
   ensureGdalReady();
   if (crs_.empty()) {
-    throw inputError("the TIN has no CRS, so its tiles cannot be placed on the globe", {},
-                     "rebuild it with a CRS (tinsmith tin --crs EPSG:…) or tile with --frame local");
+    throw inputError(
+        "the TIN has no CRS, so its tiles cannot be placed on the globe", {},
+        "rebuild it with a CRS (tinsmith tin --crs EPSG:…) or tile with --frame local");
   }
   if (geoid_.empty()) {
     sourceDefinition_ = crs_;
@@ -70,7 +71,8 @@ ProjGeoReference::ProjGeoReference(std::string crs, std::string geoid)
     sourceDefinition_ = wkt ? wkt : "";
     CPLFree(wkt);
   } else {
-    throw usageError("unknown geoid '" + geoid_ + "'", "use geoid = \"egm96\" or leave it out (ellipsoidal heights)");
+    throw usageError("unknown geoid '" + geoid_ + "'",
+                     "use geoid = \"egm96\" or leave it out (ellipsoidal heights)");
   }
   (void)forThisThread();  // fail now, not on a worker
 }
@@ -87,7 +89,8 @@ ProjGeoReference::Transform& ProjGeoReference::forThisThread() const {
   return *slot;
 }
 
-void ProjGeoReference::toGeodetic(std::span<const Point3> in, std::span<encode::Geodetic> out) const {
+void ProjGeoReference::toGeodetic(std::span<const Point3> in,
+                                  std::span<encode::Geodetic> out) const {
   Transform& t = forThisThread();
   std::vector<double> x(in.size()), y(in.size()), z(in.size());
   for (std::size_t i = 0; i < in.size(); ++i) {
@@ -96,12 +99,14 @@ void ProjGeoReference::toGeodetic(std::span<const Point3> in, std::span<encode::
     z[i] = in[i].z;
   }
   std::vector<int> ok(in.size(), 0);
-  if (!in.empty() && !t.ct->Transform(in.size(), x.data(), y.data(), z.data(), nullptr, ok.data())) {
+  if (!in.empty() &&
+      !t.ct->Transform(in.size(), x.data(), y.data(), z.data(), nullptr, ok.data())) {
     for (std::size_t i = 0; i < in.size(); ++i) {
       if (!ok[i]) {
-        throw inputError("PROJ could not transform the point (" + std::to_string(in[i].x) + ", " +
-                             std::to_string(in[i].y) + ") from " + crs_ + " to WGS84",
-                         {}, "check that the TIN's CRS is right and that the point is inside its area of use");
+        throw inputError(
+            "PROJ could not transform the point (" + std::to_string(in[i].x) + ", " +
+                std::to_string(in[i].y) + ") from " + crs_ + " to WGS84",
+            {}, "check that the TIN's CRS is right and that the point is inside its area of use");
       }
     }
   }

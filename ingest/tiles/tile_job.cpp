@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
-
 #include <nlohmann/json.hpp>
 
 #include "core/base/error.hpp"
@@ -24,7 +23,9 @@ namespace {
 constexpr const char* kBuildKey = "tinsmith/build.json";
 constexpr const char* kTinKey = "tinsmith/terrain.tin";
 
-std::string compressionName(encode::Compression c) { return c == encode::Compression::Draco ? "draco" : "none"; }
+std::string compressionName(encode::Compression c) {
+  return c == encode::Compression::Draco ? "draco" : "none";
+}
 
 /// What the tiles are a function of (and nothing else: no subtree, no
 /// threads, no time), so shards and resumed runs can be checked against it.
@@ -37,8 +38,10 @@ std::string buildRecord(const TinData& tin, const std::string& tinBytes, const s
               {"vertices", tin.vertices.size()},
               {"triangles", tin.triangles.size()},
               {"crs", tin.crs}};
-  j["options"] = {{"tolerance", o.tiler.tolerance},   {"maxTriangles", o.tiler.maxTriangles},
-                  {"maxZoom", o.tiler.maxZoom},       {"lambdaFactor", o.tiler.lambdaFactor},
+  j["options"] = {{"tolerance", o.tiler.tolerance},
+                  {"maxTriangles", o.tiler.maxTriangles},
+                  {"maxZoom", tiler.maxZoom()},
+                  {"lambdaFactor", o.tiler.lambdaFactor},
                   {"compression", compressionName(o.compression)},
                   {"frame", o.frame == tiles::ContentFrame::Ecef ? "ecef" : "local"},
                   {"geoid", o.geoid}};
@@ -49,7 +52,8 @@ std::string buildRecord(const TinData& tin, const std::string& tinBytes, const s
   return j.dump(2) + "\n";
 }
 
-bool tileKeyLess(const std::string& a, const std::string& b, const std::map<std::string, TileId>& ids) {
+bool tileKeyLess(const std::string& a, const std::string& b,
+                 const std::map<std::string, TileId>& ids) {
   return ids.at(a) < ids.at(b);
 }
 
@@ -71,7 +75,8 @@ std::vector<std::string> canonicalKeys(const std::vector<std::string>& keys) {
     }
   }
   std::sort(head.begin(), head.end());
-  std::sort(tileKeys.begin(), tileKeys.end(), [&](auto& a, auto& b) { return tileKeyLess(a, b, ids); });
+  std::sort(tileKeys.begin(), tileKeys.end(),
+            [&](auto& a, auto& b) { return tileKeyLess(a, b, ids); });
   std::sort(tail.begin(), tail.end());
   std::vector<std::string> out = head;
   out.insert(out.end(), tileKeys.begin(), tileKeys.end());
@@ -82,7 +87,8 @@ std::vector<std::string> canonicalKeys(const std::vector<std::string>& keys) {
 std::string tilesetExtras(const std::string& build) {
   const auto b = nlohmann::json::parse(build);
   nlohmann::ordered_json e;
-  e["tinsmith"] = {{"crs", b["tin"]["crs"]}, {"tolerance", b["options"]["tolerance"]},
+  e["tinsmith"] = {{"crs", b["tin"]["crs"]},
+                   {"tolerance", b["options"]["tolerance"]},
                    {"finestZoom", b["pyramid"]["finestZoom"]}};
   return e.dump();
 }
@@ -97,7 +103,7 @@ TileJobSummary summarize(const std::vector<TileRecord>& records, const std::stri
   for (const auto& r : records) {
     auto& z = zooms[r.id.z];
     z.z = r.id.z;
-    z.tolerance = std::ldexp(tolerance, s.finestZoom - r.id.z);
+    z.tolerance = std::ldexp(tolerance, std::max(0, s.finestZoom - r.id.z));
     ++z.tiles;
     z.triangles += r.triangles;
     z.vertices += r.vertices;
@@ -112,7 +118,8 @@ TileJobSummary summarize(const std::vector<TileRecord>& records, const std::stri
 }
 
 /// Records of every tile in a store, from the tiles themselves.
-std::vector<TileRecord> storeRecords(const store::TileStore& st, std::map<TileId, std::string>* keysOut = nullptr) {
+std::vector<TileRecord> storeRecords(const store::TileStore& st,
+                                     std::map<TileId, std::string>* keysOut = nullptr) {
   std::vector<TileRecord> records;
   for (const auto& key : st.keys()) {
     if (key.rfind("tiles/", 0) != 0) continue;
@@ -123,13 +130,16 @@ std::vector<TileRecord> storeRecords(const store::TileStore& st, std::map<TileId
                        "rebuild the store with tinsmith tile");
     }
     if (tiles::tileContentKey(record->id) != key) {
-      throw inputError("tile " + key + " in " + st.path().string() + " says it is " + record->id.name());
+      throw inputError("tile " + key + " in " + st.path().string() + " says it is " +
+                       record->id.name());
     }
     records.push_back(*record);
+    records.back().bytes = bytes->size();
     if (keysOut) (*keysOut)[record->id] = key;
   }
   std::sort(records.begin(), records.end(), [](const TileRecord& a, const TileRecord& b) {
-    return a.id.z < b.id.z || (a.id.z == b.id.z && (a.id.y < b.id.y || (a.id.y == b.id.y && a.id.x < b.id.x)));
+    return a.id.z < b.id.z ||
+           (a.id.z == b.id.z && (a.id.y < b.id.y || (a.id.y == b.id.y && a.id.x < b.id.x)));
   });
   return records;
 }
@@ -148,7 +158,9 @@ void finish(store::TileStore& stage, const fs::path& output, const std::vector<T
 
 fs::path stagingPath(const fs::path& output) {
   if (store::storeKindFor(output) == store::StoreKind::Directory) return output;
-  return fs::path(output.string() + ".partial");
+  fs::path stage = output;
+  stage.replace_extension(".partial.3dtiles");
+  return stage;
 }
 
 }  // namespace
@@ -187,8 +199,9 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   if (options.resume) {
     const auto previous = stage->get(kBuildKey);
     if (previous && *previous != build) {
-      throw usageError("the store " + stagePath.string() + " was built from another TIN or other options",
-                       "run without --resume to start over, or with the options it was built with");
+      throw usageError(
+          "the store " + stagePath.string() + " was built from another TIN or other options",
+          "run without --resume to start over, or with the options it was built with");
     }
   }
   stage->put(kBuildKey, build);
@@ -202,7 +215,9 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     };
   }
   const int untilZoom = options.untilZoom.value_or(1 << 20);
-  callbacks.emit = [&](const tiles::TileContent& c) { stage->put(tiles::tileContentKey(c.record.id), c.glb); };
+  callbacks.emit = [&](const tiles::TileContent& c) {
+    stage->put(tiles::tileContentKey(c.record.id), c.glb);
+  };
   callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
     reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
   };
@@ -231,21 +246,24 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
 }
 
 TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::path& output) {
-  if (inputs.empty()) throw usageError("nothing to merge", "name the shard stores: tinsmith merge A B … -o ALL");
+  if (inputs.empty())
+    throw usageError("nothing to merge", "name the shard stores: tinsmith merge A B … -o ALL");
   const fs::path stagePath = stagingPath(output);
   auto stage = store::openStoreForWriting(stagePath, false);
   std::string build;
   for (const auto& path : inputs) {
     auto in = store::openStoreForReading(path);
     const auto b = in->get(kBuildKey);
-    if (!b) throw inputError(path.string() + " is not a tinsmith tile store (no " + kBuildKey + ")");
+    if (!b)
+      throw inputError(path.string() + " is not a tinsmith tile store (no " + kBuildKey + ")");
     if (build.empty()) {
       build = *b;
       stage->put(kBuildKey, build);
       if (auto tin = in->get(kTinKey)) stage->put(kTinKey, *tin);
     } else if (*b != build) {
-      throw usageError(path.string() + " was built from another TIN or other options than " + inputs[0].string(),
-                       "merge only shards of one job");
+      throw usageError(
+          path.string() + " was built from another TIN or other options than " + inputs[0].string(),
+          "merge only shards of one job");
     }
     for (const auto& key : in->keys()) {
       if (key.rfind("tiles/", 0) != 0) continue;
@@ -269,8 +287,9 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     bool any = false;
     for (int c = 0; c < 4; ++c) any = any || present.contains(r.id.child(c));
     if (!any) {
-      throw usageError("tile " + r.id.name() + " is refined but none of its children is in the shards",
-                       "add the shard of subtree " + r.id.child(0).name() + " (and its siblings)");
+      throw usageError(
+          "tile " + r.id.name() + " is refined but none of its children is in the shards",
+          "add the shard of subtree " + r.id.child(0).name() + " (and its siblings)");
     }
   }
   finish(*stage, output, records, build);

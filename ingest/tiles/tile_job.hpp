@@ -4,7 +4,7 @@
 //   tinsmith/terrain.tin  the TIN itself (the server answers elevations from it)
 //   tiles/{z}/{x}/{y}.glb one per tile; asset.extras carries the tile's record
 //   tileset.json (+ tilesets/…) written last, from the records
-// An archive output is staged in "<output>.partial" (resumable) and written
+// An archive output X.3dtiles is staged in "X.partial.3dtiles" (resumable) and written
 // out at the end in one canonical key order, atomically, so one run, a resumed
 // run and merged shards give the same bytes and a half-done archive never
 // appears under the output's name. A directory output is written in place,
@@ -29,9 +29,9 @@ struct TileJobOptions {
   tiles::TilerOptions tiler;
   encode::Compression compression = encode::Compression::Draco;
   tiles::ContentFrame frame = tiles::ContentFrame::Ecef;
-  std::string geoid;                      ///< "" (ellipsoidal) or "egm96"
-  std::optional<tiles::TileId> subtree;   ///< only this tile and its descendants
-  std::optional<int> untilZoom;           ///< only tiles above this zoom
+  std::string geoid;                     ///< "" (ellipsoidal) or "egm96"
+  std::optional<tiles::TileId> subtree;  ///< only this tile and its descendants
+  std::optional<int> untilZoom;          ///< only tiles above this zoom
   bool resume = false;
   int threads = 0;
 };
@@ -56,19 +56,21 @@ struct TileJobSummary {
 /// `output`. Throws usageError for bad options (a --resume whose store was
 /// built from other input or options), ioError when the store cannot be
 /// written (nothing half-written is left under the output's name).
-TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const std::filesystem::path& output,
-                          const TileJobOptions& options, const Progress* progress = nullptr);
+TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
+                          const std::filesystem::path& output, const TileJobOptions& options,
+                          const Progress* progress = nullptr);
 
 /// Joins stores built from the same TIN and options (shards: subtrees and the
 /// tiles above them) into one, as one run would have written it. Throws
 /// usageError when they disagree (other input or options, a tile with
 /// different bytes) or a refined tile's children are missing from all.
-TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output);
+TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs,
+                               const std::filesystem::path& output);
 
 /// What `tinsmith info` tells of a store: its build record (JSON text) and the
 /// per-zoom summary from the tiles' records.
 struct StoreInfo {
-  std::string build;  ///< tinsmith/build.json, or empty
+  std::string build;      ///< tinsmith/build.json, or empty
   bool complete = false;  ///< tileset.json present
   TileJobSummary summary;
 };

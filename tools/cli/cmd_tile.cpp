@@ -28,8 +28,8 @@ struct TileCliOptions {
   std::string output;
   double tolerance = 1.0;
   std::size_t maxTriangles = 32768;
-  int maxZoom = 20;
-  double lambda = 1.0;
+  std::optional<int> maxZoom;
+  double lambda = 0.01;
   std::string compression = "draco";
   std::string frame = "ecef";
   std::string geoid;
@@ -48,7 +48,8 @@ struct MergeCliOptions {
   bool quiet = false;
 };
 
-void report(const ingest::TileJobSummary& summary, const std::string& output, bool json, bool quiet) {
+void report(const ingest::TileJobSummary& summary, const std::string& output, bool json,
+            bool quiet) {
   if (json) {
     std::cout << tileSummaryJson(summary, output);
   } else if (!quiet) {
@@ -58,7 +59,8 @@ void report(const ingest::TileJobSummary& summary, const std::string& output, bo
 
 }  // namespace
 
-ingest::TileJobOptions tileJobOptions(double tolerance, std::size_t maxTriangles, int maxZoom, double lambda,
+ingest::TileJobOptions tileJobOptions(double tolerance, std::size_t maxTriangles,
+                                      std::optional<int> maxZoom, double lambda,
                                       const std::string& compression, const std::string& frame,
                                       const std::string& geoid) {
   ingest::TileJobOptions o;
@@ -88,27 +90,40 @@ void addTileCommand(CLI::App& app) {
   auto opt = std::make_shared<TileCliOptions>();
   auto* cmd = app.add_subcommand("tile", "Cut a TIN into level-of-detail 3D Tiles (Draco glTF)");
   cmd->add_option("tin", opt->tin, "The .tin file to tile")->required();
-  cmd->add_option("-o,--output", opt->output, "Tile store: a .3dtiles archive, or a directory")->required();
-  cmd->add_option("--tolerance", opt->tolerance, "Metres the finest zoom meets against the TIN (default 1)");
-  cmd->add_option("--max-triangles", opt->maxTriangles, "Triangles a tile may hold, about (default 32768)");
-  cmd->add_option("--max-zoom", opt->maxZoom, "Deepest tile zoom (default 20)");
-  cmd->add_option("--lambda", opt->lambda, "Thin-plate smoothing as a multiple of the default λ_d (default 1)");
+  cmd->add_option("-o,--output", opt->output, "Tile store: a .3dtiles archive, or a directory")
+      ->required();
+  cmd->add_option("--tolerance", opt->tolerance,
+                  "Metres the finest zoom meets against the TIN (default 1)");
+  cmd->add_option("--max-triangles", opt->maxTriangles,
+                  "Triangles a tile may hold, about (default 32768)");
+  cmd->add_option("--max-zoom", opt->maxZoom,
+                  "Deepest tile zoom (default: the planned finest zoom + 6)");
+  cmd->add_option("--lambda", opt->lambda,
+                  "Thin-plate smoothing as a multiple of the default λ_d (default 0.01)");
   cmd->add_option("--compression", opt->compression, "draco (default) or none");
-  cmd->add_option("--frame", opt->frame, "ecef (3D Tiles on the globe, default) or local (ENU metres)");
-  cmd->add_option("--geoid", opt->geoid, "egm96: the TIN's z are EGM96 heights (default: ellipsoidal)");
-  cmd->add_option("--subtree", opt->subtree, "Build only this tile and its descendants (Z/X/Y): a shard");
-  cmd->add_option("--until-zoom", opt->untilZoom, "Build only the tiles above this zoom: the shards' top");
-  cmd->add_option("--threads", opt->threads, "Worker threads (default 0: all cores); same bytes for any");
-  cmd->add_flag("--resume", opt->resume, "Keep tiles already in the store and build only the missing ones");
+  cmd->add_option("--frame", opt->frame,
+                  "ecef (3D Tiles on the globe, default) or local (ENU metres)");
+  cmd->add_option("--geoid", opt->geoid,
+                  "egm96: the TIN's z are EGM96 heights (default: ellipsoidal)");
+  cmd->add_option("--subtree", opt->subtree,
+                  "Build only this tile and its descendants (Z/X/Y): a shard");
+  cmd->add_option("--until-zoom", opt->untilZoom,
+                  "Build only the tiles above this zoom: the shards' top");
+  cmd->add_option("--threads", opt->threads,
+                  "Worker threads (default 0: all cores); same bytes for any");
+  cmd->add_flag("--resume", opt->resume,
+                "Keep tiles already in the store and build only the missing ones");
   cmd->add_flag("-q,--quiet", opt->quiet, "No summary, no progress bar");
   cmd->add_flag("--json", opt->json, "Print the summary as JSON on stdout");
   cmd->callback([opt] {
-    ingest::TileJobOptions o = tileJobOptions(opt->tolerance, opt->maxTriangles, opt->maxZoom, opt->lambda,
-                                              opt->compression, opt->frame, opt->geoid);
+    ingest::TileJobOptions o =
+        tileJobOptions(opt->tolerance, opt->maxTriangles, opt->maxZoom, opt->lambda,
+                       opt->compression, opt->frame, opt->geoid);
     if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
     o.untilZoom = opt->untilZoom;
     if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
-    if (o.subtree && o.untilZoom) throw usageError("--subtree and --until-zoom make different shards: give one");
+    if (o.subtree && o.untilZoom)
+      throw usageError("--subtree and --until-zoom make different shards: give one");
     o.resume = opt->resume;
     o.threads = opt->threads;
     if (opt->threads < 0) throw usageError("--threads must be 0 (all cores) or more");
@@ -121,9 +136,11 @@ void addTileCommand(CLI::App& app) {
 
   auto merge = std::make_shared<MergeCliOptions>();
   auto* mcmd = app.add_subcommand("merge", "Join tile stores built as shards of one job into one");
-  mcmd->add_option("stores", merge->inputs, "Shard stores (from tinsmith tile --subtree / --until-zoom)")
+  mcmd->add_option("stores", merge->inputs,
+                   "Shard stores (from tinsmith tile --subtree / --until-zoom)")
       ->required();
-  mcmd->add_option("-o,--output", merge->output, "The joined store (.3dtiles or a directory)")->required();
+  mcmd->add_option("-o,--output", merge->output, "The joined store (.3dtiles or a directory)")
+      ->required();
   mcmd->add_flag("-q,--quiet", merge->quiet, "No summary");
   mcmd->add_flag("--json", merge->json, "Print the summary as JSON on stdout");
   mcmd->callback([merge] {

@@ -28,7 +28,8 @@ class ProgressBar {
   }
 
  private:
-  void draw(std::string_view stage, std::string_view detail, std::uint64_t done, std::uint64_t total) {
+  void draw(std::string_view stage, std::string_view detail, std::uint64_t done,
+            std::uint64_t total) {
     const auto now = std::chrono::steady_clock::now();
     if (drawn_ && done != total && now - last_ < std::chrono::milliseconds(100)) return;
     last_ = now;
@@ -37,7 +38,8 @@ class ProgressBar {
     if (!detail.empty()) line += " " + std::string(detail);
     if (total > 0) {
       const int width = 30;
-      const int filled = static_cast<int>(width * static_cast<double>(done) / static_cast<double>(total));
+      const int filled =
+          static_cast<int>(width * static_cast<double>(done) / static_cast<double>(total));
       line += " [" + std::string(static_cast<std::size_t>(filled), '#') +
               std::string(static_cast<std::size_t>(width - filled), ' ') + "] " +
               std::to_string(100 * done / total) + "%";

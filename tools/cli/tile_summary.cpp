@@ -1,7 +1,6 @@
 #include "tools/cli/tile_summary.hpp"
 
 #include <cstdio>
-
 #include <nlohmann/json.hpp>
 
 namespace tinsmith::cli {
@@ -15,18 +14,22 @@ std::string format(const char* fmt, auto... args) {
 }  // namespace
 
 std::string tileSummaryText(const ingest::TileJobSummary& s) {
-  std::string out = format("  tiles: %zu in %zu zooms, %.2f MB (finest planned zoom %d, %d binary levels a tile)\n",
-                           s.tiles, s.zooms.size(), static_cast<double>(s.bytes) / 1e6, s.finestZoom,
-                           s.levelsPerTile + 1);
+  std::string out = format(
+      "  tiles: %zu in %zu zooms, %.2f MB (finest planned zoom %d, %d binary levels a tile)\n",
+      s.tiles, s.zooms.size(), static_cast<double>(s.bytes) / 1e6, s.finestZoom,
+      s.levelsPerTile + 1);
   if (s.built + s.reused > 0) {
-    out += format("  built %zu, kept %zu already in the store, %zu fit points, %.1f s\n", s.built, s.reused,
-                  s.dataPoints, s.seconds);
+    out += format("  built %zu, kept %zu already in the store, %zu fit points, %.1f s\n", s.built,
+                  s.reused, s.dataPoints, s.seconds);
   }
-  out += "  zoom  tolerance m  tiles  triangles  bytes/triangle  max error m  break-line vertices\n";
+  out +=
+      "  zoom  tolerance m  tiles  triangles  bytes/triangle  max error m  break-line vertices\n";
   for (const auto& z : s.zooms) {
-    out += format("  %4d  %11.3f  %5zu  %9zu  %14.2f  %11.3f  %19zu\n", z.z, z.tolerance, z.tiles, z.triangles,
-                  z.triangles ? static_cast<double>(z.bytes) / static_cast<double>(z.triangles) : 0.0, z.maxError,
-                  z.breakLineVertices);
+    out +=
+        format("  %4d  %11.3f  %5zu  %9zu  %14.2f  %11.3f  %19zu\n", z.z, z.tolerance, z.tiles,
+               z.triangles,
+               z.triangles ? static_cast<double>(z.bytes) / static_cast<double>(z.triangles) : 0.0,
+               z.maxError, z.breakLineVertices);
   }
   return out;
 }

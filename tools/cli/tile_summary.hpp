@@ -2,6 +2,7 @@
 // and info.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "ingest/tiles/tile_job.hpp"
@@ -13,7 +14,8 @@ std::string tileSummaryJson(const ingest::TileJobSummary& s, const std::string& 
 
 /// The tiling options from their command-line (or config) forms; throws
 /// usageError for an unknown compression or frame.
-ingest::TileJobOptions tileJobOptions(double tolerance, std::size_t maxTriangles, int maxZoom, double lambda,
+ingest::TileJobOptions tileJobOptions(double tolerance, std::size_t maxTriangles,
+                                      std::optional<int> maxZoom, double lambda,
                                       const std::string& compression, const std::string& frame,
                                       const std::string& geoid);
 

@@ -1,0 +1,228 @@
+// Tiles: the lines kept per zoom, the exact surface difference, and tiles
+// of a small synthetic TIN (shared sides bit for bit, break lines held,
+// determinism). The pyramid's quality on real data is not asserted here yet.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <tuple>
+
+#include "core/base/error.hpp"
+#include "core/cdt/cdt.hpp"
+#include "core/surface/surface.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "core/tiles/surface_difference.hpp"
+#include "core/tiles/terrain_lines.hpp"
+#include "core/tiles/tiler.hpp"
+
+namespace tinsmith::tiles {
+namespace {
+
+double hill(double x, double y) {
+  return 100 + 30 * std::exp(-((x - 400) * (x - 400) + (y - 600) * (y - 600)) / 6e4);
+}
+
+/// A 1 km square of jittered points on a hill with a road across it, at
+/// UTM-sized coordinates.
+TinData syntheticTin() {
+  Cdt cdt;
+  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+  const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jitter(-8, 8);
+  std::vector<Point3> points;
+  const double x0 = 500000, y0 = 4500000;
+  for (int j = 0; j <= 25; ++j) {
+    for (int i = 0; i <= 25; ++i) {
+      const double x = i * 40.0 + ((i > 0 && i < 25) ? jitter(rng) : 0);
+      const double y = j * 40.0 + ((j > 0 && j < 25) ? jitter(rng) : 0);
+      points.push_back({x0 + x, y0 + y, hill(x, y)});
+    }
+  }
+  cdt.insertPoints(points, spots);
+  std::vector<Point3> line;
+  for (int k = 0; k <= 20; ++k) {
+    const double x = 30 + k * 47.0, y = 120 + k * 38.0 + 10 * std::sin(k);
+    line.push_back({x0 + x, y0 + y, hill(x, y) + 0.5});
+  }
+  cdt.insertConstraint(line, road);
+  cdt.finalize();
+  return cdt.toTinData();
+}
+
+TEST(TerrainLines, DouglasPeuckerKeepsTheEndsAndWhatIsFarEnough) {
+  TerrainLine line;
+  line.points = {{0, 0, 0}, {1, 0.001, 0}, {2, 0, 0}, {3, 5, 0}, {4, 0, 0}};
+  const TerrainLine s = simplify(line, 0.1);
+  ASSERT_EQ(s.points.size(), 4u);
+  EXPECT_EQ(s.points.front(), line.points.front());
+  EXPECT_EQ(s.points.back(), line.points.back());
+  EXPECT_EQ(s.points[2], line.points[3]);
+}
+
+TEST(TerrainLines, ACrossingIsTheSameDoubleFromBothSidesOfATileSide) {
+  // The same segment, clipped by the two tiles that share x = 10.
+  TerrainLine ab, ba;
+  ab.points = {{3.1, 1.7, 5}, {17.3, 8.9, 9}};
+  ba.points = {ab.points[1], ab.points[0]};
+  const Rect west{0, 0, 10, 10}, east{10, 0, 20, 10};
+  const auto w = clipToRect(ab, west, 1e-9);
+  const auto e = clipToRect(ba, east, 1e-9);
+  ASSERT_EQ(w.size(), 1u);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(w[0].points.back(), e[0].points.back());
+  EXPECT_EQ(w[0].points.back().x, 10.0);
+}
+
+TEST(TerrainLines, BreakLinesAndTheBoundaryRingComeOutOfATin) {
+  const TinData tin = syntheticTin();
+  const auto lines = extractTerrainLines(tin);
+  int roads = 0, rings = 0;
+  for (const auto& l : lines) {
+    roads += l.kind == FeatureKind::Road;
+    rings += l.ring;
+  }
+  EXPECT_GE(roads, 1);
+  EXPECT_EQ(rings, 1);
+}
+
+TEST(SurfaceDifference, PeakOfAPyramidOverAPlaneIsFoundExactly) {
+  // TIN: a square pyramid with its apex 1 m up, off the mesh's vertices.
+  TinData tin;
+  tin.vertices = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}, {3.3, 6.1, 1.0}};
+  tin.triangles = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+  const TinIndex index(tin);
+  const std::vector<Point3> mesh = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}};
+  const std::vector<std::array<std::uint32_t, 3>> triangles = {{0, 1, 2}, {0, 2, 3}};
+  const auto d = maxVerticalDifference(mesh, triangles, index);
+  EXPECT_NEAR(d.maxAbs, 1.0, 1e-12);
+  EXPECT_NEAR(d.at.x, 3.3, 1e-9);
+  EXPECT_NEAR(d.at.y, 6.1, 1e-9);
+}
+
+TEST(SurfaceDifference, NeverBelowADenseSampleOfTheDifference) {
+  const TinData tin = syntheticTin();
+  const TinIndex index(tin);
+  // A coarse mesh: the TIN's bounding square in 8 triangles, z from a plane.
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const auto& v : tin.vertices) {
+    x0 = std::min(x0, v.x), y0 = std::min(y0, v.y), x1 = std::max(x1, v.x), y1 = std::max(y1, v.y);
+  }
+  std::vector<Point3> mesh;
+  for (int j = 0; j <= 2; ++j)
+    for (int i = 0; i <= 2; ++i) {
+      const double x = x0 + (x1 - x0) * i / 2, y = y0 + (y1 - y0) * j / 2;
+      mesh.push_back({x, y, 100 + 0.01 * (x - x0)});
+    }
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  for (std::uint32_t j = 0; j < 2; ++j)
+    for (std::uint32_t i = 0; i < 2; ++i) {
+      const std::uint32_t a = j * 3 + i;
+      triangles.push_back({a, a + 1, a + 4});
+      triangles.push_back({a, a + 4, a + 3});
+    }
+  const auto declared = maxVerticalDifference(mesh, triangles, index);
+  // Brute force: the difference at the TIN's vertices and on a fine grid.
+  const Surface tinSurface(tin);
+  const Surface meshSurface(TinData{"", mesh, {triangles.begin(), triangles.end()}, {}, {}});
+  double sampled = 0;
+  auto probe = [&](Point2 p) {
+    const auto a = tinSurface.z(p), b = meshSurface.z(p);
+    if (a && b) sampled = std::max(sampled, std::abs(*a - *b));
+  };
+  for (const auto& v : tin.vertices) probe(v.xy());
+  for (int j = 0; j <= 200; ++j)
+    for (int i = 0; i <= 200; ++i) probe({x0 + (x1 - x0) * i / 200, y0 + (y1 - y0) * j / 200});
+  EXPECT_GE(declared.maxAbs, sampled - 1e-9);
+  EXPECT_LE(declared.maxAbs, sampled + 0.05);  // the grid comes within its spacing of the peak
+}
+
+TEST(Tiles, NeighboursShareTheirSideVerticesBitForBit) {
+  const TinData tin = syntheticTin();
+  TilerOptions options;
+  options.tolerance = 0.5;
+  options.maxTriangles = 2048;
+  const Tiler tiler(tin, options);
+  for (int z = 1; z <= 2; ++z) {
+    const std::uint32_t n = 1u << z;
+    std::map<std::tuple<int, std::uint32_t, std::uint32_t>, TileSurface> tiles;
+    for (std::uint32_t y = 0; y < n; ++y)
+      for (std::uint32_t x = 0; x < n; ++x) tiles[{z, x, y}] = tiler.buildTile({z, x, y});
+    auto sideVertices = [](const TileSurface& t, std::uint8_t side) {
+      std::vector<std::tuple<double, double, double>> out;
+      for (std::size_t v = 0; v < t.vertices.size(); ++v)
+        if (t.flags[v] & side) out.push_back({t.vertices[v].x, t.vertices[v].y, t.vertices[v].z});
+      std::sort(out.begin(), out.end());
+      return out;
+    };
+    for (std::uint32_t y = 0; y < n; ++y) {
+      for (std::uint32_t x = 0; x + 1 < n; ++x) {
+        const auto& w = tiles[{z, x, y}];
+        const auto& e = tiles[{z, x + 1, y}];
+        if (w.empty() || e.empty()) continue;
+        EXPECT_EQ(sideVertices(w, kSideEast), sideVertices(e, kSideWest))
+            << "zoom " << z << " x " << x << " y " << y;
+      }
+    }
+    for (std::uint32_t y = 0; y + 1 < n; ++y) {
+      for (std::uint32_t x = 0; x < n; ++x) {
+        const auto& s = tiles[{z, x, y}];
+        const auto& nn = tiles[{z, x, y + 1}];
+        if (s.empty() || nn.empty()) continue;
+        EXPECT_EQ(sideVertices(s, kSideNorth), sideVertices(nn, kSideSouth)) << "zoom " << z;
+      }
+    }
+  }
+}
+
+TEST(Tiles, BreakLineVerticesKeepTheTinsHeightAndTilesArePure) {
+  const TinData tin = syntheticTin();
+  TilerOptions options;
+  options.tolerance = 0.5;
+  options.maxTriangles = 2048;
+  const Tiler tiler(tin, options);
+  std::map<std::pair<double, double>, double> roadZ;
+  for (const auto& e : tin.constrainedEdges) {
+    if (tin.features[e.feature].kind != FeatureKind::Road) continue;
+    for (auto v : {e.a, e.b}) roadZ[{tin.vertices[v].x, tin.vertices[v].y}] = tin.vertices[v].z;
+  }
+  std::size_t held = 0;
+  for (std::uint32_t y = 0; y < 4; ++y) {
+    for (std::uint32_t x = 0; x < 4; ++x) {
+      const TileSurface t = tiler.buildTile({2, x, y});
+      for (const auto& v : t.vertices) {
+        auto it = roadZ.find({v.x, v.y});
+        if (it == roadZ.end()) continue;
+        EXPECT_EQ(v.z, it->second);
+        ++held;
+      }
+      const TileSurface again = tiler.buildTile({2, x, y});
+      EXPECT_EQ(t.vertices, again.vertices);
+      EXPECT_EQ(t.triangles, again.triangles);
+      EXPECT_EQ(t.error, again.error);
+      if (!t.empty()) {
+        EXPECT_GE(t.error, 0.0);
+      }
+    }
+  }
+  EXPECT_GE(held, 2u);
+}
+
+TEST(Tiles, BadOptionsAreUsageErrors) {
+  const TinData tin = syntheticTin();
+  TilerOptions options;
+  options.tolerance = 0;
+  EXPECT_THROW(Tiler(tin, options), tinsmith::Error);
+  options.tolerance = -1;
+  EXPECT_THROW(Tiler(tin, options), tinsmith::Error);
+  options.tolerance = 1;
+  options.maxTriangles = 10;
+  EXPECT_THROW(Tiler(tin, options), tinsmith::Error);
+  EXPECT_THROW(parseTileId("3/8/0", "--subtree"), tinsmith::Error);
+  EXPECT_THROW(parseTileId("a/b/c", "--subtree"), tinsmith::Error);
+  EXPECT_EQ(parseTileId("3/7/1", "--subtree"), (TileId{3, 7, 1}));
+}
+
+}  // namespace
+}  // namespace tinsmith::tiles
