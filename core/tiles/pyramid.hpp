@@ -8,6 +8,8 @@
 // the same doubles for it: the first condition of crack-free tiles.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <compare>
 #include <cstdint>
 #include <string>
@@ -30,6 +32,18 @@ struct TileId {
   [[nodiscard]] std::string name() const;
 };
 
+/// The order tiles are built, emitted and stored in: by zoom, then row by row
+/// (y, then x).
+inline bool rowMajorLess(const TileId& a, const TileId& b) {
+  return a.z < b.z || (a.z == b.z && (a.y < b.y || (a.y == b.y && a.x < b.x)));
+}
+
+/// Whether a tile with this measured error gets children: the pyramid's one
+/// refinement rule, also what `tinsmith merge` checks shards against.
+inline bool tileRefines(double error, int z, double tolerance, int maxZoom) {
+  return error > tolerance && z < maxZoom;
+}
+
 /// Parses "z/x/y"; throws usageError naming `what` for anything else or a tile
 /// outside its zoom's grid.
 TileId parseTileId(const std::string& text, const std::string& what);
@@ -42,7 +56,24 @@ struct Rect {
   }
   [[nodiscard]] double width() const { return x1 - x0; }
   [[nodiscard]] double height() const { return y1 - y0; }
+  [[nodiscard]] bool overlaps(const Rect& o) const {
+    return !(o.x1 < x0 || o.x0 > x1 || o.y1 < y0 || o.y0 > y1);
+  }
 };
+
+/// The x, y bounding box of points (empty input: an inverted box that
+/// overlaps nothing).
+template <class Points>
+Rect boundsOf(const Points& points) {
+  Rect r{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (const auto& p : points) {
+    r.x0 = std::min(r.x0, p.x);
+    r.y0 = std::min(r.y0, p.y);
+    r.x1 = std::max(r.x1, p.x);
+    r.y1 = std::max(r.y1, p.y);
+  }
+  return r;
+}
 
 class PyramidGeometry {
  public:

@@ -53,80 +53,28 @@ void clipLeft(const std::vector<P2>& poly, P2 a, P2 b, std::vector<P2>& out) {
 
 TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
   if (tin.vertices.empty() || tin.triangles.empty()) return;
-  double x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-  x0_ = y0_ = HUGE_VAL;
-  for (const auto& v : tin.vertices) {
-    x0_ = std::min(x0_, v.x);
-    y0_ = std::min(y0_, v.y);
-    x1 = std::max(x1, v.x);
-    y1 = std::max(y1, v.y);
-  }
-  const double area = std::max((x1 - x0_) * (y1 - y0_), 1e-300);
-  cell_ = std::max(std::sqrt(area / static_cast<double>(tin.triangles.size())) * 2.0, 1e-9);
-  nx_ = std::min<std::size_t>(static_cast<std::size_t>((x1 - x0_) / cell_) + 1, 1u << 14);
-  ny_ = std::min<std::size_t>(static_cast<std::size_t>((y1 - y0_) / cell_) + 1, 1u << 14);
-  cell_ = std::max((x1 - x0_) / static_cast<double>(nx_), (y1 - y0_) / static_cast<double>(ny_)) *
-          (1 + 1e-12);
-  if (cell_ <= 0) cell_ = 1;
-  auto cellRange = [&](const std::array<std::uint32_t, 3>& t, std::size_t& i0, std::size_t& i1,
-                       std::size_t& j0, std::size_t& j1) {
-    double lx = HUGE_VAL, ly = HUGE_VAL, hx = -HUGE_VAL, hy = -HUGE_VAL;
-    for (auto v : t) {
-      lx = std::min(lx, tin.vertices[v].x);
-      ly = std::min(ly, tin.vertices[v].y);
-      hx = std::max(hx, tin.vertices[v].x);
-      hy = std::max(hy, tin.vertices[v].y);
-    }
-    i0 = std::min(nx_ - 1, static_cast<std::size_t>(std::max(0.0, (lx - x0_) / cell_)));
-    i1 = std::min(nx_ - 1, static_cast<std::size_t>(std::max(0.0, (hx - x0_) / cell_)));
-    j0 = std::min(ny_ - 1, static_cast<std::size_t>(std::max(0.0, (ly - y0_) / cell_)));
-    j1 = std::min(ny_ - 1, static_cast<std::size_t>(std::max(0.0, (hy - y0_) / cell_)));
-  };
-  begin_.assign(nx_ * ny_ + 1, 0);
-  for (const auto& t : tin.triangles) {
-    std::size_t i0, i1, j0, j1;
-    cellRange(t, i0, i1, j0, j1);
-    for (std::size_t j = j0; j <= j1; ++j)
-      for (std::size_t i = i0; i <= i1; ++i) ++begin_[j * nx_ + i + 1];
-  }
-  for (std::size_t c = 0; c < nx_ * ny_; ++c) begin_[c + 1] += begin_[c];
-  items_.resize(begin_.back());
-  std::vector<std::uint32_t> fill(begin_.begin(), begin_.end() - 1);
-  for (std::uint32_t k = 0; k < tin.triangles.size(); ++k) {
-    std::size_t i0, i1, j0, j1;
-    cellRange(tin.triangles[k], i0, i1, j0, j1);
-    for (std::size_t j = j0; j <= j1; ++j)
-      for (std::size_t i = i0; i <= i1; ++i) items_[fill[j * nx_ + i]++] = k;
-  }
+  const Rect extent = boundsOf(tin.vertices);
+  // About four triangles a cell.
+  const double cell = CellGrid::cellFor(extent.width(), extent.height(),
+                                        std::max<std::size_t>(1, tin.triangles.size() / 4), 1e-9);
+  grid_.emplace(extent.x0, extent.y0, extent.x1, extent.y1, cell);
+  grid_->build(tin.triangles.size(), [&](std::size_t t, auto&& emit) {
+    const Rect b = triangleBox(static_cast<std::uint32_t>(t));
+    grid_->forEachCellOfBox(b.x0, b.y0, b.x1, b.y1, emit);
+  });
+}
+
+Rect TinIndex::triangleBox(std::uint32_t t) const {
+  const auto& tri = tin_.triangles[t];
+  return boundsOf(std::array{tin_.vertices[tri[0]], tin_.vertices[tri[1]], tin_.vertices[tri[2]]});
 }
 
 void TinIndex::overlapping(const Rect& box, std::vector<std::uint32_t>& out) const {
   out.clear();
-  if (items_.empty()) return;
-  auto clampCell = [](double v, std::size_t n) {
-    return static_cast<std::size_t>(std::clamp(v, 0.0, static_cast<double>(n - 1)));
-  };
-  const std::size_t i0 = clampCell((box.x0 - x0_) / cell_, nx_),
-                    i1 = clampCell((box.x1 - x0_) / cell_, nx_);
-  const std::size_t j0 = clampCell((box.y0 - y0_) / cell_, ny_),
-                    j1 = clampCell((box.y1 - y0_) / cell_, ny_);
-  for (std::size_t j = j0; j <= j1; ++j) {
-    for (std::size_t i = i0; i <= i1; ++i) {
-      const std::size_t c = j * nx_ + i;
-      for (std::uint32_t k = begin_[c]; k < begin_[c + 1]; ++k) {
-        const auto& t = tin_.triangles[items_[k]];
-        double lx = HUGE_VAL, ly = HUGE_VAL, hx = -HUGE_VAL, hy = -HUGE_VAL;
-        for (auto v : t) {
-          lx = std::min(lx, tin_.vertices[v].x);
-          ly = std::min(ly, tin_.vertices[v].y);
-          hx = std::max(hx, tin_.vertices[v].x);
-          hy = std::max(hy, tin_.vertices[v].y);
-        }
-        if (hx < box.x0 || lx > box.x1 || hy < box.y0 || ly > box.y1) continue;
-        out.push_back(items_[k]);
-      }
-    }
-  }
+  if (!grid_) return;
+  grid_->forEachInBox(box.x0, box.y0, box.x1, box.y1, [&](std::uint32_t t) {
+    if (triangleBox(t).overlaps(box)) out.push_back(t);
+  });
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
@@ -145,9 +93,8 @@ SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
   for (const auto& m : triangles) {
     const P2 a = local(vertices[m[0]]), b = local(vertices[m[1]]), c = local(vertices[m[2]]);
     const Plane meshPlane(a, b, c, vertices[m[0]].z, vertices[m[1]].z, vertices[m[2]].z);
-    Rect box{std::min({a.x, b.x, c.x}) + ox, std::min({a.y, b.y, c.y}) + oy,
-             std::max({a.x, b.x, c.x}) + ox, std::max({a.y, b.y, c.y}) + oy};
-    index.overlapping(box, candidates);
+    index.overlapping(boundsOf(std::array{vertices[m[0]], vertices[m[1]], vertices[m[2]]}),
+                      candidates);
     for (std::uint32_t k : candidates) {
       const auto& t = tin.triangles[k];
       const P2 ta = local(tin.vertices[t[0]]), tb = local(tin.vertices[t[1]]),

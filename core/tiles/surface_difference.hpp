@@ -12,10 +12,12 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/geometry/cell_grid.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "core/tin/tin_data.hpp"
 
@@ -31,11 +33,9 @@ class TinIndex {
   void overlapping(const Rect& box, std::vector<std::uint32_t>& out) const;
 
  private:
+  [[nodiscard]] Rect triangleBox(std::uint32_t t) const;
   const TinData& tin_;
-  double x0_ = 0, y0_ = 0, cell_ = 1;
-  std::size_t nx_ = 1, ny_ = 1;
-  std::vector<std::uint32_t> begin_;
-  std::vector<std::uint32_t> items_;
+  std::optional<CellGrid> grid_;
 };
 
 struct SurfaceDifference {

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <utility>
+
+#include "core/mesh/mesh.hpp"
 
 namespace tinsmith::tiles {
 
@@ -82,9 +85,9 @@ std::vector<TerrainLine> extractTerrainLines(const TinData& tin) {
   auto isNode = [&](std::uint32_t v) {
     return adjacent[v].size() != 2 || adjacent[v][0].second != adjacent[v][1].second;
   };
-  std::map<Edge, bool> used;
+  std::set<Edge> used;
   auto take = [&](std::uint32_t a, std::uint32_t b) {
-    return used.emplace(Edge{std::min(a, b), std::max(a, b)}, true).second;
+    return used.insert(Edge{std::min(a, b), std::max(a, b)}).second;
   };
   auto walk = [&](std::uint32_t start, std::uint32_t next, FeatureKind kind, bool closed) {
     TerrainLine line;
@@ -118,27 +121,28 @@ std::vector<TerrainLine> extractTerrainLines(const TinData& tin) {
     }
   }
 
-  // Domain boundary: half-edges without a twin, interior on their left.
-  std::map<Edge, int> directed;
-  for (const auto& t : tin.triangles) {
-    for (int i = 0; i < 3; ++i) directed[{t[i], t[(i + 1) % 3]}] += 1;
-  }
-  std::multimap<std::uint32_t, std::uint32_t> next;
-  for (const auto& [e, count] : directed) {
-    if (!directed.contains({e.second, e.first})) next.emplace(e.first, e.second);
-  }
-  while (!next.empty()) {
+  // Domain boundary: half-edges without a twin (interior on their left),
+  // chained from the lowest origin, each step to the lowest unused target.
+  const Mesh mesh = Mesh::fromTinData(tin);
+  std::vector<Edge> boundary;
+  for (HalfedgeId h : mesh.boundaryHalfedges())
+    boundary.push_back({mesh.origin(h).value, mesh.target(h).value});
+  std::sort(boundary.begin(), boundary.end());
+  std::vector<char> done(boundary.size(), 0);
+  for (std::size_t first = 0; first < boundary.size(); ++first) {
+    if (done[first]) continue;
     TerrainLine ring;
     ring.kind = FeatureKind::Boundary;
     ring.ring = ring.closed = true;
-    const std::uint32_t start = next.begin()->first;
+    const std::uint32_t start = boundary[first].first;
     std::uint32_t at = start;
     while (true) {
-      auto it = next.find(at);
-      if (it == next.end()) break;
+      auto it = std::lower_bound(boundary.begin(), boundary.end(), Edge{at, 0});
+      while (it != boundary.end() && it->first == at && done[it - boundary.begin()]) ++it;
+      if (it == boundary.end() || it->first != at) break;
+      done[it - boundary.begin()] = 1;
       ring.points.push_back(tin.vertices[at]);
       at = it->second;
-      next.erase(it);
       if (at == start) break;
     }
     if (ring.points.size() >= 3) lines.push_back(std::move(ring));
@@ -163,7 +167,7 @@ TerrainLine simplify(const TerrainLine& line, double tolerance) {
     std::size_t far = 1;
     double best = -1.0;
     for (std::size_t k = 1; k < pts.size(); ++k) {
-      const double d = distanceToSegment(pts[k], pts[0], pts[0]);
+      const double d = distanceToSegment(pts[k], pts[0], pts[0]);  // to the point
       if (d > best) {
         best = d;
         far = k;

@@ -2,8 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
-#include <unordered_map>
+#include <limits>
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
@@ -12,19 +11,13 @@
 
 namespace tinsmith::tiles {
 
-/// What every tile of one zoom shares: the zoom's fit, its active vertices by
-/// tile, and the lines simplified to its tolerance.
+/// What every tile of one zoom shares: the zoom's fit and the lines
+/// simplified to its tolerance (with their bounding boxes).
 struct Tiler::Zoom {
-  int z = 0;
   double tolerance = 0;
   std::unique_ptr<fit::MultilevelFit> fit;
-  int gridLevels = 0;
-  /// (tile index y·2^z + x, key) for every active vertex, a vertex on a side
-  /// listed under each tile it touches; sorted.
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> keysByTile;
   std::vector<TerrainLine> lines;
   std::vector<Rect> lineBoxes;
-  std::size_t keptLineVertices = 0;
 };
 
 namespace {
@@ -124,7 +117,7 @@ bool insideRings(Point2 p, const std::vector<TerrainLine>& lines) {
   return inside;
 }
 
-/// Adds `piece` to a vertex pool, returns the pool indices of its points.
+/// A vertex on one side of a tile and where along the side it lies.
 struct SideVertex {
   double along;  // coordinate along the side
   Point3 p;
@@ -146,14 +139,8 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   if (tin.triangles.empty() || tin.vertices.size() < 3) {
     throw inputError("the TIN has no triangles to tile", {}, "build it with tinsmith tin first");
   }
-  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-  for (const auto& v : tin.vertices) {
-    x0 = std::min(x0, v.x);
-    y0 = std::min(y0, v.y);
-    x1 = std::max(x1, v.x);
-    y1 = std::max(y1, v.y);
-  }
-  geometry_ = PyramidGeometry({x0, y0}, std::max(x1 - x0, y1 - y0));
+  const Rect extent = boundsOf(tin.vertices);
+  geometry_ = PyramidGeometry({extent.x0, extent.y0}, std::max(extent.width(), extent.height()));
   // levelsPerTile d: a tile refined d + 1 levels holds 2·4^(d+1) triangles;
   // keep that within half the budget, for break lines and sides.
   int d = 0;
@@ -162,6 +149,12 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   FitData data = fitData(tin);
   data_ = std::move(data.all);
   zoomData_ = std::move(data.zoomFit);
+  dataGrid_ =
+      CellGrid(extent.x0, extent.y0, extent.x1, extent.y1,
+               CellGrid::cellFor(extent.width(), extent.height(), data_.size() / 4 + 1, 1e-9));
+  dataGrid_.build(data_.size(), [&](std::size_t i, auto&& emit) {
+    emit(dataGrid_.index(dataGrid_.cellX(data_[i].x), dataGrid_.cellY(data_[i].y)));
+  });
   lines_ = extractTerrainLines(tin);
 
   // The finest planned zoom: the first whose tiles hold the finest fit's
@@ -179,14 +172,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
     ++zmax;
   finestZoom_ = zmax;
   maxZoom_ = std::min(options_.maxZoom.value_or(finestZoom_ + 6), 30);
-  if (finestZoom_ + levelsPerTile_ == cap) {
-    auto zoom = std::make_shared<Zoom>();
-    zoom->z = finestZoom_;
-    zoom->tolerance = options_.tolerance;
-    zoom->fit = std::move(planning);
-    // The rest of the zoom is filled by zoom() on first use.
-    zooms_[-1 - finestZoom_] = zoom;
-  }
+  if (finestZoom_ + levelsPerTile_ == cap) plannedFit_ = std::move(planning);
 }
 
 Tiler::~Tiler() = default;
@@ -195,74 +181,27 @@ double Tiler::zoomTolerance(int z) const {
   return std::ldexp(options_.tolerance, std::max(0, finestZoom_ - z));
 }
 
-std::size_t Tiler::keptLineVertices(int z) const {
-  return zoom(z).keptLineVertices;
+const Tiler::Zoom& Tiler::zoom(int z) const {
+  ZoomSlot& slot = zooms_.at(static_cast<std::size_t>(z));
+  std::call_once(slot.once, [&] { slot.zoom = makeZoom(z); });
+  return *slot.zoom;
 }
 
-const Tiler::Zoom& Tiler::zoom(int z) const {
-  std::shared_ptr<std::once_flag> once;
-  {
-    std::lock_guard lock(mutex_);
-    auto it = zooms_.find(z);
-    if (it != zooms_.end()) return *it->second;
-    auto& flag = zoomOnce_[z];
-    if (!flag) flag = std::make_shared<std::once_flag>();
-    once = flag;
+std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
+  auto zd = std::make_unique<Zoom>();
+  zd->tolerance = zoomTolerance(z);
+  if (z == finestZoom_ && plannedFit_) {
+    zd->fit = std::move(plannedFit_);  // only this zoom's once-call touches it
+  } else {
+    zd->fit = std::make_unique<fit::MultilevelFit>(fit::fitMultilevel(
+        zoomData_, zoomFitOptions(options_, geometry_, zd->tolerance, z + levelsPerTile_)));
   }
-  std::call_once(*once, [&] {
-    auto zoomData = std::make_shared<Zoom>();
-    Zoom& zd = *zoomData;
-    zd.z = z;
-    zd.tolerance = zoomTolerance(z);
-    const int maxLevel = z + levelsPerTile_;
-    {
-      std::shared_ptr<Zoom> planned;
-      {
-        std::lock_guard lock(mutex_);
-        auto it = zooms_.find(-1 - z);
-        if (it != zooms_.end()) planned = it->second;
-      }
-      if (planned) {
-        zd.fit = std::move(planned->fit);
-      } else {
-        zd.fit = std::make_unique<fit::MultilevelFit>(fit::fitMultilevel(
-            zoomData_, zoomFitOptions(options_, geometry_, zd.tolerance, maxLevel)));
-      }
-    }
-    const auto& mesh = zd.fit->mesh();
-    zd.gridLevels = mesh.gridLevels();
-    const int shift = zd.gridLevels - z;
-    const std::uint64_t step = 1ULL << shift, tilesASide = 1ULL << z;
-    for (std::uint64_t key : mesh.activeKeys()) {
-      const std::uint64_t col = mesh.column(key), row = mesh.row(key);
-      std::uint64_t xs[2] = {std::min(col >> shift, tilesASide - 1), 0},
-                    ys[2] = {std::min(row >> shift, tilesASide - 1), 0};
-      int nx = 1, ny = 1;
-      if (col % step == 0 && col > 0 && (col >> shift) < tilesASide) xs[nx++] = (col >> shift) - 1;
-      if (row % step == 0 && row > 0 && (row >> shift) < tilesASide) ys[ny++] = (row >> shift) - 1;
-      for (int i = 0; i < nx; ++i)
-        for (int j = 0; j < ny; ++j) zd.keysByTile.push_back({ys[j] * tilesASide + xs[i], key});
-    }
-    std::sort(zd.keysByTile.begin(), zd.keysByTile.end());
-    for (const auto& line : lines_) {
-      TerrainLine s = simplify(line, zd.tolerance);
-      Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-      for (const auto& p : s.points) {
-        box.x0 = std::min(box.x0, p.x);
-        box.y0 = std::min(box.y0, p.y);
-        box.x1 = std::max(box.x1, p.x);
-        box.y1 = std::max(box.y1, p.y);
-      }
-      zd.keptLineVertices += s.points.size();
-      zd.lineBoxes.push_back(box);
-      zd.lines.push_back(std::move(s));
-    }
-    std::lock_guard lock(mutex_);
-    zooms_.erase(-1 - z);
-    zooms_[z] = zoomData;
-  });
-  std::lock_guard lock(mutex_);
-  return *zooms_.at(z);
+  for (const auto& line : lines_) {
+    TerrainLine simplified = simplify(line, zd->tolerance);
+    zd->lineBoxes.push_back(boundsOf(simplified.points));
+    zd->lines.push_back(std::move(simplified));
+  }
+  return zd;
 }
 
 TileSurface Tiler::buildTile(const TileId& id) const {
@@ -280,20 +219,64 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   // The lines in this tile.
   std::vector<ClippedPiece> pieces;
   for (std::size_t i = 0; i < zd.lines.size(); ++i) {
-    const Rect& b = zd.lineBoxes[i];
-    if (b.x1 < rect.x0 || b.x0 > rect.x1 || b.y1 < rect.y0 || b.y0 > rect.y1) continue;
+    if (!zd.lineBoxes[i].overlaps(rect)) continue;
     for (auto& piece : clipToRect(zd.lines[i], rect, snap)) pieces.push_back(std::move(piece));
   }
 
-  // The binary vertices of the zoom fit in and on the tile.
-  const std::uint64_t tileIndex = static_cast<std::uint64_t>(id.y) * (1ULL << id.z) + id.x;
-  auto lo = std::lower_bound(zd.keysByTile.begin(), zd.keysByTile.end(),
-                             std::pair<std::uint64_t, std::uint64_t>{tileIndex, 0});
+  const int gridLevels = mesh.gridLevels();
   const auto zValues = fit.vertexZ();
   auto binaryPoint = [&](std::uint64_t key) {
-    return Point3{geometry_.lineX(zd.gridLevels, mesh.column(key)),
-                  geometry_.lineY(zd.gridLevels, mesh.row(key)), zValues[mesh.vertexId(key)]};
+    return Point3{geometry_.lineX(gridLevels, mesh.column(key)),
+                  geometry_.lineY(gridLevels, mesh.row(key)), zValues[mesh.vertexId(key)]};
   };
+
+  // The zoom fit's triangles that meet the tile (SubmeshRefine, 2.10, pruned
+  // to the tile): their vertices in the tile, and their edges cut at its
+  // sides, which go in as constraints so the tile reproduces the zoom's
+  // surface exactly before its own fit (a tile smaller than the fit's
+  // triangles would otherwise miss the creases between them).
+  const int shift = gridLevels - id.z;
+  std::vector<std::uint64_t> keys;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> edges;
+  {
+    const double scale = static_cast<double>(1ULL << shift);
+    const Rect grid{static_cast<double>(id.x) * scale, static_cast<double>(id.y) * scale,
+                    static_cast<double>(id.x + 1ULL) * scale,
+                    static_cast<double>(id.y + 1ULL) * scale};
+    std::vector<fit::BinaryTriangle> stack;
+    for (const auto& r : mesh.rootTriangles()) stack.push_back(r);
+    while (!stack.empty()) {
+      const fit::BinaryTriangle t = stack.back();
+      stack.pop_back();
+      const std::array corners{mesh.gridPosition(t.l), mesh.gridPosition(t.a),
+                               mesh.gridPosition(t.r)};
+      if (!boundsOf(corners).overlaps(grid)) continue;
+      if (mesh.isSplit(t)) {
+        const std::uint64_t j = (t.l + t.r) / 2;
+        // (l, a, r) splits into (a, j, l) and (r, j, a).
+        stack.push_back({t.a, j, t.l, 0, t.depth + 1});
+        stack.push_back({t.r, j, t.a, 0, t.depth + 1});
+        continue;
+      }
+      for (int i = 0; i < 3; ++i) {
+        if (grid.contains(corners[i])) keys.push_back(i == 0 ? t.l : i == 1 ? t.a : t.r);
+      }
+      for (auto [u, v] : {std::pair{t.l, t.r}, std::pair{t.r, t.a}, std::pair{t.a, t.l}}) {
+        edges.push_back({std::min(u, v), std::max(u, v)});
+      }
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  }
+  std::vector<ClippedPiece> binaryEdges;
+  for (const auto& [u, v] : edges) {
+    TerrainLine e;
+    e.kind = FeatureKind::Raster;
+    e.points = {binaryPoint(u), binaryPoint(v)};
+    for (auto& piece : clipToRect(e, rect, snap)) binaryEdges.push_back(std::move(piece));
+  }
 
   // Side vertices: corners, binary vertices on a side, line points on a side.
   std::array<std::vector<SideVertex>, 4> sides;  // south, east, north, west (CCW)
@@ -304,8 +287,7 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     if (p.x == rect.x0) sides[3].push_back({-p.y, p, onLine});
   };
   // Corners that are not active vertices take the fit's value there (active
-  // ones come with the binary vertices below).
-  const int shift = zd.gridLevels - id.z;
+  // ones are among the binary vertices).
   for (std::uint64_t cj = id.y; cj <= id.y + 1ULL; ++cj) {
     for (std::uint64_t ci = id.x; ci <= id.x + 1ULL; ++ci) {
       if (mesh.isActive(mesh.key(ci << shift, cj << shift))) continue;
@@ -314,53 +296,12 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     }
   }
   std::vector<Point3> interior;
-  for (auto it = lo; it != zd.keysByTile.end() && it->first == tileIndex; ++it) {
-    Point3 p = binaryPoint(it->second);
+  for (std::uint64_t key : keys) {
+    const Point3 p = binaryPoint(key);
     if (p.x == rect.x0 || p.x == rect.x1 || p.y == rect.y0 || p.y == rect.y1) {
       addToSides(p, false);
     } else {
       interior.push_back(p);
-    }
-  }
-  // The zoom fit's triangles in the tile, cut at its sides: their edges go in
-  // as constraints, so the tile reproduces the zoom's surface exactly before
-  // its own fit (a tile smaller than the fit's triangles would otherwise miss
-  // the creases between them).
-  std::vector<ClippedPiece> binaryEdges;
-  {
-    const double scale = static_cast<double>(1ULL << shift);
-    const double gx0 = static_cast<double>(id.x) * scale, gy0 = static_cast<double>(id.y) * scale;
-    const double gx1 = gx0 + scale, gy1 = gy0 + scale;
-    std::vector<fit::BinaryTriangle> stack;
-    for (const auto& r : mesh.rootTriangles()) stack.push_back(r);
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> edges;
-    while (!stack.empty()) {
-      const fit::BinaryTriangle t = stack.back();
-      stack.pop_back();
-      const Point2 a = mesh.gridPosition(t.l), b = mesh.gridPosition(t.a),
-                   c = mesh.gridPosition(t.r);
-      if (std::max({a.x, b.x, c.x}) < gx0 || std::min({a.x, b.x, c.x}) > gx1 ||
-          std::max({a.y, b.y, c.y}) < gy0 || std::min({a.y, b.y, c.y}) > gy1) {
-        continue;
-      }
-      if (mesh.isSplit(t)) {
-        const std::uint64_t j = (t.l + t.r) / 2;
-        // SubmeshRefine (2.10): (l, a, r) splits into (a, j, l) and (r, j, a).
-        stack.push_back({t.a, j, t.l, 0, t.depth + 1});
-        stack.push_back({t.r, j, t.a, 0, t.depth + 1});
-        continue;
-      }
-      for (auto [u, v] : {std::pair{t.l, t.r}, std::pair{t.r, t.a}, std::pair{t.a, t.l}}) {
-        edges.push_back({std::min(u, v), std::max(u, v)});
-      }
-    }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    for (const auto& [u, v] : edges) {
-      TerrainLine e;
-      e.kind = FeatureKind::Raster;
-      e.points = {binaryPoint(u), binaryPoint(v)};
-      for (auto& piece : clipToRect(e, rect, snap)) binaryEdges.push_back(std::move(piece));
     }
   }
   for (const auto& piece : binaryEdges) {
@@ -399,21 +340,29 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   cdt.insertPoints(interior, binaryFeature);
   for (const auto& piece : binaryEdges) cdt.insertConstraint(piece.points, binaryFeature);
   cdt.finalize();
-  TinData td = cdt.toTinData();
+  const Mesh& cm = cdt.mesh();
+  const auto& points = cm.points();
 
-  // Which vertices are held, and where the domain boundary runs.
-  const std::size_t nv = td.vertices.size();
+  // Which vertices are held (on a line, a ring or a side), and where the
+  // domain boundary runs.
+  const std::size_t nv = cm.vertexCount(), nt = cm.triangleCount();
+  auto hasKind = [&](HalfedgeId h, auto&& test) {
+    for (std::uint32_t f : cm.edgeFeatures(h)) {
+      if (test(cm.features()[f].kind)) return true;
+    }
+    return false;
+  };
+  auto isRingEdge = [&](HalfedgeId h) {
+    return hasKind(h, [](FeatureKind k) { return k == FeatureKind::Boundary; });
+  };
   std::vector<std::uint8_t> flags(nv, 0);
-  std::map<std::pair<std::uint32_t, std::uint32_t>, bool> ringEdges;
-  for (const auto& e : td.constrainedEdges) {
-    const FeatureKind kind = td.features[e.feature].kind;
-    if (kind == FeatureKind::Raster || kind == FeatureKind::SpotHeight) continue;
-    flags[e.a] |= kHeld;
-    flags[e.b] |= kHeld;
-    if (kind == FeatureKind::Boundary) ringEdges[{e.a, e.b}] = true;
+  for (std::uint32_t h = 0; h < cm.halfedgeCount(); ++h) {
+    if (!hasKind(HalfedgeId(h), [](FeatureKind k) { return k != FeatureKind::Raster; })) continue;
+    flags[cm.origin(HalfedgeId(h)).value] |= kHeld;
+    flags[cm.target(HalfedgeId(h)).value] |= kHeld;
   }
   for (std::size_t v = 0; v < nv; ++v) {
-    const Point3& p = td.vertices[v];
+    const Point3& p = points[v];
     if (p.x == rect.x0) flags[v] |= kSideWest;
     if (p.x == rect.x1) flags[v] |= kSideEast;
     if (p.y == rect.y0) flags[v] |= kSideSouth;
@@ -422,17 +371,13 @@ TileSurface Tiler::buildTile(const TileId& id) const {
 
   // Keep the triangles inside the TIN's (simplified) domain: components
   // bounded by ring edges, each classified once by even-odd.
-  const std::size_t nt = td.triangles.size();
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edgeOwner;
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    for (int i = 0; i < 3; ++i) edgeOwner[{td.triangles[t][i], td.triangles[t][(i + 1) % 3]}] = t;
-  }
   std::vector<int> keep(nt, -1);
   for (std::uint32_t seed = 0; seed < nt; ++seed) {
     if (keep[seed] >= 0) continue;
-    const auto& s = td.triangles[seed];
-    const Point2 centroid{(td.vertices[s[0]].x + td.vertices[s[1]].x + td.vertices[s[2]].x) / 3,
-                          (td.vertices[s[0]].y + td.vertices[s[1]].y + td.vertices[s[2]].y) / 3};
+    const auto corners = cm.vertices(TriangleId(seed));
+    const Point2 centroid{
+        (points[corners[0].value].x + points[corners[1].value].x + points[corners[2].value].x) / 3,
+        (points[corners[0].value].y + points[corners[1].value].y + points[corners[2].value].y) / 3};
     const int inside = insideRings(centroid, zd.lines) ? 1 : 0;
     std::vector<std::uint32_t> stack{seed};
     keep[seed] = inside;
@@ -440,12 +385,12 @@ TileSurface Tiler::buildTile(const TileId& id) const {
       const std::uint32_t t = stack.back();
       stack.pop_back();
       for (int i = 0; i < 3; ++i) {
-        const std::uint32_t a = td.triangles[t][i], b = td.triangles[t][(i + 1) % 3];
-        if (ringEdges.contains({std::min(a, b), std::max(a, b)})) continue;
-        auto it = edgeOwner.find({b, a});
-        if (it == edgeOwner.end() || keep[it->second] >= 0) continue;
-        keep[it->second] = inside;
-        stack.push_back(it->second);
+        const HalfedgeId h = Mesh::halfedge(TriangleId(t), i);
+        if (cm.isBoundary(h) || isRingEdge(h)) continue;
+        const std::uint32_t across = Mesh::triangle(cm.twin(h)).value;
+        if (keep[across] >= 0) continue;
+        keep[across] = inside;
+        stack.push_back(across);
       }
     }
   }
@@ -453,12 +398,14 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   for (std::uint32_t t = 0; t < nt; ++t) {
     if (keep[t] != 1) continue;
     std::array<std::uint32_t, 3> tri{};
+    const auto corners = cm.vertices(TriangleId(t));
     for (int i = 0; i < 3; ++i) {
-      std::uint32_t& r = remap[td.triangles[t][i]];
+      const std::uint32_t v = corners[i].value;
+      std::uint32_t& r = remap[v];
       if (r == std::numeric_limits<std::uint32_t>::max()) {
         r = static_cast<std::uint32_t>(tile.vertices.size());
-        tile.vertices.push_back(td.vertices[td.triangles[t][i]]);
-        tile.flags.push_back(flags[td.triangles[t][i]]);
+        tile.vertices.push_back(points[v]);
+        tile.flags.push_back(flags[v]);
       }
       tri[i] = r;
     }
@@ -479,11 +426,18 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     v.y -= rect.y0;
   }
   for (const auto& t : tile.triangles) local.triangles.push_back(t);
+  // A sample names its triangle by index into local.triangles: Surface keeps
+  // TinData's triangle order (it drops none of a valid CDT mesh's).
   const Surface surface(local);
   std::vector<fit::Sample> samples;
   TriangleId hint;
-  for (const auto& p : data_) {
-    if (!rect.contains(p.xy())) continue;
+  std::vector<std::uint32_t> inTile;
+  dataGrid_.forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
+    if (rect.contains(data_[i].xy())) inTile.push_back(i);
+  });
+  std::sort(inTile.begin(), inTile.end());  // the data's order, whatever the grid's
+  for (std::uint32_t i : inTile) {
+    const Point3& p = data_[i];
     const auto loc = surface.locate({p.x - rect.x0, p.y - rect.y0}, hint);
     if (!loc) continue;
     hint = loc->triangle;
@@ -494,7 +448,6 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   // a vertex with no data in its triangles (slivers beside a break line make
   // λ_d small) stays near the zoom's surface instead of being undetermined.
   constexpr double kPriorWeight = 0.25;
-  // Surface may renumber nothing: its mesh keeps TinData's triangle order.
   std::vector<Point2> xy;
   xy.reserve(local.vertices.size());
   for (const auto& v : local.vertices) xy.push_back(v.xy());

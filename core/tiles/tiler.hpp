@@ -25,7 +25,6 @@
 
 #include <array>
 #include <cstdint>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -33,6 +32,7 @@
 
 #include "core/base/point.hpp"
 #include "core/fit/multilevel_fit.hpp"
+#include "core/geometry/cell_grid.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/terrain_lines.hpp"
@@ -85,33 +85,39 @@ class Tiler {
   [[nodiscard]] double zoomTolerance(int z) const;
   [[nodiscard]] const TinData& tin() const { return tin_; }
   [[nodiscard]] std::size_t dataPointCount() const { return data_.size(); }
-  /// Whether a tile with this error gets children.
+  /// Whether a tile with this error gets children (tileRefines).
   [[nodiscard]] bool refines(const TileId& id, double error) const {
-    return error > options_.tolerance && id.z < maxZoom_;
+    return tileRefines(error, id.z, options_.tolerance, maxZoom_);
   }
-  /// Break-line and ring vertices kept at a zoom (for reports).
-  [[nodiscard]] std::size_t keptLineVertices(int z) const;
 
   /// The tile's surface (empty when the tile holds none of the TIN). Thread-safe.
   [[nodiscard]] TileSurface buildTile(const TileId& id) const;
 
  private:
   struct Zoom;
+  /// A zoom's shared part, built by the first tile of the zoom that needs it.
+  struct ZoomSlot {
+    std::once_flag once;
+    std::unique_ptr<Zoom> zoom;
+  };
   const Zoom& zoom(int z) const;
+  std::unique_ptr<Zoom> makeZoom(int z) const;
 
   const TinData& tin_;
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
-  std::vector<Point3> data_;      // TIN vertices and points sampled from its triangles
-  std::vector<Point3> zoomData_;  // the part of data_ the zoom fits refine for
+  std::vector<Point3> data_;          // TIN vertices and points sampled from its triangles
+  std::vector<Point3> zoomData_;      // the part of data_ the zoom fits refine for
+  CellGrid dataGrid_{0, 0, 0, 0, 1};  // data_ by position
   std::vector<TerrainLine> lines_;
   TinIndex index_;
   int finestZoom_ = 0;
   int maxZoom_ = 0;
   int levelsPerTile_ = 5;
-  mutable std::mutex mutex_;
-  mutable std::map<int, std::shared_ptr<Zoom>> zooms_;
-  mutable std::map<int, std::shared_ptr<std::once_flag>> zoomOnce_;
+  // The planning fit, kept when its options are those of the finest zoom's
+  // fit (then zoom(finestZoom_) takes it instead of fitting again).
+  mutable std::unique_ptr<fit::MultilevelFit> plannedFit_;
+  mutable std::array<ZoomSlot, 31> zooms_;  // by zoom (PyramidGeometry::inside: z < 31)
 };
 
 }  // namespace tinsmith::tiles

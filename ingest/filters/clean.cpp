@@ -8,8 +8,8 @@
 #include <tuple>
 
 #include "core/base/error.hpp"
+#include "core/geometry/cell_grid.hpp"
 #include "core/geometry/predicates.hpp"
-#include "ingest/filters/cell_grid.hpp"
 
 namespace tinsmith::ingest {
 namespace {

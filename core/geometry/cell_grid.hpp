@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace tinsmith::ingest {
+namespace tinsmith {
 
 class CellGrid {
  public:
@@ -74,13 +74,24 @@ class CellGrid {
     return items_.data() + start_[c];
   }
 
+  /// Calls visit(cell index) for every cell the box [x0, x1] x [y0, y1] overlaps.
+  template <typename Visit>
+  void forEachCellOfBox(double x0, double y0, double x1, double y1, Visit&& visit) const {
+    const auto cx0 = cellX(x0), cx1 = cellX(x1), cy0 = cellY(y0), cy1 = cellY(y1);
+    for (auto cy = cy0; cy <= cy1; ++cy) {
+      for (auto cx = cx0; cx <= cx1; ++cx) visit(index(cx, cy));
+    }
+  }
+  /// Calls f(item) for each item in the cells the box [x0, x1] x [y0, y1]
+  /// overlaps (an item in several of them once per cell).
+  template <typename F>
+  void forEachInBox(double x0, double y0, double x1, double y1, F&& f) const {
+    forEachCellOfBox(x0, y0, x1, y1, [&](std::size_t c) { forEachInCell(c, f); });
+  }
   /// Calls f(item) for each item in the cells the box [x-r, x+r] x [y-r, y+r] overlaps.
   template <typename F>
   void forEachNear(double x, double y, double r, F&& f) const {
-    const auto x0 = cellX(x - r), x1 = cellX(x + r), y0 = cellY(y - r), y1 = cellY(y + r);
-    for (auto cy = y0; cy <= y1; ++cy) {
-      for (auto cx = x0; cx <= x1; ++cx) forEachInCell(index(cx, cy), f);
-    }
+    forEachInBox(x - r, y - r, x + r, y + r, f);
   }
 
  private:
@@ -90,4 +101,4 @@ class CellGrid {
   std::vector<std::uint32_t> items_;
 };
 
-}  // namespace tinsmith::ingest
+}  // namespace tinsmith
