@@ -70,4 +70,9 @@ struct DecodedGlb {
 };
 DecodedGlb decodeGlb(std::string_view bytes, std::string_view name);
 
+/// asset.extras of a .glb as compact JSON text (empty when absent), from its
+/// container and JSON chunk alone (no mesh is decoded). Throws inputError
+/// naming `name` for bytes that are not a .glb.
+std::string glbAssetExtras(std::string_view bytes, std::string_view name);
+
 }  // namespace tinsmith::encode

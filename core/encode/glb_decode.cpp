@@ -29,6 +29,8 @@ class GlbReader {
   GlbReader(std::string_view bytes, std::string_view name) : bytes_(bytes), name_(name) {}
 
   DecodedGlb read();
+  /// asset.extras only: the container and the JSON chunk, nothing decoded.
+  std::string readAssetExtras();
 
  private:
   [[noreturn]] void fail(const std::string& problem) const {
@@ -230,6 +232,12 @@ Matrix4 GlbReader::nodeMatrix(const Json& node) {
   return m;
 }
 
+std::string GlbReader::readAssetExtras() {
+  readContainer();
+  const Json& asset = member(doc_, "asset", "the document");
+  return asset.contains("extras") ? asset["extras"].dump() : std::string();
+}
+
 DecodedGlb GlbReader::read() {
   readContainer();
   DecodedGlb out;
@@ -295,6 +303,10 @@ DecodedGlb GlbReader::read() {
 
 DecodedGlb decodeGlb(std::string_view bytes, std::string_view name) {
   return GlbReader(bytes, name).read();
+}
+
+std::string glbAssetExtras(std::string_view bytes, std::string_view name) {
+  return GlbReader(bytes, name).readAssetExtras();
 }
 
 }  // namespace tinsmith::encode

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <mutex>
 #include <thread>
 
 #include "core/base/error.hpp"
@@ -36,9 +37,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
   if (root.z < untilZoom) level.push_back(root);
   while (!level.empty()) {
     const int z = level.front().z;
-    std::sort(level.begin(), level.end(), [](const TileId& a, const TileId& b) {
-      return a.y < b.y || (a.y == b.y && a.x < b.x);
-    });
+    std::sort(level.begin(), level.end(), rowMajorLess);
     std::vector<std::optional<TileRecord>> records(level.size());
     std::vector<std::optional<TileContent>> built(level.size());
     std::vector<std::size_t> todo;
@@ -50,7 +49,10 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
         todo.push_back(i);
       }
     }
-    // Build on workers; emit in order as soon as the prefix is done.
+    // Build on workers; emit in order as soon as the prefix is done. A worker
+    // stops taking tiles after a failure; the tiles it took are all before
+    // any it did not, so the loop below meets the failure before waiting on
+    // a tile nobody builds.
     std::atomic<std::size_t> next{0};
     std::vector<std::atomic<bool>> ready(level.size());
     for (std::size_t i = 0; i < level.size(); ++i) ready[i] = records[i].has_value();
@@ -74,11 +76,10 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
         ready[i].notify_all();
       }
     };
+    // The calling thread emits; the pool builds.
     std::vector<std::jthread> pool;
-    const unsigned n =
-        std::min<unsigned>(workers, static_cast<unsigned>(std::max<std::size_t>(todo.size(), 1)));
-    for (unsigned w = 1; w < n; ++w) pool.emplace_back(work);
-    std::jthread last(work);  // the calling thread emits; one more worker builds
+    const auto n = std::min<std::size_t>(workers, std::max<std::size_t>(todo.size(), 1));
+    for (std::size_t w = 0; w < n; ++w) pool.emplace_back(work);
     std::vector<TileId> nextLevel;
     std::size_t done = 0;
     for (std::size_t i = 0; i < level.size(); ++i) {
@@ -107,13 +108,8 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
         for (int c = 0; c < 4; ++c) nextLevel.push_back(level[i].child(c));
       }
     }
-    stop = stop.load() || failure != nullptr;
-    if (failure) {
-      // Wake workers' waits are not needed: they only wait on `next`.
-      for (auto& t : pool) t.join();
-      last.join();
-      std::rethrow_exception(failure);
-    }
+    pool.clear();  // joins: `failure` is final after this
+    if (failure) std::rethrow_exception(failure);
     level = z + 1 < untilZoom ? std::move(nextLevel) : std::vector<TileId>{};
   }
   return summary;

@@ -68,19 +68,11 @@ std::optional<TileRecord> recordFromExtras(std::string_view extras) {
 }
 
 std::optional<TileRecord> recordFromGlb(std::string_view glb) {
-  auto u32 = [&](std::size_t at) {
-    return static_cast<std::uint32_t>(static_cast<unsigned char>(glb[at])) |
-           static_cast<std::uint32_t>(static_cast<unsigned char>(glb[at + 1])) << 8 |
-           static_cast<std::uint32_t>(static_cast<unsigned char>(glb[at + 2])) << 16 |
-           static_cast<std::uint32_t>(static_cast<unsigned char>(glb[at + 3])) << 24;
-  };
-  if (glb.size() < 20 || glb.substr(0, 4) != "glTF" || u32(16) != 0x4E4F534Au) return std::nullopt;
-  const std::size_t length = u32(12);
-  if (20 + length > glb.size()) return std::nullopt;
-  const auto doc = nlohmann::json::parse(glb.substr(20, length), nullptr, false);
-  if (doc.is_discarded() || !doc.contains("asset") || !doc["asset"].contains("extras"))
+  try {
+    return recordFromExtras(encode::glbAssetExtras(glb, "tile"));
+  } catch (const Error&) {
     return std::nullopt;
-  return recordFromExtras(doc["asset"]["extras"].dump());
+  }
 }
 
 TileContent encodeTile(const TileSurface& tile, double skirtDepth, const ContentOptions& options) {

@@ -52,7 +52,7 @@ ProjGeoReference::ProjGeoReference(std::string crs, std::string geoid)
   if (crs_.empty()) {
     throw inputError(
         "the TIN has no CRS, so its tiles cannot be placed on the globe", {},
-        "rebuild it with a CRS (tinsmith tin --crs EPSG:…) or tile with --frame local");
+        "rebuild it with a CRS (tinsmith tin --crs EPSG:…); --frame local needs one too");
   }
   if (geoid_.empty()) {
     sourceDefinition_ = crs_;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "core/base/error.hpp"
 #include "core/tiles/pyramid_build.hpp"
@@ -52,35 +53,15 @@ std::string buildRecord(const TinData& tin, const std::string& tinBytes, const s
   return j.dump(2) + "\n";
 }
 
-bool tileKeyLess(const std::string& a, const std::string& b,
-                 const std::map<std::string, TileId>& ids) {
-  return ids.at(a) < ids.at(b);
-}
-
-/// The canonical order of a finished store's keys.
-std::vector<std::string> canonicalKeys(const std::vector<std::string>& keys) {
-  std::vector<std::string> head, tileKeys, tail;
-  std::map<std::string, TileId> ids;
-  for (const auto& k : keys) {
-    if (k == kBuildKey || k == kTinKey) {
-      head.push_back(k);
-    } else if (k.rfind("tiles/", 0) == 0) {
-      unsigned z = 0, x = 0, y = 0;
-      if (std::sscanf(k.c_str(), "tiles/%u/%u/%u.glb", &z, &x, &y) == 3) {
-        ids[k] = TileId{static_cast<int>(z), y, x};  // ordered (z, y, x)
-        tileKeys.push_back(k);
-      }
-    } else if (k.rfind("tilesets/", 0) == 0 || k == "tileset.json") {
-      tail.push_back(k);
-    }
-  }
-  std::sort(head.begin(), head.end());
-  std::sort(tileKeys.begin(), tileKeys.end(),
-            [&](auto& a, auto& b) { return tileKeyLess(a, b, ids); });
-  std::sort(tail.begin(), tail.end());
-  std::vector<std::string> out = head;
-  out.insert(out.end(), tileKeys.begin(), tileKeys.end());
-  out.insert(out.end(), tail.begin(), tail.end());
+/// The canonical order of a finished store's keys: the build record and the
+/// TIN, the tiles in `records` (already in rowMajorLess order), then the
+/// tileset files.
+std::vector<std::string> canonicalKeys(const std::vector<TileRecord>& records,
+                                       std::vector<std::string> tilesetKeys) {
+  std::vector<std::string> out{kBuildKey, kTinKey};
+  for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
+  std::sort(tilesetKeys.begin(), tilesetKeys.end());
+  out.insert(out.end(), tilesetKeys.begin(), tilesetKeys.end());
   return out;
 }
 
@@ -117,30 +98,35 @@ TileJobSummary summarize(const std::vector<TileRecord>& records, const std::stri
   return s;
 }
 
+/// The record a stored tile carries, checked against its key.
+TileRecord recordOfTile(const std::string& key, const std::string& bytes, const fs::path& store) {
+  const auto record = tiles::recordFromGlb(bytes);
+  if (!record) {
+    throw inputError("tile " + key + " in " + store.string() + " is not a tinsmith tile", {},
+                     "rebuild the store with tinsmith tile");
+  }
+  if (tiles::tileContentKey(record->id) != key) {
+    throw inputError("tile " + key + " in " + store.string() + " says it is " + record->id.name());
+  }
+  TileRecord r = *record;
+  r.bytes = bytes.size();
+  return r;
+}
+
+void sortRecords(std::vector<TileRecord>& records) {
+  std::sort(records.begin(), records.end(), [](const TileRecord& a, const TileRecord& b) {
+    return tiles::rowMajorLess(a.id, b.id);
+  });
+}
+
 /// Records of every tile in a store, from the tiles themselves.
-std::vector<TileRecord> storeRecords(const store::TileStore& st,
-                                     std::map<TileId, std::string>* keysOut = nullptr) {
+std::vector<TileRecord> storeRecords(const store::TileStore& st) {
   std::vector<TileRecord> records;
   for (const auto& key : st.keys()) {
     if (key.rfind("tiles/", 0) != 0) continue;
-    const auto bytes = st.get(key);
-    const auto record = bytes ? tiles::recordFromGlb(*bytes) : std::nullopt;
-    if (!record) {
-      throw inputError("tile " + key + " in " + st.path().string() + " is not a tinsmith tile", {},
-                       "rebuild the store with tinsmith tile");
-    }
-    if (tiles::tileContentKey(record->id) != key) {
-      throw inputError("tile " + key + " in " + st.path().string() + " says it is " +
-                       record->id.name());
-    }
-    records.push_back(*record);
-    records.back().bytes = bytes->size();
-    if (keysOut) (*keysOut)[record->id] = key;
+    if (const auto bytes = st.get(key)) records.push_back(recordOfTile(key, *bytes, st.path()));
   }
-  std::sort(records.begin(), records.end(), [](const TileRecord& a, const TileRecord& b) {
-    return a.id.z < b.id.z ||
-           (a.id.z == b.id.z && (a.id.y < b.id.y || (a.id.y == b.id.y && a.id.x < b.id.x)));
-  });
+  sortRecords(records);
   return records;
 }
 
@@ -150,10 +136,12 @@ void finish(store::TileStore& stage, const fs::path& output, const std::vector<T
             const std::string& build) {
   tiles::TilesetOptions tileset;
   tileset.extras = tilesetExtras(build);
-  for (const auto& [key, json] : tiles::tilesetFiles(records, tileset)) stage.put(key, json);
-  if (stage.path() != output) {
-    store::writeStore(stage, canonicalKeys(stage.keys()), output);
+  std::vector<std::string> tilesetKeys;
+  for (const auto& [key, json] : tiles::tilesetFiles(records, tileset)) {
+    stage.put(key, json);
+    tilesetKeys.push_back(key);
   }
+  if (stage.path() != output) store::writeStore(stage, canonicalKeys(records, tilesetKeys), output);
 }
 
 fs::path stagingPath(const fs::path& output) {
@@ -174,23 +162,17 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   const tiles::Tiler tiler(tin, tilerOptions);
   reportProgress(progress, "tiles.plan", "", 1, 1);
 
-  std::unique_ptr<ProjGeoReference> geo;
+  // Both frames place the tiles through the TIN's CRS (the local frame's
+  // east-north-up axes stand at the pyramid's centre).
+  const ProjGeoReference geo(tin.crs, options.geoid);
   tiles::ContentOptions content;
   content.compression = options.compression;
   content.frame = options.frame;
-  if (options.frame == tiles::ContentFrame::Ecef || !tin.crs.empty()) {
-    geo = std::make_unique<ProjGeoReference>(tin.crs, options.geoid);
-    content.geo = geo.get();
-    const Point2 o = tiler.geometry().origin();
-    const double h = 0.5 * tiler.geometry().size();
-    const Point3 centre{o.x + h, o.y + h, 0.0};
-    encode::Geodetic g;
-    geo->toGeodetic({&centre, 1}, {&g, 1});
-    content.localOrigin = g;
-  } else {
-    throw inputError("--frame local needs the TIN's CRS to place east-north-up axes", {},
-                     "rebuild the TIN with --crs");
-  }
+  content.geo = &geo;
+  const Point2 o = tiler.geometry().origin();
+  const double half = 0.5 * tiler.geometry().size();
+  const Point3 centre{o.x + half, o.y + half, 0.0};
+  geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
 
   const std::string tinBytes = encodeTin(tin);
   const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler);
@@ -210,8 +192,9 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   tiles::PyramidCallbacks callbacks;
   if (options.resume) {
     callbacks.existing = [&](const TileId& id) -> std::optional<TileRecord> {
-      const auto bytes = stage->get(tiles::tileContentKey(id));
-      return bytes ? tiles::recordFromGlb(*bytes) : std::nullopt;
+      const std::string key = tiles::tileContentKey(id);
+      const auto bytes = stage->get(key);
+      return bytes ? std::optional(recordOfTile(key, *bytes, stagePath)) : std::nullopt;
     };
   }
   const int untilZoom = options.untilZoom.value_or(1 << 20);
@@ -225,18 +208,16 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   const tiles::PyramidSummary walked =
       tiles::buildPyramid(tiler, content, root, options.threads, callbacks, untilZoom);
 
-  std::vector<TileRecord> records = storeRecords(*stage);
-  const bool whole = !options.subtree && !options.untilZoom;
-  if (whole) {
+  // The walk's records are the stage's tiles: those it built and those a
+  // resumed run found there.
+  const std::vector<TileRecord>& records = walked.records;
+  if (!options.subtree && !options.untilZoom) {
     finish(*stage, output, records, build);
-    if (stagePath != output) fs::remove(stagePath);
-  } else {
+  } else if (stagePath != output) {
     // A shard: no tileset.json of its own; `tinsmith merge` writes it.
-    if (stagePath != output) {
-      store::writeStore(*stage, canonicalKeys(stage->keys()), output);
-      fs::remove(stagePath);
-    }
+    store::writeStore(*stage, canonicalKeys(records, {}), output);
   }
+  if (stagePath != output) fs::remove(stagePath);
   TileJobSummary summary = summarize(records, build);
   summary.built = walked.built;
   summary.reused = walked.reused;
@@ -251,6 +232,7 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
   const fs::path stagePath = stagingPath(output);
   auto stage = store::openStoreForWriting(stagePath, false);
   std::string build;
+  std::vector<TileRecord> records;
   for (const auto& path : inputs) {
     auto in = store::openStoreForReading(path);
     const auto b = in->get(kBuildKey);
@@ -272,18 +254,19 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
         if (*there != *bytes) throw usageError("tile " + key + " differs between the shards");
         continue;
       }
+      records.push_back(recordOfTile(key, *bytes, path));
       stage->put(key, *bytes);
     }
   }
-  const auto records = storeRecords(*stage);
+  sortRecords(records);
   // Every refined tile must have children from some shard.
   const auto b = nlohmann::json::parse(build);
   const double tolerance = b["options"]["tolerance"].get<double>();
   const int maxZoom = b["options"]["maxZoom"].get<int>();
-  std::map<TileId, bool> present;
-  for (const auto& r : records) present[r.id] = true;
+  std::set<TileId> present;
+  for (const auto& r : records) present.insert(r.id);
   for (const auto& r : records) {
-    if (!(r.error > tolerance && r.id.z < maxZoom)) continue;
+    if (!tiles::tileRefines(r.error, r.id.z, tolerance, maxZoom)) continue;
     bool any = false;
     for (int c = 0; c < 4; ++c) any = any || present.contains(r.id.child(c));
     if (!any) {

@@ -57,34 +57,41 @@ void report(const ingest::TileJobSummary& summary, const std::string& output, bo
   }
 }
 
-}  // namespace
-
-ingest::TileJobOptions tileJobOptions(double tolerance, std::size_t maxTriangles,
-                                      std::optional<int> maxZoom, double lambda,
-                                      const std::string& compression, const std::string& frame,
-                                      const std::string& geoid) {
+/// The job's options from the command line; throws usageError for a value
+/// no option takes.
+ingest::TileJobOptions tileJobOptions(const TileCliOptions& c) {
   ingest::TileJobOptions o;
-  o.tiler.tolerance = tolerance;
-  o.tiler.maxTriangles = maxTriangles;
-  o.tiler.maxZoom = maxZoom;
-  o.tiler.lambdaFactor = lambda;
-  if (compression == "draco") {
+  o.tiler.tolerance = c.tolerance;
+  o.tiler.maxTriangles = c.maxTriangles;
+  o.tiler.maxZoom = c.maxZoom;
+  o.tiler.lambdaFactor = c.lambda;
+  if (c.compression == "draco") {
     o.compression = encode::Compression::Draco;
-  } else if (compression == "none") {
+  } else if (c.compression == "none") {
     o.compression = encode::Compression::None;
   } else {
-    throw usageError("--compression must be draco or none (got '" + compression + "')");
+    throw usageError("--compression must be draco or none (got '" + c.compression + "')");
   }
-  if (frame == "ecef") {
+  if (c.frame == "ecef") {
     o.frame = tiles::ContentFrame::Ecef;
-  } else if (frame == "local") {
+  } else if (c.frame == "local") {
     o.frame = tiles::ContentFrame::Local;
   } else {
-    throw usageError("--frame must be ecef or local (got '" + frame + "')");
+    throw usageError("--frame must be ecef or local (got '" + c.frame + "')");
   }
-  o.geoid = geoid;
+  o.geoid = c.geoid;
+  if (!c.subtree.empty()) o.subtree = tiles::parseTileId(c.subtree, "--subtree");
+  o.untilZoom = c.untilZoom;
+  if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
+  if (o.subtree && o.untilZoom)
+    throw usageError("--subtree and --until-zoom make different shards: give one");
+  if (c.threads < 0) throw usageError("--threads must be 0 (all cores) or more");
+  o.threads = c.threads;
+  o.resume = c.resume;
   return o;
 }
+
+}  // namespace
 
 void addTileCommand(CLI::App& app) {
   auto opt = std::make_shared<TileCliOptions>();
@@ -116,17 +123,7 @@ void addTileCommand(CLI::App& app) {
   cmd->add_flag("-q,--quiet", opt->quiet, "No summary, no progress bar");
   cmd->add_flag("--json", opt->json, "Print the summary as JSON on stdout");
   cmd->callback([opt] {
-    ingest::TileJobOptions o =
-        tileJobOptions(opt->tolerance, opt->maxTriangles, opt->maxZoom, opt->lambda,
-                       opt->compression, opt->frame, opt->geoid);
-    if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
-    o.untilZoom = opt->untilZoom;
-    if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
-    if (o.subtree && o.untilZoom)
-      throw usageError("--subtree and --until-zoom make different shards: give one");
-    o.resume = opt->resume;
-    o.threads = opt->threads;
-    if (opt->threads < 0) throw usageError("--threads must be 0 (all cores) or more");
+    const ingest::TileJobOptions o = tileJobOptions(*opt);
     const TinData tin = ingest::readTinFile(opt->tin);
     auto bar = terminalProgress(opt->quiet || opt->json);
     const auto summary = ingest::runTileJob(tin, opt->tin, opt->output, o, bar.get());

@@ -139,13 +139,8 @@ void run(const TinOptions& o) {
   checkOutputDirectory(o.output, "-o");
   if (!o.report.empty()) checkOutputDirectory(o.report, "--report");
 
-  std::unique_ptr<ProgressBar> bar;
-  ingest::Progress progress;
-  if (!o.quiet && ::isatty(STDERR_FILENO)) {
-    bar = std::make_unique<ProgressBar>();
-    progress = bar->progress();
-  }
-  const ingest::Progress* p = bar ? &progress : nullptr;
+  auto bar = terminalProgress(o.quiet);
+  const ingest::Progress* p = bar.get();
 
   // The TIN is written straight from the triangulation's mesh, before the
   // triangulation is freed: no TinData copy of it is ever made.
@@ -179,7 +174,7 @@ void run(const TinOptions& o) {
     report = build(std::move(layers), ingest::buildOptionsFrom(config));
     ingest::addIngestReport(report, ingested);
   }
-  bar.reset();
+  bar.bar.reset();
   if (!o.report.empty()) {
     try {
       writeReport(o.report, report);
