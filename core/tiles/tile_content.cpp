@@ -82,18 +82,14 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   // Vertices: the surface's, then one below each side vertex that a skirt uses.
   std::vector<Point3> project = tile.vertices;
   const std::size_t top = project.size();
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edgeUse;
-  for (const auto& t : tile.triangles) {
-    for (int i = 0; i < 3; ++i)
-      edgeUse[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}] += 1;
-  }
   std::vector<std::uint32_t> below(top, std::numeric_limits<std::uint32_t>::max());
   std::vector<std::array<std::uint32_t, 3>> triangles = tile.triangles;
   for (const auto& t : tile.triangles) {
     for (int i = 0; i < 3; ++i) {
       const std::uint32_t a = t[i], b = t[(i + 1) % 3];
-      if ((tile.flags[a] & tile.flags[b] & 15) == 0) continue;  // not along one side
-      if (edgeUse[{std::min(a, b), std::max(a, b)}] != 1) continue;
+      // An edge with both ends on one side lies along it (the side is a
+      // constraint through all its vertices), so the tile is on one side of it.
+      if ((tile.flags[a] & tile.flags[b] & 15) == 0) continue;
       for (std::uint32_t v : {a, b}) {
         if (below[v] == std::numeric_limits<std::uint32_t>::max()) {
           below[v] = static_cast<std::uint32_t>(project.size());

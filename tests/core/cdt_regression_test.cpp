@@ -258,19 +258,9 @@ TEST(CdtConstraintRegression, FiveLinesThroughAnInputPointMakeNoNearDuplicateVer
 // other side, so it goes in there and R–L's constraint runs through it: a new
 // vertex on both lines.
 TEST(CdtConstraintRegression, CrossingBesideASliverStaysOnBothLines) {
-  const Point3 R{6999980.9999999991, 7000017.0000000000, 10.0};
-  const Point3 L{6999980.0000000000, 6999980.0000000000, 20.0};
-  const Point3 apex{6999980.0000000000, 6999980.0000000009, 0.0};  // one ulp above L
-  const Point3 A{6999981.7548746532, 7000013.3426183844, 30.0};
-  const Point3 B{6999980.0000000000, 7000015.0000000009, 40.0};
+  using namespace testing::crossing_beside_a_sliver;
   Cdt cdt;
-  cdt.insertPoints(std::vector<Point3>{L,
-                                       apex,
-                                       R,
-                                       {6999990.0, 6999990.0, 0.0},
-                                       {6999970.0, 6999990.0, 0.0},
-                                       {6999990.0, 7000020.0, 0.0},
-                                       {6999970.0, 7000020.0, 0.0}});
+  cdt.insertPoints(points());
   const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
   const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
   const std::vector<InputSegment> segs{{R, L, road}, {A, B, river}};

@@ -20,6 +20,7 @@ namespace {
 
 using testing::isValid;
 using testing::randomPoints;
+namespace sliver = testing::crossing_beside_a_sliver;
 
 double area(const Mesh& mesh) {
   double sum = 0;
@@ -297,19 +298,12 @@ TEST(CdtReview, ChainSearchOfALongConstraintIsLinear) {
 // it goes in beside a sliver and R–L's constraint is rerouted through it.)
 TEST(CdtReview, RerouteNestingIsBoundedByAnInternalError) {
   auto build = [](Cdt& cdt) {
-    cdt.insertPoints(std::vector<Point3>{{6999980.0000000000, 6999980.0000000000, 20.0},
-                                         {6999980.0000000000, 6999980.0000000009, 0.0},
-                                         {6999980.9999999991, 7000017.0000000000, 10.0},
-                                         {6999990.0, 6999990.0, 0.0},
-                                         {6999970.0, 6999990.0, 0.0},
-                                         {6999990.0, 7000020.0, 0.0},
-                                         {6999970.0, 7000020.0, 0.0}});
+    cdt.insertPoints(sliver::points());
     const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
     const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
     cdt.insertConstraintSegment(VertexId(2), VertexId(0), road);
-    cdt.insertConstraint(std::vector<Point3>{{6999981.7548746532, 7000013.3426183844, 30.0},
-                                             {6999980.0000000000, 7000015.0000000009, 40.0}},
-                         river);
+    cdt.insertConstraint(
+        std::vector<Point3>{sliver::A, sliver::B}, river);
   };
   Cdt natural;
   build(natural);

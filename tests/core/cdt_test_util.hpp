@@ -93,4 +93,26 @@ inline void exportCase(const std::filesystem::path& dir, const Mesh& mesh,
   }
 }
 
+/// A constrained edge R–L with a vertex one ulp from L (a sliver beside the
+/// edge) and a break line A–B crossing it near R, in a frame of four points:
+/// the input of CdtConstraintRegression.CrossingBesideASliverStaysOnBothLines
+/// and CdtReview.RerouteNestingIsBoundedByAnInternalError.
+namespace crossing_beside_a_sliver {
+inline const Point3 R{6999980.9999999991, 7000017.0000000000, 10.0};
+inline const Point3 L{6999980.0000000000, 6999980.0000000000, 20.0};
+inline const Point3 apex{6999980.0000000000, 6999980.0000000009, 0.0};  // one ulp above L
+inline const Point3 A{6999981.7548746532, 7000013.3426183844, 30.0};
+inline const Point3 B{6999980.0000000000, 7000015.0000000009, 40.0};
+/// L, apex, R, then the frame.
+inline std::vector<Point3> points() {
+  return {L,
+          apex,
+          R,
+          {6999990.0, 6999990.0, 0.0},
+          {6999970.0, 6999990.0, 0.0},
+          {6999990.0, 7000020.0, 0.0},
+          {6999970.0, 7000020.0, 0.0}};
+}
+}  // namespace crossing_beside_a_sliver
+
 }  // namespace tinsmith::testing
