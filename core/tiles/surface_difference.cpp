@@ -79,10 +79,80 @@ void TinIndex::overlapping(const Rect& box, std::vector<std::uint32_t>& out) con
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
-SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
-                                        std::span<const std::array<std::uint32_t, 3>> triangles,
-                                        const TinIndex& index) {
-  SurfaceDifference result;
+std::optional<double> TinIndex::z(Point2 p) const {
+  std::vector<std::uint32_t> candidates;
+  overlapping({p.x, p.y, p.x, p.y}, candidates);
+  for (std::uint32_t k : candidates) {
+    const auto& tri = tin_.triangles[k];
+    std::array<P2, 3> c{};
+    for (int i = 0; i < 3; ++i) c[i] = {tin_.vertices[tri[i]].x - p.x, tin_.vertices[tri[i]].y - p.y};
+    bool inside = true;
+    for (int i = 0; i < 3 && inside; ++i) inside = sideOf(c[i], c[(i + 1) % 3], {0.0, 0.0}) >= 0;
+    if (!inside) continue;
+    return Plane(c[0], c[1], c[2], tin_.vertices[tri[0]].z, tin_.vertices[tri[1]].z,
+                 tin_.vertices[tri[2]].z)
+        .at({0.0, 0.0});
+  }
+  return std::nullopt;
+}
+
+void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const {
+  out.clear();
+  if (!grid_) return;
+  std::vector<std::uint32_t> candidates;
+  overlapping(boundsOf(std::array{a, b}), candidates);
+  // Each triangle's stretch of the segment, by clipping t ∈ [0, 1] to the
+  // left of its three (CCW) edges; relative to a for precision.
+  struct Stretch {
+    double t0, t1, z0, z1;
+  };
+  std::vector<Stretch> stretches;
+  const P2 d{b.x - a.x, b.y - a.y};
+  for (std::uint32_t k : candidates) {
+    const auto& tri = tin_.triangles[k];
+    std::array<P2, 3> c{};
+    for (int i = 0; i < 3; ++i) {
+      c[i] = {tin_.vertices[tri[i]].x - a.x, tin_.vertices[tri[i]].y - a.y};
+    }
+    double t0 = 0.0, t1 = 1.0;
+    for (int i = 0; i < 3 && t0 <= t1; ++i) {
+      const P2 p = c[i], q = c[(i + 1) % 3];
+      // side(t) = s0 + t·ds ≥ 0 inside.
+      const double s0 = sideOf(p, q, {0.0, 0.0});
+      const double ds = (q.x - p.x) * d.y - (q.y - p.y) * d.x;
+      if (ds == 0.0) {
+        if (s0 < 0) t1 = -1.0;
+      } else if (ds > 0) {
+        t0 = std::max(t0, -s0 / ds);
+      } else {
+        t1 = std::min(t1, -s0 / ds);
+      }
+    }
+    if (t0 > t1) continue;
+    const Plane plane(c[0], c[1], c[2], tin_.vertices[tri[0]].z, tin_.vertices[tri[1]].z,
+                      tin_.vertices[tri[2]].z);
+    stretches.push_back({t0, t1, plane.at({t0 * d.x, t0 * d.y}), plane.at({t1 * d.x, t1 * d.y})});
+  }
+  std::stable_sort(stretches.begin(), stretches.end(),
+                   [](const Stretch& x, const Stretch& y) { return x.t0 < y.t0; });
+  constexpr double kMerge = 1e-12;
+  double reach = -1.0;
+  auto push = [&](double t, double z) {
+    if (!out.empty() && t <= out.back().t + kMerge) return;
+    out.push_back({t, z});
+  };
+  for (const Stretch& s : stretches) {
+    if (!out.empty() && s.t0 > reach + kMerge) out.push_back({reach, std::nan("")});
+    push(s.t0, s.z0);
+    push(s.t1, s.z1);
+    reach = std::max(reach, s.t1);
+  }
+}
+
+std::vector<SurfaceDifference> triangleDifferences(
+    std::span<const Point3> vertices, std::span<const std::array<std::uint32_t, 3>> triangles,
+    const TinIndex& index) {
+  std::vector<SurfaceDifference> result(triangles.size());
   if (triangles.empty()) return result;
   const TinData& tin = index.tin();
   // Work relative to the first vertex: UTM-sized coordinates lose less.
@@ -90,7 +160,9 @@ SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
   auto local = [&](const Point3& p) { return P2{p.x - ox, p.y - oy}; };
   std::vector<std::uint32_t> candidates;
   std::vector<P2> poly, next;
-  for (const auto& m : triangles) {
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    const auto& m = triangles[i];
+    SurfaceDifference& r = result[i];
     const P2 a = local(vertices[m[0]]), b = local(vertices[m[1]]), c = local(vertices[m[2]]);
     const Plane meshPlane(a, b, c, vertices[m[0]].z, vertices[m[1]].z, vertices[m[2]].z);
     index.overlapping(boundsOf(std::array{vertices[m[0]], vertices[m[1]], vertices[m[2]]}),
@@ -106,17 +178,42 @@ SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
       if (next.empty()) continue;
       const Plane tinPlane(ta, tb, tc, tin.vertices[t[0]].z, tin.vertices[t[1]].z,
                            tin.vertices[t[2]].z);
-      ++result.pieces;
+      ++r.pieces;
       for (const P2& p : next) {
         const double zm = meshPlane.at(p), zt = tinPlane.at(p);
         const double d = std::abs(zm - zt);
-        if (d > result.maxAbs) {
-          result.maxAbs = d;
-          result.at = {p.x + ox, p.y + oy};
-          result.meshZ = zm;
-          result.tinZ = zt;
+        if (d > r.maxAbs) {
+          r.maxAbs = d;
+          r.at = {p.x + ox, p.y + oy};
+          r.meshZ = zm;
+          r.tinZ = zt;
+          r.tinTriangle = k;
+        }
+        // Clipping keeps a TIN corner inside the mesh triangle bit for bit.
+        for (int i = 0; i < 3; ++i) {
+          const P2 corner = i == 0 ? ta : i == 1 ? tb : tc;
+          if (p.x == corner.x && p.y == corner.y && d > r.vertexAbs) {
+            r.vertexAbs = d;
+            r.vertex = {tin.vertices[t[i]].x, tin.vertices[t[i]].y};
+            r.vertexZ = tin.vertices[t[i]].z;
+          }
         }
       }
+    }
+  }
+  return result;
+}
+
+SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
+                                        std::span<const std::array<std::uint32_t, 3>> triangles,
+                                        const TinIndex& index) {
+  SurfaceDifference result;
+  for (const SurfaceDifference& d : triangleDifferences(vertices, triangles, index)) {
+    result.pieces += d.pieces;
+    if (d.maxAbs > result.maxAbs) {
+      const std::size_t pieces = result.pieces;
+      result = d;
+      result.pieces = pieces;
     }
   }
   return result;

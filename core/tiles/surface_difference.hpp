@@ -32,6 +32,23 @@ class TinIndex {
   /// The triangles whose bounding boxes meet `box`, each once, ascending.
   void overlapping(const Rect& box, std::vector<std::uint32_t>& out) const;
 
+  /// A point of the TIN's section along a segment: the parameter t ∈ [0, 1]
+  /// from a to b and the TIN's z there. z is NaN at a marker that starts a gap
+  /// (the part of the segment after the previous point and before the next
+  /// lies outside the TIN).
+  struct SectionPoint {
+    double t;
+    double z;
+  };
+  /// The TIN's section along a → b: where the segment enters and leaves each
+  /// TIN triangle, ascending in t (points within 1e-12 merged, the lower
+  /// triangle id's z kept), with gap markers. The section is linear between
+  /// consecutive points, so it is the TIN along the segment exactly. A
+  /// function of (a, b) alone: the same call gives the same doubles.
+  void section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const;
+  /// The TIN's z at p (the lowest-id triangle containing it), or nullopt.
+  [[nodiscard]] std::optional<double> z(Point2 p) const;
+
  private:
   [[nodiscard]] Rect triangleBox(std::uint32_t t) const;
   const TinData& tin_;
@@ -42,11 +59,23 @@ struct SurfaceDifference {
   double maxAbs = 0.0;  ///< max |mesh − TIN| over the overlap (m)
   Point2 at;            ///< where it is reached
   double meshZ = 0.0, tinZ = 0.0;
+  std::uint32_t tinTriangle = 0;  ///< the TIN triangle the largest difference lies in
   std::size_t pieces = 0;  ///< overlay cells visited
+  /// The largest difference at a TIN vertex of the overlay (0 when none), where
+  /// and the TIN's z there.
+  double vertexAbs = 0.0;
+  Point2 vertex;
+  double vertexZ = 0.0;
 };
 
 /// The difference of a triangle mesh (CCW triangles over `vertices`) and the
-/// indexed TIN.
+/// indexed TIN within each mesh triangle, in the triangles' order (maxAbs 0
+/// and `at` unset for a triangle outside the TIN).
+std::vector<SurfaceDifference> triangleDifferences(
+    std::span<const Point3> vertices, std::span<const std::array<std::uint32_t, 3>> triangles,
+    const TinIndex& tin);
+
+/// The largest of triangleDifferences (pieces summed).
 SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,
                                         std::span<const std::array<std::uint32_t, 3>> triangles,
                                         const TinIndex& tin);

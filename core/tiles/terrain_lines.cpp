@@ -27,7 +27,7 @@ double distanceToSegment(const Point3& p, const Point3& a, const Point3& b) {
 /// Marks the vertices of points[first..last] that Douglas–Peucker keeps
 /// (iterative, so long lines cannot overflow the stack).
 void markKept(std::span<const Point3> points, std::size_t first, std::size_t last, double tolerance,
-              std::vector<char>& keep) {
+              const ChordError& chordError, std::vector<char>& keep) {
   std::vector<std::pair<std::size_t, std::size_t>> stack{{first, last}};
   while (!stack.empty()) {
     auto [i, j] = stack.back();
@@ -42,7 +42,7 @@ void markKept(std::span<const Point3> points, std::size_t first, std::size_t las
         at = k;
       }
     }
-    if (worst > tolerance) {
+    if (worst > tolerance || (chordError && chordError(points[i], points[j]) > tolerance)) {
       keep[at] = 1;
       stack.push_back({i, at});
       stack.push_back({at, j});
@@ -150,7 +150,7 @@ std::vector<TerrainLine> extractTerrainLines(const TinData& tin) {
   return lines;
 }
 
-TerrainLine simplify(const TerrainLine& line, double tolerance) {
+TerrainLine simplify(const TerrainLine& line, double tolerance, const ChordError& chordError) {
   TerrainLine out;
   out.kind = line.kind;
   out.ring = line.ring;
@@ -174,11 +174,11 @@ TerrainLine simplify(const TerrainLine& line, double tolerance) {
       }
     }
     keep[far] = 1;
-    markKept(pts, 0, far, tolerance, keep);
+    markKept(pts, 0, far, tolerance, chordError, keep);
     std::vector<Point3> tail(pts.begin() + static_cast<std::ptrdiff_t>(far), pts.end());
     tail.push_back(pts[0]);
     std::vector<char> keepTail(tail.size(), 0);
-    markKept(tail, 0, tail.size() - 1, tolerance, keepTail);
+    markKept(tail, 0, tail.size() - 1, tolerance, chordError, keepTail);
     for (std::size_t k = 1; k + 1 < tail.size(); ++k) {
       if (keepTail[k]) keep[far + k] = 1;
     }
@@ -198,7 +198,7 @@ TerrainLine simplify(const TerrainLine& line, double tolerance) {
     }
   } else {
     keep.back() = 1;
-    markKept(pts, 0, pts.size() - 1, tolerance, keep);
+    markKept(pts, 0, pts.size() - 1, tolerance, chordError, keep);
   }
   for (std::size_t k = 0; k < pts.size(); ++k) {
     if (keep[k]) out.points.push_back(pts[k]);

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -34,10 +35,17 @@ bool isBreakLineKind(FeatureKind kind);
 /// The break-line chains and domain-boundary rings of a TIN, deterministic.
 std::vector<TerrainLine> extractTerrainLines(const TinData& tin);
 
+/// How far a chord a → b that replaces part of a line is from the surface
+/// the line lies on (largest vertical distance), so that simplification can
+/// keep a chord that cuts a slope beside the line from straying off it.
+using ChordError = std::function<double(const Point3& a, const Point3& b)>;
+
 /// Douglas–Peucker in 3-D: keeps the ends (for a ring, the first vertex and
 /// the vertex farthest from it) and every vertex farther than `tolerance` from
-/// the simplified line; a ring keeps at least 3 vertices.
-TerrainLine simplify(const TerrainLine& line, double tolerance);
+/// the simplified line; a ring keeps at least 3 vertices. With `chordError`,
+/// a chord also splits (at its farthest vertex) while its error exceeds
+/// `tolerance` (a chord that is one of the line's own segments must have none).
+TerrainLine simplify(const TerrainLine& line, double tolerance, const ChordError& chordError = {});
 
 /// A line cut to a closed rectangle. Where a segment crosses a side the
 /// crossing is computed from the segment's ends in a canonical order

@@ -1,26 +1,37 @@
-// Level-of-detail tiles of a TIN (DESIGN.md "Tiles"): for each zoom z the
+// Level-of-detail tiles of a TIN (DESIGN.md "Tiles"). For each zoom z the
 // multilevel least-squares fit (Algorithm 8.1) of the TIN's data to that
-// zoom's tolerance, then per tile a constrained triangulation of the fit's
-// binary vertices in the tile, the break lines and domain boundary simplified
-// to the zoom's tolerance, and the tile's sides; its z is the constrained least
-// squares fit (8.9) over that mesh with break-line and boundary vertices held
-// at the TIN's z and the tile's side vertices held at the zoom fit's z.
+// zoom's tolerance; per tile a constrained triangulation of
+//   - the tile's sides: the TIN's exact section along each side, simplified in
+//     the vertical (Douglas–Peucker) to kEdgeShare of the zoom's tolerance
+//     between the points a side must keep (corners, the fit's vertices on it,
+//     the lines' crossings);
+//   - the break lines and domain-boundary rings, simplified in 3-D to the same
+//     share with every chord also kept within it of the TIN beneath;
+//   - the zoom fit's binary vertices inside the tile;
+// then the constrained least squares (8.9, umbrella smoothing) over that mesh
+// with the side, line and ring vertices held. The tile's error is measured
+// exactly against the TIN (surface_difference.hpp); where a triangle misses
+// the zoom's tolerance the TIN is held at its worst point (the worst TIN
+// vertex in it, or a crossing with that TIN triangle's corners; a point on a
+// line goes into the line) and the tile is fitted again, for up to
+// kRepairRounds rounds within `maxTriangles`. The fit gives the tile its
+// shape where the terrain is smooth; the held TIN points are what meets the
+// tolerance on contour-built terrain, whose creases no smooth fit follows.
 //
 // Tolerances: the finest planned zoom Z meets `tolerance`; zoom z's is
 // tolerance · 2^(Z − z), and zooms below Z keep `tolerance`. Z is the first
 // zoom whose tiles would hold the finest fit's triangles within a quarter of
 // `maxTriangles` each on average; a zoom's fit refines at most
-// `levelsPerTile` levels below the zoom, so a tile holds at most about
-// 2·4^(levelsPerTile + 1) binary triangles, and where the terrain needs more
-// (steep ground) the tiles of Z are refined further. A tile gets children
-// when its measured error is above `tolerance` (and z < maxZoom).
+// `levelsPerTile` levels below the zoom. A tile gets children when its
+// measured error is above `tolerance` (and z < maxZoom).
 //
 // Every tile is a pure function of the TIN, the options and its id: tiles can
 // be built in any order, on any thread, in separate processes, and give the same
 // result. Crack-free within a zoom: the vertices on a tile's side are computed
-// only from what both tiles sharing it see (the grid, the zoom fit, the
-// simplified lines, each crossing from its segment's ends in a canonical
-// order), and held fixed in both.
+// only from what both tiles sharing it see (the TIN's section along the side,
+// the grid, the zoom fit, the simplified lines, each crossing from its
+// segment's ends in a canonical order), held fixed in both, and no held TIN
+// point comes closer to a side than 1e-4 of the tile's width.
 #pragma once
 
 #include <array>
@@ -28,6 +39,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -57,17 +69,22 @@ struct TileSurface {
   Rect bounds;
   std::vector<Point3> vertices;
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< CCW
-  /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed.
+  /// Per triangle: bit i set when its edge from corner i to corner i + 1 is
+  /// a constrained edge (a side, a line or a ring).
+  std::vector<std::uint8_t> heldEdges;
+  /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed;
+  /// 5 a TIN point held where the fit missed the tolerance.
   std::vector<std::uint8_t> flags;
   double error = 0.0;  ///< measured max |surface − TIN| (m)
   Point2 errorAt;
   std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
   std::size_t dataPoints = 0;         ///< data points the tile's fit used
+  int repairRounds = 0;               ///< fits again with TIN points held
   [[nodiscard]] bool empty() const { return triangles.empty(); }
 };
 
 inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8,
-                              kHeld = 16;
+                              kHeld = 16, kPinned = 32;
 
 class Tiler {
  public:
@@ -95,6 +112,9 @@ class Tiler {
 
  private:
   struct Zoom;
+  struct TileInput;
+  /// How often a tile is fitted again with the TIN held at its worst points.
+  static constexpr int kRepairRounds = 12;
   /// A zoom's shared part, built by the first tile of the zoom that needs it.
   struct ZoomSlot {
     std::once_flag once;
@@ -102,6 +122,17 @@ class Tiler {
   };
   const Zoom& zoom(int z) const;
   std::unique_ptr<Zoom> makeZoom(int z) const;
+  [[nodiscard]] TileInput tileInput(const TileId& id, const Zoom& zd) const;
+  [[nodiscard]] TileSurface triangulateTile(const TileId& id, const Rect& rect,
+                                            const TileInput& input,
+                                            const std::vector<TerrainLine>& zoomLines) const;
+  void fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const;
+  /// Adds pins where the tile misses `target`; false when it found none new.
+  bool addPins(const TileSurface& tile, std::span<const SurfaceDifference> differences,
+               double target, TileInput& input) const;
+  /// Puts the TIN's point at p into the line segment of `input` p lies on;
+  /// false when p is on none inside the tile.
+  bool splitLine(Point2 p, const Rect& rect, TileInput& input) const;
 
   const TinData& tin_;
   TilerOptions options_;

@@ -1,11 +1,13 @@
-// Tiles: the lines kept per zoom, the exact surface difference, and tiles
-// of a small synthetic TIN (shared sides bit for bit, break lines held,
-// determinism). The pyramid's quality on real data is not asserted here yet.
+// Tiles: the lines kept per zoom, the exact surface difference and section,
+// and tiles of a small synthetic TIN (shared sides bit for bit and on the
+// TIN, break lines held, the finest zoom within its tolerance, determinism).
+// The demo pyramid's quality is checked by the CLI tests and the JS checkers.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 #include <tuple>
 
 #include "core/base/error.hpp"
@@ -136,6 +138,87 @@ TEST(SurfaceDifference, NeverBelowADenseSampleOfTheDifference) {
     for (int i = 0; i <= 200; ++i) probe({x0 + (x1 - x0) * i / 200, y0 + (y1 - y0) * j / 200});
   EXPECT_GE(declared.maxAbs, sampled - 1e-9);
   EXPECT_LE(declared.maxAbs, sampled + 0.05);  // the grid comes within its spacing of the peak
+}
+
+TEST(SurfaceDifference, TheSectionIsTheTinAlongTheSegment) {
+  const TinData tin = syntheticTin();
+  const TinIndex index(tin);
+  const Surface surface(tin);
+  const double x0 = 500000, y0 = 4500000;
+  // Axis-parallel and oblique, one running off the TIN at both ends.
+  const std::vector<std::pair<Point2, Point2>> segments{
+      {{x0 + 3.5, y0 + 410.25}, {x0 + 977.0, y0 + 410.25}},
+      {{x0 + 520.0, y0}, {x0 + 520.0, y0 + 1000.0}},
+      {{x0 + 13.0, y0 + 21.0}, {x0 + 911.0, y0 + 777.0}},
+      {{x0 - 50.0, y0 + 500.0}, {x0 + 1050.0, y0 + 500.0}}};
+  std::vector<TinIndex::SectionPoint> section;
+  for (const auto& [a, b] : segments) {
+    index.section(a, b, section);
+    ASSERT_GE(section.size(), 10u);
+    auto at = [&](double t) { return Point2{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; };
+    for (std::size_t k = 0; k < section.size(); ++k) {
+      if (k > 0) {
+        EXPECT_GE(section[k].t, section[k - 1].t);
+      }
+      if (std::isnan(section[k].z)) continue;
+      const auto z = surface.z(at(section[k].t));
+      ASSERT_TRUE(z.has_value());
+      EXPECT_NEAR(section[k].z, *z, 1e-9);
+    }
+    // Linear between consecutive points: the TIN at any t in between.
+    for (std::size_t k = 0; k + 1 < section.size(); ++k) {
+      const auto [t0, z0] = section[k];
+      const auto [t1, z1] = section[k + 1];
+      if (std::isnan(z0) || std::isnan(z1) || t1 - t0 < 1e-9) continue;
+      for (double w : {0.25, 0.5, 0.75}) {
+        const auto z = surface.z(at(t0 + w * (t1 - t0)));
+        ASSERT_TRUE(z.has_value());
+        EXPECT_NEAR(z0 + w * (z1 - z0), *z, 1e-8);
+      }
+    }
+  }
+  // Off the TIN: the stretches before and after the TIN are not covered.
+  index.section(segments[3].first, segments[3].second, section);
+  EXPECT_GT(section.front().t, 0.04);
+  EXPECT_LT(section.back().t, 0.96);
+  EXPECT_EQ(index.z({x0 - 1, y0 + 500}), std::nullopt);
+  EXPECT_NEAR(*index.z({x0 + 400, y0 + 600}), *surface.z({x0 + 400, y0 + 600}), 1e-9);
+}
+
+TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
+  const TinData tin = syntheticTin();
+  const Surface surface(tin);
+  for (const double tolerance : {0.05, 0.2}) {
+    TilerOptions options;
+    options.tolerance = tolerance;
+    options.maxTriangles = 4096;
+    const Tiler tiler(tin, options);
+    const int z = tiler.finestZoom();
+    const std::uint32_t n = 1u << z;
+    std::size_t built = 0, sides = 0, exact = 0;
+    for (std::uint32_t y = 0; y < n; ++y) {
+      for (std::uint32_t x = 0; x < n; ++x) {
+        const TileSurface t = tiler.buildTile({z, x, y});
+        if (t.empty()) continue;
+        ++built;
+        EXPECT_LE(t.error, tolerance) << "tile " << t.id.name() << " at tolerance " << tolerance
+                                      << ": " << t.repairRounds << " rounds, "
+                                      << t.triangles.size() << " triangles";
+        // A side vertex is the TIN's point there, or a road crossing within
+        // the road's simplification (which stays within 0.4 of the tolerance).
+        for (std::size_t v = 0; v < t.vertices.size(); ++v) {
+          if (!(t.flags[v] & 15)) continue;
+          const auto zt = surface.z(t.vertices[v].xy());
+          if (!zt) continue;
+          ++sides;
+          if (std::abs(t.vertices[v].z - *zt) <= 1e-9) ++exact;
+          EXPECT_NEAR(t.vertices[v].z, *zt, 0.4 * tolerance + 1e-9);
+        }
+      }
+    }
+    EXPECT_GE(built, 1u);
+    EXPECT_GE(exact * 10, sides * 9) << exact << " of " << sides << " side vertices exact";
+  }
 }
 
 TEST(Tiles, NeighboursShareTheirSideVerticesBitForBit) {
