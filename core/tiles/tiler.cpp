@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
@@ -37,10 +38,15 @@ namespace {
 /// 1 m: 0.9 leaves tiles that never converge, 0.4 converges at zoom 4).
 constexpr double kEdgeShare = 0.4;
 
+/// A repair round pins the triangles whose error is above this share of the
+/// tile's worst (and above the tolerance).
+constexpr double kWorstShare = 0.5;
+
 /// The data the fits see: the TIN's vertices, plus points sampled from its
 /// triangles where its vertices are sparse (a triangle whose longest edge
-/// exceeds twice the median edge gets the interior points of a barycentric
-/// grid at about the median edge's spacing, z on the triangle's plane).
+/// exceeds twice the median longest edge gets the interior points of a
+/// barycentric grid at about that median's spacing, z on the triangle's
+/// plane; a DEM's even grid gets none).
 /// `zoomFit` leaves out what the tile meshes hold exactly — vertices of break
 /// lines, and samples of the triangles at them —
 /// so a zoom's binary fit is not driven to tiny cells by the steps a break
@@ -67,7 +73,9 @@ FitData fitData(const TinData& tin) {
     const auto& t = tin.triangles[k];
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
-    lengths.push_back(std::hypot(b.x - a.x, b.y - a.y));
+    const Point3& c = tin.vertices[t[2]];
+    lengths.push_back(std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
+                                std::hypot(a.x - c.x, a.y - c.y)}));
   }
   if (lengths.empty()) return data;
   std::nth_element(lengths.begin(),
@@ -84,7 +92,11 @@ FitData fitData(const TinData& tin) {
                   std::hypot(a.x - c.x, a.y - c.y)});
     if (longest <= 2 * spacing) continue;
     const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
-    const int n = static_cast<int>(std::min(64.0, std::ceil(longest / spacing)));
+    // About one sample per spacing² of area (a barycentric grid of n steps
+    // has n²/2 points): a long sliver on the hull gets a few, not thousands.
+    const double area =
+        0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+    const int n = static_cast<int>(std::min(64.0, std::ceil(std::sqrt(2 * area) / spacing)));
     for (int i = 1; i < n; ++i) {
       for (int j = 1; i + j < n; ++j) {
         const double u = static_cast<double>(i) / n, v = static_cast<double>(j) / n,
@@ -112,6 +124,33 @@ fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, const PyramidGeomet
   m.domainSize = g.size();
   m.threads = o.threads;
   return m;
+}
+
+/// A triangle by its corners (x, y, z), rotated to start at the least (x, y):
+/// the same triangle with the same heights in any round has the same key.
+using TriangleKey = std::array<double, 9>;
+struct TriangleKeyHash {
+  std::size_t operator()(const TriangleKey& k) const {
+    std::size_t h = 1469598103934665603ULL;
+    for (double v : k) h = (h ^ std::hash<double>{}(v)) * 1099511628211ULL;
+    return h;
+  }
+};
+TriangleKey triangleKey(const std::vector<Point3>& vertices, const std::array<std::uint32_t, 3>& t) {
+  int first = 0;
+  for (int i = 1; i < 3; ++i) {
+    const Point3& a = vertices[t[i]];
+    const Point3& b = vertices[t[first]];
+    if (a.x < b.x || (a.x == b.x && a.y < b.y)) first = i;
+  }
+  TriangleKey key{};
+  for (int i = 0; i < 3; ++i) {
+    const Point3& p = vertices[t[(first + i) % 3]];
+    key[3 * i] = p.x;
+    key[3 * i + 1] = p.y;
+    key[3 * i + 2] = p.z;
+  }
+  return key;
 }
 
 /// Even-odd test of p against closed rings.
@@ -262,13 +301,39 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   TileInput input = tileInput(id, zd);
 
   // Fit, measure, and where a triangle misses the zoom's tolerance hold the
-  // TIN at its worst points and fit again, within the triangle budget.
+  // TIN at its worst points and fit again, within the triangle budget. Each
+  // round takes the triangles within kWorstShare of the worst first (greedy
+  // in batches): pinning every failing triangle at once spends the budget on
+  // the many that barely fail before the few that fail by far.
   TileSurface tile;
+  // Each round measures only the triangles it has not measured before (a
+  // held triangle stays the same from round to round).
+  std::unordered_map<TriangleKey, SurfaceDifference, TriangleKeyHash> measured;
+  std::vector<SurfaceDifference> differences;
+  std::vector<std::array<std::uint32_t, 3>> unmeasured;
+  std::vector<std::size_t> unmeasuredAt;
   for (int round = 0;; ++round) {
     tile = triangulateTile(id, rect, input, zd.lines);
     if (tile.empty()) return tile;
     fitTile(tile, *zd.fit);
-    const auto differences = triangleDifferences(tile.vertices, tile.triangles, index_);
+    differences.assign(tile.triangles.size(), {});
+    unmeasured.clear();
+    unmeasuredAt.clear();
+    std::vector<TriangleKey> keys(tile.triangles.size());
+    for (std::size_t t = 0; t < tile.triangles.size(); ++t) {
+      keys[t] = triangleKey(tile.vertices, tile.triangles[t]);
+      if (const auto it = measured.find(keys[t]); it != measured.end()) {
+        differences[t] = it->second;
+      } else {
+        unmeasured.push_back(tile.triangles[t]);
+        unmeasuredAt.push_back(t);
+      }
+    }
+    const auto fresh = triangleDifferences(tile.vertices, unmeasured, index_);
+    for (std::size_t k = 0; k < fresh.size(); ++k) {
+      differences[unmeasuredAt[k]] = fresh[k];
+      measured.emplace(keys[unmeasuredAt[k]], fresh[k]);
+    }
     tile.error = 0;
     for (const auto& d : differences) {
       if (d.maxAbs > tile.error) {
@@ -279,7 +344,8 @@ TileSurface Tiler::buildTile(const TileId& id) const {
     tile.repairRounds = round;
     if (tile.error <= zd.tolerance || round == kRepairRounds ||
         tile.triangles.size() >= options_.maxTriangles ||
-        !addPins(tile, differences, zd.tolerance, input))
+        (!addPins(tile, differences, std::max(zd.tolerance, kWorstShare * tile.error), input) &&
+         !addPins(tile, differences, zd.tolerance, input)))
       break;
   }
   return tile;
@@ -351,14 +417,31 @@ bool Tiler::addPins(const TileSurface& tile, std::span<const SurfaceDifference> 
       // flips it away), with the TIN triangle's corners, so the TIN's own
       // shape comes in: crossings alone may not converge. On a line's edge
       // the line itself gets the TIN's point (no pin beside it could help).
-      if (const Point2 q = offHeld(d.at); q.x != d.at.x || q.y != d.at.y) {
-        if (splitLine(d.at, rect, input)) {
-          split = true;
-        } else {
-          pin(q);
-        }
+      // Beside a held edge (within its 5 % strip) that is a line's or a
+      // ring's, the line gets the TIN's point at the foot of the worst point:
+      // a pin beside a long held edge leaves the edge, and the strip along
+      // it, as they were.
+      bool splitHere = false;
+      for (int i = 0; i < 3 && !splitHere; ++i) {
+        if (!((tile.heldEdges[t] >> ((i + 1) % 3)) & 1U)) continue;
+        const Point3& a = c[(i + 1) % 3];
+        const Point3& b = c[(i + 2) % 3];
+        const double wi = ((b.x - a.x) * (d.at.y - a.y) - (b.y - a.y) * (d.at.x - a.x)) / area;
+        if (wi >= 0.05) continue;
+        // The worst TIN vertex, if it is the one beside the edge (a line's own
+        // vertex the simplification left out), else the worst point's foot.
+        const double wv = ((b.x - a.x) * (d.vertex.y - a.y) - (b.y - a.y) * (d.vertex.x - a.x)) / area;
+        const bool vertexBeside = d.vertexAbs > target && wv >= 0 && wv < 0.05;
+        const Point2 p = vertexBeside ? d.vertex : d.at;
+        const double dx = b.x - a.x, dy = b.y - a.y;
+        const double u = ((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy);
+        const Point2 foot{a.x + u * dx, a.y + u * dy};
+        splitHere = splitLine(foot, vertexBeside ? p : foot, rect, input);
+      }
+      if (splitHere) {
+        split = true;
       } else {
-        pin(q);
+        pin(offHeld(d.at));
       }
       for (std::uint32_t corner : tin_.triangles[d.tinTriangle]) pin(tin_.vertices[corner].xy());
     }
@@ -385,7 +468,7 @@ bool Tiler::addPins(const TileSurface& tile, std::span<const SurfaceDifference> 
   return split || input.pinned.size() > before;
 }
 
-bool Tiler::splitLine(Point2 p, const Rect& rect, TileInput& input) const {
+bool Tiler::splitLine(Point2 p, Point2 at, const Rect& rect, TileInput& input) const {
   // The line segment p lies on (within rounding of the tile's size).
   const double near = 1e-6 * rect.width();
   for (auto& piece : input.lines) {
@@ -398,8 +481,8 @@ bool Tiler::splitLine(Point2 p, const Rect& rect, TileInput& input) const {
       if (!(len2 > 0)) continue;
       const double u = ((p.x - a.x) * dx + (p.y - a.y) * dy) / len2;
       if (u <= 1e-6 || u >= 1 - 1e-6) continue;
-      const Point2 q{a.x + u * dx, a.y + u * dy};
-      if (std::hypot(p.x - q.x, p.y - q.y) > near) continue;
+      if (std::hypot(p.x - (a.x + u * dx), p.y - (a.y + u * dy)) > near) continue;
+      const Point2 q = at;
       if (q.x <= rect.x0 || q.x >= rect.x1 || q.y <= rect.y0 || q.y >= rect.y1) return false;
       const auto z = index_.z(q);
       if (!z) return false;
@@ -700,6 +783,16 @@ void Tiler::fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const {
     if (rect.contains(data_[i].xy())) inTile.push_back(i);
   });
   std::sort(inTile.begin(), inTile.end());  // the data's order, whatever the grid's
+  // A coarse tile over dense data (a DEM's every cell) fits a thinned share,
+  // every k-th point in the data's order: a few per triangle of the budget
+  // fix its shape as well, and the held TIN points meet the tolerance.
+  const std::size_t cap = 4 * options_.maxTriangles;
+  const std::size_t stride = (inTile.size() + cap - 1) / cap;
+  if (stride > 1) {
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < inTile.size(); k += stride) inTile[kept++] = inTile[k];
+    inTile.resize(kept);
+  }
   for (std::uint32_t i : inTile) {
     const Point3& p = data_[i];
     const auto loc = surface.locate({p.x - rect.x0, p.y - rect.y0}, hint);

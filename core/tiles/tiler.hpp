@@ -114,7 +114,7 @@ class Tiler {
   struct Zoom;
   struct TileInput;
   /// How often a tile is fitted again with the TIN held at its worst points.
-  static constexpr int kRepairRounds = 12;
+  static constexpr int kRepairRounds = 24;
   /// A zoom's shared part, built by the first tile of the zoom that needs it.
   struct ZoomSlot {
     std::once_flag once;
@@ -130,9 +130,10 @@ class Tiler {
   /// Adds pins where the tile misses `target`; false when it found none new.
   bool addPins(const TileSurface& tile, std::span<const SurfaceDifference> differences,
                double target, TileInput& input) const;
-  /// Puts the TIN's point at p into the line segment of `input` p lies on;
-  /// false when p is on none inside the tile.
-  bool splitLine(Point2 p, const Rect& rect, TileInput& input) const;
+  /// Puts the TIN's point at `at` (p itself or a point beside the segment)
+  /// into the line segment of `input` that p lies on; false when p is on none
+  /// or `at` is outside the tile.
+  bool splitLine(Point2 p, Point2 at, const Rect& rect, TileInput& input) const;
 
   const TinData& tin_;
   TilerOptions options_;
