@@ -125,18 +125,22 @@ struct PositionQuantization {
 // largest extent, computed in float (1 when all positions coincide), split
 // into 2^b − 1 steps, and values round to the nearest step, so the error is at
 // most range / (2^b − 1) / 2 (attribute_quantization_transform.cc), plus the
-// float rounding of the coordinates themselves.
+// float rounding of the coordinates themselves. A position moves by at most
+// √3 times that (each coordinate rounds on its own): that distance is the
+// bound chosen and reported.
 PositionQuantization choosePositionBits(const Bounds& b, double maxError) {
   float range = 0.0f;
   for (int c = 0; c < 3; ++c) range = std::max(range, b.max[c] - b.min[c]);
   if (range == 0.0f) range = 1.0f;
   PositionQuantization q;
   for (q.bits = 1; q.bits <= 30; ++q.bits) {
-    q.errorBound = static_cast<double>(range) / static_cast<double>((1u << q.bits) - 1u) / 2.0;
+    q.errorBound =
+        std::sqrt(3.0) * static_cast<double>(range) / static_cast<double>((1u << q.bits) - 1u) / 2.0;
     if (q.errorBound <= maxError) return q;
   }
   q.bits = 30;
-  q.errorBound = static_cast<double>(range) / static_cast<double>((1u << 30) - 1u) / 2.0;
+  q.errorBound =
+      std::sqrt(3.0) * static_cast<double>(range) / static_cast<double>((1u << 30) - 1u) / 2.0;
   return q;
 }
 

@@ -6,8 +6,8 @@
 // matrix (core/encode/frames.hpp).
 //
 // Draco: positions are quantized on the bounding cube of the positions with
-// the fewest bits (≤ 30) whose rounding error is at most maxPositionError per
-// coordinate (the bound is reported); normals with normalBits (octahedral).
+// the fewest bits (≤ 30) whose rounding moves no position farther than
+// maxPositionError (the bound, √3 × the per-coordinate rounding, is reported); normals with normalBits (octahedral).
 // Draco keeps the triangle set but may reorder vertices and triangles, and
 // drops positions no triangle uses (the accessor counts say what it kept).
 // Output is deterministic: the same mesh and options give the same bytes.
@@ -36,7 +36,7 @@ struct MeshBuffers {
 
 struct GlbOptions {
   Compression compression = Compression::Draco;
-  /// Largest rounding error per position coordinate Draco may introduce (m).
+  /// Farthest Draco's rounding may move a position (m, Euclidean).
   double maxPositionError = 0.01;
   int normalBits = 10;
   /// A JSON object (text) stored as the glTF `asset.extras`; empty for none.
@@ -46,7 +46,7 @@ struct GlbOptions {
 struct GlbResult {
   std::string bytes;
   int positionBits = 0;             ///< Draco quantization bits (0 when plain)
-  double positionErrorBound = 0.0;  ///< its largest rounding error per coordinate (m)
+  double positionErrorBound = 0.0;  ///< farthest its rounding moves a position (m)
 };
 
 /// Encodes the mesh as a .glb whose single root node has `rootMatrix`.

@@ -1,6 +1,7 @@
 #include "core/tiles/tileset_json.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -125,7 +126,24 @@ std::vector<std::pair<std::string, std::string>> tilesetFiles(std::span<const Ti
   };
   Json tileset;
   tileset["asset"] = {{"version", "1.1"}, {"generator", options.generator}};
-  tileset["geometricError"] = 2.0 * nodes[root].declaredError;
+  // Not drawing the terrain at all is off by the terrain itself: at least its
+  // extent's diagonal, so a viewer that sees the whole extent draws the root
+  // (twice the root's error alone can project below a viewer's threshold from
+  // the distance that frames the extent, and nothing would be drawn).
+  const TileRecord& top = nodes[root].record;
+  double diagonal = 0.0;
+  if (top.local) {
+    // The box's corner: centre + x half-axis + y half-axis.
+    diagonal = 2.0 * std::hypot(top.box[3] + top.box[6], top.box[4] + top.box[7],
+                                top.box[5] + top.box[8]);
+  } else {
+    constexpr double kEarthRadius = 6371000.0;
+    const double south = top.region[1], north = top.region[3];
+    const double width = (top.region[2] - top.region[0]) * kEarthRadius *
+                         std::cos(0.5 * (south + north));
+    diagonal = std::hypot(width, (north - south) * kEarthRadius);
+  }
+  tileset["geometricError"] = std::max(2.0 * nodes[root].declaredError, diagonal);
   tileset["root"] = tileJson(root, "", true);
   if (!options.extras.empty()) {
     const auto extras = Json::parse(options.extras, nullptr, false);

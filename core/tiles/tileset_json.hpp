@@ -3,7 +3,8 @@
 // `region` bounding volumes (or `box` in the local frame) grown to contain
 // their children; each tile's geometricError is its measured error, raised to
 // its children's where one of them measured more (so errors never grow down
-// the tree and stay bounds); the tileset's error is twice the root's.
+// the tree and stay bounds); the tileset's error is twice the root's, at
+// least the root's horizontal diagonal (metres).
 //
 // Content keys: "tiles/{z}/{x}/{y}.glb". External tilesets
 // "tilesets/{z}/{x}/{y}.json" root the subtrees at zooms that are multiples

@@ -228,10 +228,12 @@ TEST(EncodeGlb, DracoRoundTripKeepsTrianglesWithinTheReportedBound) {
     EXPECT_LE(r.positionErrorBound, maxError);
     EXPECT_GE(r.positionBits, 1);
     EXPECT_LE(r.positionBits, 30);
-    // The fewest bits: one fewer would exceed the error asked for.
+    // The fewest bits: one fewer would exceed the error asked for. The bound
+    // is a distance: √3 × the half step each coordinate rounds to.
     const double range = 80.0 * 49;
-    EXPECT_NEAR(r.positionErrorBound, range / ((1u << r.positionBits) - 1) / 2, 1e-12);
-    EXPECT_GT(range / ((1u << (r.positionBits - 1)) - 1) / 2, maxError);
+    EXPECT_NEAR(r.positionErrorBound, std::sqrt(3.0) * range / ((1u << r.positionBits) - 1) / 2,
+                1e-12);
+    EXPECT_GT(std::sqrt(3.0) * range / ((1u << (r.positionBits - 1)) - 1) / 2, maxError);
 
     const DecodedGlb d = decodeGlb(r.bytes, "grid.glb");
     EXPECT_TRUE(d.draco);

@@ -312,8 +312,10 @@ function checkExtras(report, file, gltf, refs, isDraco) {
     report.error(file, `asset.extras.tinsmith.tile ${JSON.stringify(t.tile)} does not match the file's path`);
   if (!isNum(t.geometricError)) report.error(file, `asset.extras.tinsmith.geometricError must be a number, got ${JSON.stringify(t.geometricError)}`);
   else for (const ref of refs)
-    if (ref.geometricError !== null && Math.abs(ref.geometricError - t.geometricError) > 1e-9 * Math.max(1, Math.abs(t.geometricError)))
-      report.error(file, `asset.extras.tinsmith.geometricError ${t.geometricError} != ${ref.label} geometricError ${ref.geometricError}`);
+    // The tile's own measured error; the tileset may declare more (an error
+    // never grows down the tree, so a parent declares at least its children's).
+    if (ref.geometricError !== null && t.geometricError > ref.geometricError + 1e-9 * Math.max(1, Math.abs(t.geometricError)))
+      report.error(file, `asset.extras.tinsmith.geometricError ${t.geometricError} > ${ref.label} geometricError ${ref.geometricError}`);
   let bound = null;
   if (t.positionErrorBound !== undefined) {
     if (!isNum(t.positionErrorBound) || t.positionErrorBound < 0)

@@ -65,9 +65,13 @@ function triangles(points, indices) {
     if (!a || !b || !c) continue;
     const u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     const v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    const w = [c[0] - b[0], c[1] - b[1], c[2] - b[2]];
+    const normal = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
     out.push({
       centroid: [(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3],
-      normal: [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]],
+      normal,
+      // The distance of the vertex farthest from the opposite edge's line.
+      height: Math.hypot(...normal) / Math.max(Math.hypot(...u), Math.hypot(...v), Math.hypot(...w)),
     });
   }
   return out;
@@ -134,8 +138,11 @@ export function comparePrimitives(a, b, bound) {
       if (near.length === 0) { ++unmatched; continue; }
       const same = near.some((j) => {
         const n = to[j].normal;
+        // A triangle thinner than twice the bound may turn over when its
+        // vertices move within the bound: its winding is not the encoder's.
         return n[0] * t.normal[0] + n[1] * t.normal[1] + n[2] * t.normal[2] > 0 ||
-          Math.hypot(...n) < tol * tol || Math.hypot(...t.normal) < tol * tol;
+          Math.hypot(...n) < tol * tol || Math.hypot(...t.normal) < tol * tol ||
+          t.height < 2 * tol || to[j].height < 2 * tol;
       });
       if (!same) ++flipped;
     }
