@@ -386,16 +386,27 @@ bool Tiler::addPins(const TileSurface& tile, std::span<const SurfaceDifference> 
     const double area =
         (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
     if (!(area > 0)) continue;
-    // p's barycentric weights, raised to 5 % opposite a held edge (p moved
-    // off it, into the triangle).
+    // p's barycentric weight for corner i: its distance from the opposite
+    // edge over the corner's. The 5 % strip along a held edge is where a
+    // pin would make a sliver of that edge.
+    auto weight = [&](Point2 p, int i) {
+      const Point3& a = c[(i + 1) % 3];
+      const Point3& b = c[(i + 2) % 3];
+      return ((b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)) / area;
+    };
+    auto heldOpposite = [&](int i) { return ((tile.heldEdges[t] >> ((i + 1) % 3)) & 1U) != 0; };
+    auto inHeldStrip = [&](Point2 p) {
+      for (int i = 0; i < 3; ++i) {
+        if (heldOpposite(i) && weight(p, i) < 0.05) return true;
+      }
+      return false;
+    };
+    // p moved out of every held edge's strip, into the triangle.
     auto offHeld = [&](Point2 p) {
       std::array<double, 3> w{};
       double total = 0.0;
       for (int i = 0; i < 3; ++i) {
-        const Point3& a = c[(i + 1) % 3];
-        const Point3& b = c[(i + 2) % 3];
-        w[i] = ((b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)) / area;
-        if ((tile.heldEdges[t] >> ((i + 1) % 3)) & 1U) w[i] = std::max(w[i], 0.05);
+        w[i] = heldOpposite(i) ? std::max(weight(p, i), 0.05) : weight(p, i);
         total += w[i];
       }
       Point2 q{0.0, 0.0};
@@ -408,29 +419,27 @@ bool Tiler::addPins(const TileSurface& tile, std::span<const SurfaceDifference> 
     if (nearest < 0.1 * longest && !(tile.flags[tri[nearestCorner]] & kHeld)) {
       // At (or beside) a free vertex the vertex is what is off: hold it.
       pin(c[nearestCorner].xy());
-    } else if (const Point2 v = offHeld(d.vertex); d.vertexAbs > target && v.x == d.vertex.x &&
-                                                    v.y == d.vertex.y) {
-      // The worst TIN vertex: holding those converges, at worst to the TIN.
+    } else if (d.vertexAbs > target && !inHeldStrip(d.vertex)) {
+      // The worst TIN vertex and the corners of the TIN triangle the worst
+      // point lies in: holding the TIN's vertices converges, at worst to the
+      // TIN itself.
       pin(d.vertex);
+      for (std::uint32_t corner : tin_.triangles[d.tinTriangle]) pin(tin_.vertices[corner].xy());
     } else {
       // A crossing of TIN and mesh edges (on a free edge the triangulation
       // flips it away), with the TIN triangle's corners, so the TIN's own
-      // shape comes in: crossings alone may not converge. On a line's edge
-      // the line itself gets the TIN's point (no pin beside it could help).
-      // Beside a held edge (within its 5 % strip) that is a line's or a
-      // ring's, the line gets the TIN's point at the foot of the worst point:
+      // shape comes in: crossings alone may not converge. In the strip of a
+      // line's or a ring's held edge the line itself takes the TIN's point:
       // a pin beside a long held edge leaves the edge, and the strip along
       // it, as they were.
       bool splitHere = false;
       for (int i = 0; i < 3 && !splitHere; ++i) {
-        if (!((tile.heldEdges[t] >> ((i + 1) % 3)) & 1U)) continue;
+        if (!heldOpposite(i) || weight(d.at, i) >= 0.05) continue;
         const Point3& a = c[(i + 1) % 3];
         const Point3& b = c[(i + 2) % 3];
-        const double wi = ((b.x - a.x) * (d.at.y - a.y) - (b.y - a.y) * (d.at.x - a.x)) / area;
-        if (wi >= 0.05) continue;
         // The worst TIN vertex, if it is the one beside the edge (a line's own
         // vertex the simplification left out), else the worst point's foot.
-        const double wv = ((b.x - a.x) * (d.vertex.y - a.y) - (b.y - a.y) * (d.vertex.x - a.x)) / area;
+        const double wv = weight(d.vertex, i);
         const bool vertexBeside = d.vertexAbs > target && wv >= 0 && wv < 0.05;
         const Point2 p = vertexBeside ? d.vertex : d.at;
         const double dx = b.x - a.x, dy = b.y - a.y;
