@@ -617,8 +617,8 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       if (!must.empty() && must.back().along == sp.along) continue;
       must.push_back(sp);
       if (!sp.onLine) {
-        const Point2 q = sp.p.xy();
-        must.back().p.z = tinZ(sp.along).value_or(fit.evaluate(q));
+        const auto z = tinZ(sp.along);
+        must.back().p.z = z ? *z : fit.evaluate(sp.p.xy());  // the fit only off the TIN
       }
     }
     auto& out = sideLines[k];
@@ -662,8 +662,8 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
   tile.id = id;
   tile.bounds = rect;
 
-  // Lines first: where a binary edge crosses a line of the same priority
-  // (a ring), the crossing takes the earlier feature's z, the line's.
+  // Lines first: a vertex where a ring (priority 0, as the sides and pins)
+  // meets a side point or a pin takes the earlier feature's z, the line's.
   Cdt cdt(CdtOptions{});
   std::vector<FeatureId> lineFeature;
   for (const auto& piece : input.lines) {

@@ -57,8 +57,9 @@ struct TilerOptions {
   std::size_t maxTriangles = 32768;  ///< per tile, sets levelsPerTile
   /// No tile below this zoom; by default the planned finest zoom + 6.
   std::optional<int> maxZoom;
-  /// Thin-plate λ = factor · λ_d in every fit. Light: the tiles approximate a
-  /// TIN (no noise), and the samples fill its large triangles.
+  /// λ = factor · λ_d in every fit (thin-plate in the zoom fits, umbrella in
+  /// the tile fits). Light: the tiles approximate a TIN (no noise), and the
+  /// samples fill its large triangles.
   double lambdaFactor = 0.01;
   int threads = 0;  ///< for the zoom fits (0 = all cores)
 };

@@ -106,7 +106,7 @@ void addTileCommand(CLI::App& app) {
   cmd->add_option("--max-zoom", opt->maxZoom,
                   "Deepest tile zoom (default: the planned finest zoom + 6)");
   cmd->add_option("--lambda", opt->lambda,
-                  "Thin-plate smoothing as a multiple of the default λ_d (default 0.01)");
+                  "Smoothing λ of the zoom and tile fits as a multiple of λ_d (default 0.01)");
   cmd->add_option("--compression", opt->compression, "draco (default) or none");
   cmd->add_option("--frame", opt->frame,
                   "ecef (3D Tiles on the globe, default) or local (ENU metres)");
