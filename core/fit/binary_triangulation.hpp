@@ -162,10 +162,21 @@ class BinaryTriangulation {
   /// Rebuilds the triangle (l, a, r, depth) from its path.
   [[nodiscard]] BinaryTriangle triangleFromPath(std::uint64_t path) const;
 
-  /// Grid coordinates (units of the finest cell) of a domain point.
+  /// Grid coordinates (units of the finest cell) of a domain point. A point
+  /// within rounding of the square (1e-9 of a finest cell, relative to the
+  /// side) is put on it: origin + size need not round back to the data's
+  /// largest coordinate, and (x − origin)·(side / size) may exceed the side by
+  /// an ulp for a point on the square's edge. Points farther out stay out.
   [[nodiscard]] Point2 toGrid(Point2 p) const {
     const double scale = static_cast<double>(side_) / size_;
-    return {(p.x - origin_.x) * scale, (p.y - origin_.y) * scale};
+    const double n = static_cast<double>(side_);
+    const double slack = 1e-9 * n;
+    auto onto = [&](double g) {
+      if (g < 0.0 && g >= -slack) return 0.0;
+      if (g > n && g <= n + slack) return n;
+      return g;
+    };
+    return {onto((p.x - origin_.x) * scale), onto((p.y - origin_.y) * scale)};
   }
 
  private:

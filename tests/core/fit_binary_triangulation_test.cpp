@@ -166,6 +166,31 @@ TEST(FitBinaryTriangulation, LocationFindsTheContainingTriangle) {
   EXPECT_THROW((void)bt.locate({99.0, 210.0}), Error);
 }
 
+// Regression: a data point on the square's east edge (SRTM N44W072 in UTM
+// 19N, the tiler's square from its extent) was "outside the square domain":
+// (x − origin)·(side / size) rounded past the side.
+TEST(FitBinaryTriangulation, PointsOnTheSquaresEdgeAreInsideDespiteRounding) {
+  Rng rng(44);
+  int roundedPast = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Point2 origin{2e5 + 3e5 * rng.uniform(), 4e6 + 1e6 * rng.uniform()};
+    const double size = 1e3 + 2e5 * rng.uniform();
+    const BinaryTriangulation bt(origin, size, 12);
+    const Point2 corner{origin.x + size, origin.y + size};
+    const double side = static_cast<double>(bt.side());
+    const double scale = side / size;
+    if ((corner.x - origin.x) * scale > side || (corner.y - origin.y) * scale > side) ++roundedPast;
+    const Point2 g = bt.toGrid(corner);
+    ASSERT_LE(g.x, side);
+    ASSERT_LE(g.y, side);
+    EXPECT_NO_THROW((void)bt.locate(corner)) << trial;
+  }
+  EXPECT_GT(roundedPast, 0) << "no trial rounded past the side: the test would not catch the bug";
+  // Beyond rounding, a point is still outside.
+  const BinaryTriangulation bt({0.0, 0.0}, 100.0, 8);
+  EXPECT_THROW((void)bt.locate({100.001, 50.0}), Error);
+}
+
 TEST(FitBinaryTriangulation, NestedLocationMatchesLocationFromTheRoot) {
   BinaryTriangulation bt({0, 0}, 1.0, 8);
   Rng rng(8);
