@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
 #include "core/fit/least_squares.hpp"
 #include "core/surface/surface.hpp"
+#include "core/tiles/tile_refiner.hpp"
 
 namespace tinsmith::tiles {
 
@@ -26,7 +26,6 @@ struct Tiler::TileInput {
   std::vector<Point3> ring;               // the tile's sides, CCW
   std::vector<ClippedPiece> lines;        // break lines and rings in the tile (held)
   std::vector<Point3> interior;           // binary vertices inside the tile (free)
-  std::vector<Point3> pinned;             // TIN points held where the fit missed
 };
 
 namespace {
@@ -37,10 +36,6 @@ namespace {
 /// side's or line's error plus the slope it cuts (measured on Red Butte at
 /// 1 m: 0.9 leaves tiles that never converge, 0.4 converges at zoom 4).
 constexpr double kEdgeShare = 0.4;
-
-/// A repair round pins the triangles whose error is above this share of the
-/// tile's worst (and above the tolerance).
-constexpr double kWorstShare = 0.5;
 
 /// The data the fits see: the TIN's vertices, plus points sampled from its
 /// triangles where its vertices are sparse (a triangle whose longest edge
@@ -124,33 +119,6 @@ fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, const PyramidGeomet
   m.domainSize = g.size();
   m.threads = o.threads;
   return m;
-}
-
-/// A triangle by its corners (x, y, z), rotated to start at the least (x, y):
-/// the same triangle with the same heights in any round has the same key.
-using TriangleKey = std::array<double, 9>;
-struct TriangleKeyHash {
-  std::size_t operator()(const TriangleKey& k) const {
-    std::size_t h = 1469598103934665603ULL;
-    for (double v : k) h = (h ^ std::hash<double>{}(v)) * 1099511628211ULL;
-    return h;
-  }
-};
-TriangleKey triangleKey(const std::vector<Point3>& vertices, const std::array<std::uint32_t, 3>& t) {
-  int first = 0;
-  for (int i = 1; i < 3; ++i) {
-    const Point3& a = vertices[t[i]];
-    const Point3& b = vertices[t[first]];
-    if (a.x < b.x || (a.x == b.x && a.y < b.y)) first = i;
-  }
-  TriangleKey key{};
-  for (int i = 0; i < 3; ++i) {
-    const Point3& p = vertices[t[(first + i) % 3]];
-    key[3 * i] = p.x;
-    key[3 * i + 1] = p.y;
-    key[3 * i + 2] = p.z;
-  }
-  return key;
 }
 
 /// Even-odd test of p against closed rings.
@@ -298,212 +266,20 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   if (!geometry_.inside(id)) throw usageError("tile " + id.name() + " is outside the pyramid");
   const Zoom& zd = zoom(id.z);
   const Rect rect = geometry_.bounds(id);
-  TileInput input = tileInput(id, zd);
-
-  // Fit, measure, and where a triangle misses the zoom's tolerance hold the
-  // TIN at its worst points and fit again, within the triangle budget. Each
-  // round takes the triangles within kWorstShare of the worst first (greedy
-  // in batches): pinning every failing triangle at once spends the budget on
-  // the many that barely fail before the few that fail by far.
-  TileSurface tile;
-  // Each round measures only the triangles it has not measured before (a
-  // held triangle stays the same from round to round).
-  std::unordered_map<TriangleKey, SurfaceDifference, TriangleKeyHash> measured;
-  std::vector<SurfaceDifference> differences;
-  std::vector<std::array<std::uint32_t, 3>> unmeasured;
-  std::vector<std::size_t> unmeasuredAt;
-  for (int round = 0;; ++round) {
-    tile = triangulateTile(id, rect, input, zd.lines);
-    if (tile.empty()) return tile;
-    fitTile(tile, *zd.fit);
-    differences.assign(tile.triangles.size(), {});
-    unmeasured.clear();
-    unmeasuredAt.clear();
-    std::vector<TriangleKey> keys(tile.triangles.size());
-    for (std::size_t t = 0; t < tile.triangles.size(); ++t) {
-      keys[t] = triangleKey(tile.vertices, tile.triangles[t]);
-      if (const auto it = measured.find(keys[t]); it != measured.end()) {
-        differences[t] = it->second;
-      } else {
-        unmeasured.push_back(tile.triangles[t]);
-        unmeasuredAt.push_back(t);
-      }
-    }
-    const auto fresh = triangleDifferences(tile.vertices, unmeasured, index_);
-    for (std::size_t k = 0; k < fresh.size(); ++k) {
-      differences[unmeasuredAt[k]] = fresh[k];
-      measured.emplace(keys[unmeasuredAt[k]], fresh[k]);
-    }
-    tile.error = 0;
-    for (const auto& d : differences) {
-      if (d.maxAbs > tile.error) {
-        tile.error = d.maxAbs;
-        tile.errorAt = d.at;
-      }
-    }
-    tile.repairRounds = round;
-    if (tile.error <= zd.tolerance || round == kRepairRounds ||
-        tile.triangles.size() >= options_.maxTriangles ||
-        (!addPins(tile, differences, std::max(zd.tolerance, kWorstShare * tile.error), input) &&
-         !addPins(tile, differences, zd.tolerance, input)))
-      break;
-  }
+  const TileInput input = tileInput(id, zd);
+  TileSurface tile = triangulateTile(id, rect, input, zd.lines);
+  if (tile.empty()) return tile;
+  fitTile(tile, *zd.fit);
+  // Where the fit misses the zoom's tolerance, the TIN's points, worst first.
+  // They stay 1e-4 of the tile's width off its sides (which hold the TIN's
+  // section already and are shared with the neighbour).
+  RefineOptions refine;
+  refine.tolerance = zd.tolerance;
+  refine.maxTriangles = options_.maxTriangles;
+  refine.sideMargin = 1e-4 * rect.width();
+  auto differences = triangleDifferences(tile.vertices, tile.triangles, index_);
+  tile.heldPoints = refineTile(tile, std::move(differences), index_, refine);
   return tile;
-}
-
-bool Tiler::addPins(const TileSurface& tile, std::span<const SurfaceDifference> differences,
-                    double target, TileInput& input) const {
-  const Rect& rect = tile.bounds;
-  // Pins stay inside the tile, a little off its sides (which hold the TIN's
-  // section): a TIN vertex on a side, where a crease of the TIN meets it,
-  // comes in just beside it. Outside the tile a point is not this tile's.
-  const double margin = 1e-4 * rect.width();
-  std::vector<Point3> pins;
-  bool split = false;
-  auto pin = [&](Point2 p) {
-    if (!rect.contains(p)) return;
-    p.x = std::clamp(p.x, rect.x0 + margin, rect.x1 - margin);
-    p.y = std::clamp(p.y, rect.y0 + margin, rect.y1 - margin);
-    if (const auto z = index_.z(p)) pins.push_back({p.x, p.y, *z});
-  };
-  for (std::size_t t = 0; t < differences.size(); ++t) {
-    const SurfaceDifference& d = differences[t];
-    if (d.maxAbs <= target) continue;
-    const auto& tri = tile.triangles[t];
-    const std::array<Point3, 3> c{tile.vertices[tri[0]], tile.vertices[tri[1]],
-                                  tile.vertices[tri[2]]};
-    double longest = 0.0, nearest = HUGE_VAL;
-    int nearestCorner = 0;
-    for (int i = 0; i < 3; ++i) {
-      const Point3& next = c[(i + 1) % 3];
-      longest = std::max(longest, std::hypot(next.x - c[i].x, next.y - c[i].y));
-      const double distance = std::hypot(c[i].x - d.at.x, c[i].y - d.at.y);
-      if (distance < nearest) {
-        nearest = distance;
-        nearestCorner = i;
-      }
-    }
-    const double area =
-        (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
-    if (!(area > 0)) continue;
-    // p's barycentric weight for corner i: its distance from the opposite
-    // edge over the corner's. The 5 % strip along a held edge is where a
-    // pin would make a sliver of that edge.
-    auto weight = [&](Point2 p, int i) {
-      const Point3& a = c[(i + 1) % 3];
-      const Point3& b = c[(i + 2) % 3];
-      return ((b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)) / area;
-    };
-    auto heldOpposite = [&](int i) { return ((tile.heldEdges[t] >> ((i + 1) % 3)) & 1U) != 0; };
-    auto inHeldStrip = [&](Point2 p) {
-      for (int i = 0; i < 3; ++i) {
-        if (heldOpposite(i) && weight(p, i) < 0.05) return true;
-      }
-      return false;
-    };
-    // p moved out of every held edge's strip, into the triangle.
-    auto offHeld = [&](Point2 p) {
-      std::array<double, 3> w{};
-      double total = 0.0;
-      for (int i = 0; i < 3; ++i) {
-        w[i] = heldOpposite(i) ? std::max(weight(p, i), 0.05) : weight(p, i);
-        total += w[i];
-      }
-      Point2 q{0.0, 0.0};
-      for (int i = 0; i < 3; ++i) {
-        q.x += w[i] / total * c[i].x;
-        q.y += w[i] / total * c[i].y;
-      }
-      return q;
-    };
-    if (nearest < 0.1 * longest && !(tile.flags[tri[nearestCorner]] & kHeld)) {
-      // At (or beside) a free vertex the vertex is what is off: hold it.
-      pin(c[nearestCorner].xy());
-    } else if (d.vertexAbs > target && !inHeldStrip(d.vertex)) {
-      // The worst TIN vertex and the corners of the TIN triangle the worst
-      // point lies in: holding the TIN's vertices converges, at worst to the
-      // TIN itself.
-      pin(d.vertex);
-      for (std::uint32_t corner : tin_.triangles[d.tinTriangle]) pin(tin_.vertices[corner].xy());
-    } else {
-      // A crossing of TIN and mesh edges (on a free edge the triangulation
-      // flips it away), with the TIN triangle's corners, so the TIN's own
-      // shape comes in: crossings alone may not converge. In the strip of a
-      // line's or a ring's held edge the line itself takes the TIN's point:
-      // a pin beside a long held edge leaves the edge, and the strip along
-      // it, as they were.
-      bool splitHere = false;
-      for (int i = 0; i < 3 && !splitHere; ++i) {
-        if (!heldOpposite(i) || weight(d.at, i) >= 0.05) continue;
-        const Point3& a = c[(i + 1) % 3];
-        const Point3& b = c[(i + 2) % 3];
-        // The worst TIN vertex, if it is the one beside the edge (a line's own
-        // vertex the simplification left out), else the worst point's foot.
-        const double wv = weight(d.vertex, i);
-        const bool vertexBeside = d.vertexAbs > target && wv >= 0 && wv < 0.05;
-        const Point2 p = vertexBeside ? d.vertex : d.at;
-        const double dx = b.x - a.x, dy = b.y - a.y;
-        const double u = ((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy);
-        const Point2 foot{a.x + u * dx, a.y + u * dy};
-        splitHere = splitLine(foot, vertexBeside ? p : foot, rect, input);
-      }
-      if (splitHere) {
-        split = true;
-      } else {
-        pin(offHeld(d.at));
-      }
-      for (std::uint32_t corner : tin_.triangles[d.tinTriangle]) pin(tin_.vertices[corner].xy());
-    }
-  }
-  if (pins.empty()) return split;
-  // One pin per spot: points a rounding apart (two triangles' view of one
-  // crossing) would make a sliver.
-  const double spot = 1e-6 * rect.width();
-  pins.insert(pins.end(), input.pinned.begin(), input.pinned.end());
-  std::sort(pins.begin(), pins.end(),
-            [](const Point3& a, const Point3& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-  const std::size_t before = input.pinned.size();
-  input.pinned.clear();
-  for (const Point3& p : pins) {
-    bool near = false;
-    for (auto it = input.pinned.rbegin(); it != input.pinned.rend() && p.x - it->x <= spot; ++it) {
-      if (std::abs(p.y - it->y) <= spot) {
-        near = true;
-        break;
-      }
-    }
-    if (!near) input.pinned.push_back(p);
-  }
-  return split || input.pinned.size() > before;
-}
-
-bool Tiler::splitLine(Point2 p, Point2 at, const Rect& rect, TileInput& input) const {
-  // The line segment p lies on (within rounding of the tile's size).
-  const double near = 1e-6 * rect.width();
-  for (auto& piece : input.lines) {
-    auto& pts = piece.points;
-    const std::size_t n = pts.size();
-    for (std::size_t i = 0; i + 1 < n + (piece.closed ? 1 : 0); ++i) {
-      const Point3 a = pts[i];
-      const Point3 b = pts[(i + 1) % n];
-      const double dx = b.x - a.x, dy = b.y - a.y, len2 = dx * dx + dy * dy;
-      if (!(len2 > 0)) continue;
-      const double u = ((p.x - a.x) * dx + (p.y - a.y) * dy) / len2;
-      if (u <= 1e-6 || u >= 1 - 1e-6) continue;
-      if (std::hypot(p.x - (a.x + u * dx), p.y - (a.y + u * dy)) > near) continue;
-      const Point2 q = at;
-      if (q.x <= rect.x0 || q.x >= rect.x1 || q.y <= rect.y0 || q.y >= rect.y1) return false;
-      const auto z = index_.z(q);
-      if (!z) return false;
-      // A river keeps flowing one way: its new point stays between its ends.
-      const double zq = piece.kind == FeatureKind::River
-                            ? std::clamp(*z, std::min(a.z, b.z), std::max(a.z, b.z))
-                            : *z;
-      pts.insert(pts.begin() + static_cast<std::ptrdiff_t>(i + 1), Point3{q.x, q.y, zq});
-      return true;
-    }
-  }
-  return false;
 }
 
 Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
@@ -671,14 +447,11 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
   }
   const FeatureId sideFeature = cdt.addFeature(FeatureKind::Other, "tile side");
   const FeatureId binaryFeature = cdt.addFeature(FeatureKind::Raster, "zoom fit");
-  const FeatureId pinFeature = cdt.addFeature(FeatureKind::Raster, "held TIN point");
   cdt.insertConstraint(input.ring, sideFeature, true);
   for (std::size_t i = 0; i < input.lines.size(); ++i) {
     cdt.insertConstraint(input.lines[i].points, lineFeature[i], input.lines[i].closed);
   }
   cdt.insertPoints(input.interior, binaryFeature);
-  const VertexId firstPin =
-      input.pinned.empty() ? VertexId() : cdt.insertPoints(input.pinned, pinFeature);
   cdt.finalize();
   const Mesh& cm = cdt.mesh();
   std::vector<Point3> points = cm.points();
@@ -708,15 +481,6 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
     if (p.y == rect.y0) flags[v] |= kSideSouth;
     if (p.y == rect.y1) flags[v] |= kSideNorth;
   }
-  // A pinned point held at the TIN's z, unless it fell on a line or a side
-  // (merged into a vertex those hold).
-  for (std::size_t k = 0; k < input.pinned.size(); ++k) {
-    const VertexId v = cdt.meshVertex(VertexId(firstPin.value + static_cast<std::uint32_t>(k)));
-    if (!v.valid() || (flags[v.value] & (kHeld | 15))) continue;
-    points[v.value].z = input.pinned[k].z;
-    flags[v.value] |= kHeld | kPinned;
-  }
-
   // Keep the triangles inside the TIN's (simplified) domain: components
   // bounded by ring edges, each classified once by even-odd.
   std::vector<int> keep(nt, -1);
@@ -747,11 +511,14 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
     if (keep[t] != 1) continue;
     std::array<std::uint32_t, 3> tri{};
     const auto corners = cm.vertices(TriangleId(t));
-    std::uint8_t held = 0;
+    std::uint8_t held = 0, river = 0;
     for (int i = 0; i < 3; ++i) {
-      if (cm.isConstrained(Mesh::halfedge(TriangleId(t), i))) held |= 1U << i;
+      const HalfedgeId h = Mesh::halfedge(TriangleId(t), i);
+      if (cm.isConstrained(h)) held |= 1U << i;
+      if (hasKind(h, [](FeatureKind k) { return k == FeatureKind::River; })) river |= 1U << i;
     }
     tile.heldEdges.push_back(held);
+    tile.riverEdges.push_back(river);
     for (int i = 0; i < 3; ++i) {
       const std::uint32_t v = corners[i].value;
       std::uint32_t& r = remap[v];
@@ -766,7 +533,7 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
   }
   for (std::size_t v = 0; v < tile.vertices.size(); ++v) {
     const bool onSide = (tile.flags[v] & 15) != 0;
-    if ((tile.flags[v] & kHeld) && !onSide && !(tile.flags[v] & kPinned)) ++tile.breakLineVertices;
+    if ((tile.flags[v] & kHeld) && !onSide) ++tile.breakLineVertices;
     if (onSide) tile.flags[v] |= kHeld;  // sides keep the TIN's (or the line's) z
   }
   return tile;

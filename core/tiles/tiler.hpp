@@ -10,13 +10,12 @@
 //   - the zoom fit's binary vertices inside the tile;
 // then the constrained least squares (8.9, umbrella smoothing) over that mesh
 // with the side, line and ring vertices held. The tile's error is measured
-// exactly against the TIN (surface_difference.hpp); where a triangle misses
-// the zoom's tolerance the TIN is held at its worst point (the worst TIN
-// vertex in it, or a crossing with that TIN triangle's corners; a point on a
-// line goes into the line) and the tile is fitted again, for up to
-// kRepairRounds rounds within `maxTriangles`. The fit gives the tile its
-// shape where the terrain is smooth; the held TIN points are what meets the
-// tolerance on contour-built terrain, whose creases no smooth fit follows.
+// exactly against the TIN (surface_difference.hpp), and where a triangle
+// misses the zoom's tolerance the mesh is refined greedily, worst first, with
+// the TIN's points (tile_refiner.hpp), within `maxTriangles`. The fit gives
+// the tile its shape where the terrain is smooth; the TIN points are what
+// meets the tolerance on contour-built terrain, whose creases no smooth fit
+// follows, and on a DEM's detail below the fit's finest level.
 //
 // Tolerances: the finest planned zoom Z meets `tolerance`; zoom z's is
 // tolerance · 2^(Z − z), and zooms below Z keep `tolerance`. Z is the first
@@ -73,6 +72,8 @@ struct TileSurface {
   /// Per triangle: bit i set when its edge from corner i to corner i + 1 is
   /// a constrained edge (a side, a line or a ring).
   std::vector<std::uint8_t> heldEdges;
+  /// Per triangle: the bits of heldEdges that are edges of a river.
+  std::vector<std::uint8_t> riverEdges;
   /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed;
   /// 5 a TIN point held where the fit missed the tolerance.
   std::vector<std::uint8_t> flags;
@@ -80,7 +81,7 @@ struct TileSurface {
   Point2 errorAt;
   std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
   std::size_t dataPoints = 0;         ///< data points the tile's fit used
-  int repairRounds = 0;               ///< fits again with TIN points held
+  std::size_t heldPoints = 0;         ///< TIN points the refinement added or held
   [[nodiscard]] bool empty() const { return triangles.empty(); }
 };
 
@@ -114,8 +115,6 @@ class Tiler {
  private:
   struct Zoom;
   struct TileInput;
-  /// How often a tile is fitted again with the TIN held at its worst points.
-  static constexpr int kRepairRounds = 24;
   /// A zoom's shared part, built by the first tile of the zoom that needs it.
   struct ZoomSlot {
     std::once_flag once;
@@ -128,13 +127,6 @@ class Tiler {
                                             const TileInput& input,
                                             const std::vector<TerrainLine>& zoomLines) const;
   void fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const;
-  /// Adds pins where the tile misses `target`; false when it found none new.
-  bool addPins(const TileSurface& tile, std::span<const SurfaceDifference> differences,
-               double target, TileInput& input) const;
-  /// Puts the TIN's point at `at` (p itself or a point beside the segment)
-  /// into the line segment of `input` that p lies on; false when p is on none
-  /// or `at` is outside the tile.
-  bool splitLine(Point2 p, Point2 at, const Rect& rect, TileInput& input) const;
 
   const TinData& tin_;
   TilerOptions options_;

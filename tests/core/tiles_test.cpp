@@ -202,7 +202,7 @@ TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
         if (t.empty()) continue;
         ++built;
         EXPECT_LE(t.error, tolerance) << "tile " << t.id.name() << " at tolerance " << tolerance
-                                      << ": " << t.repairRounds << " rounds, "
+                                      << ": " << t.heldPoints << " TIN points held, "
                                       << t.triangles.size() << " triangles";
         // A side vertex is the TIN's point there, or a road crossing within
         // the road's simplification (which stays within 0.4 of the tolerance).
