@@ -291,6 +291,7 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
 
 /// A value as the config wrote it, for messages: 0, -2.5, "zstd".
 std::string written(const toml::node& node) {
+  if (const auto* s = node.as_string()) return "\"" + s->get() + "\"";
   std::ostringstream out;
   node.visit([&out](const auto& value) { out << value; });
   return out.str();
