@@ -213,15 +213,16 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
                           const TileJobOptions& options, const Progress* progress) {
   checkTileJobOptions(options);
   const auto start = std::chrono::steady_clock::now();
+  // Both frames place the tiles through the TIN's CRS (the local frame's
+  // east-north-up axes stand at the pyramid's centre); a CRS PROJ cannot use
+  // fails here, before the planning.
+  const ProjGeoReference geo(tin.crs, options.geoid);
   tiles::TilerOptions tilerOptions = options.tiler;
   tilerOptions.threads = options.threads;
   reportProgress(progress, "tiles.plan", "", 0, 0);
   const tiles::Tiler tiler(tin, tilerOptions);
   reportProgress(progress, "tiles.plan", "", 1, 1);
 
-  // Both frames place the tiles through the TIN's CRS (the local frame's
-  // east-north-up axes stand at the pyramid's centre).
-  const ProjGeoReference geo(tin.crs, options.geoid);
   tiles::ContentOptions content;
   content.compression = options.compression;
   content.frame = options.frame;

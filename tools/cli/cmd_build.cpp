@@ -21,6 +21,7 @@
 #include "core/base/error.hpp"
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/config/project_config.hpp"
+#include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
@@ -74,6 +75,9 @@ void run(const BuildCliOptions& o) {
   fs::path partialTin = tinPath;
   partialTin.replace_extension(".partial.tin");
   checkOutputDirectory(store, "the tile store");
+  // The project CRS and geoid must place tiles on the globe: checked now, not
+  // after the TIN is built.
+  (void)ingest::ProjGeoReference(config.crs, tileOptions.geoid);
 
   const TileFlags& f = o.flags;
   auto bar = terminalProgress(f.quiet || f.json);
