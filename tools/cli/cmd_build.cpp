@@ -105,7 +105,7 @@ void run(const BuildCliOptions& o) {
   if (f.json) {
     nlohmann::ordered_json j;
     j["config"] = config.file.string();
-    j["tin"] = {{"output", tinPath.string()}, {"report", nlohmann::json::parse(report.toJson())}};
+    j["tin"] = {{"output", tinPath.string()}, {"report", nlohmann::ordered_json::parse(report.toJson())}};
     j["tiles"] = tileSummaryObject(tiles, store.string());
     std::cout << j.dump(2) << "\n";
   } else if (!f.quiet) {

@@ -128,8 +128,8 @@ void run(const TinOptions& o) {
   if (plain && o.strict) throw usageError("--strict applies to config runs");
   if (!plain && o.snap) throw usageError("--snap applies to --points/--breaklines runs; set [tin] snap_tolerance in the config");
   if (o.snap && !(*o.snap >= 0)) throw usageError("--snap must be a distance in metres, 0 or more");
-  checkOutputDirectory(o.output, "-o");
-  if (!o.report.empty()) checkOutputDirectory(o.report, "--report");
+  checkOutputDirectory(o.output, "the TIN (-o)");
+  if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
 
   auto bar = terminalProgress(o.quiet);
   const ingest::Progress* p = bar.get();

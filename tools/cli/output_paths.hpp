@@ -16,14 +16,19 @@ namespace tinsmith::cli {
 inline void checkOutputDirectory(const std::filesystem::path& path, const char* option) {
   const auto dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec))
-    throw ioError(std::string("the directory of ") + option + " '" + dir.string() +
-                      "' does not exist",
-                  {path.string(), {}, {}, {}}, "create it first or choose another path");
-  if (::access(dir.c_str(), W_OK) != 0)
-    throw ioError(std::string("the directory of ") + option + " '" + dir.string() +
-                      "' is not writable",
-                  {path.string(), {}, {}, {}}, "choose a folder you may write to");
+  const char* problem = nullptr;
+  if (!std::filesystem::exists(dir, ec))
+    problem = "does not exist";
+  else if (!std::filesystem::is_directory(dir, ec))
+    problem = "is not a directory";
+  else if (::access(dir.c_str(), W_OK) != 0)
+    problem = "is not writable";
+  if (problem) {
+    throw ioError(std::string("cannot write ") + option + " there: '" + dir.string() + "' " +
+                      problem,
+                  {path.string(), {}, {}, {}},
+                  "create the directory, or choose another path you may write to");
+  }
 }
 
 }  // namespace tinsmith::cli
