@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/hill_points.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -28,15 +29,8 @@ Project makeProject(const std::string& name, const std::string& tilesExtra = "")
   fs::create_directories(p.out);
   {
     std::ofstream csv(p.dir / "hill.csv");
-    csv.precision(17);
     csv << "x,y,z\n";
-    for (int j = 0; j <= 30; ++j)
-      for (int i = 0; i <= 30; ++i) {
-        const double x = 430000 + i * 25.0 + (i % 3) * 1.7, y = 4515000 + j * 25.0 + (j % 4) * 1.3;
-        const double z =
-            1600 + 80 * std::exp(-(std::pow(i - 12, 2) + std::pow(j - 17, 2)) / 60.0) + 0.3 * i;
-        csv << x << "," << y << "," << z << "\n";
-      }
+    writeHillPoints(csv, ',');
   }
   p.config = p.dir / "site.toml";
   std::ofstream(p.config) << "[project]\ncrs = \"EPSG:26912\"\n\n"

@@ -128,7 +128,8 @@ void addBuildCommand(CLI::App& app) {
   cmd->footer(
       "The store is the same bytes as `tinsmith tin CONFIG -o STEM.tin` then `tinsmith tile "
       "STEM.tin -o STORE` with the same options. --threads applies to the TIN and the tiles; "
-      "--resume keeps the tiles of an interrupted run (the TIN is built again).");
+      "--resume keeps the tiles of an interrupted run (the TIN is built again).\n\n" +
+      app.get_footer());
   cmd->callback([opt] { run(*opt); });
 }
 
