@@ -89,7 +89,8 @@ BuildReport buildTinFromConfig(const ProjectConfig& config, const BuildOptions& 
                                const std::function<void(const Mesh&)>& consume,
                                const Progress* progress) {
   IngestResult ingested = loadLayers(config, progress);
-  BuildReport report = buildTinInto(toBuildLayers(std::move(ingested.layers)), options, consume, progress);
+  BuildReport report =
+      buildTinInto(toBuildLayers(std::move(ingested.layers)), options, consume, progress);
   addIngestReport(report, ingested);
   return report;
 }

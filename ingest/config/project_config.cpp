@@ -297,15 +297,15 @@ std::string written(const toml::node& node) {
   return out.str();
 }
 
-TilesConfig parseTiles(const Context& ctx, const toml::table& t, const std::filesystem::path& baseDir) {
+TilesConfig parseTiles(const Context& ctx, const toml::table& t,
+                       const std::filesystem::path& baseDir) {
   const std::string tn = "tiles";
   checkKeys(ctx, t, "[tiles]",
             {"tolerance", "max_triangles", "max_zoom", "lambda", "compression", "frame", "geoid",
              "output"});
   // "tiles.KEY = VALUE: PROBLEM", at the key's line.
   auto bad = [&](const std::string& key, const std::string& problem, const std::string& hint) {
-    ctx.fail("tiles." + key + " = " + written(*t.get(key)) + ": " + problem, keyLine(t, key),
-             hint);
+    ctx.fail("tiles." + key + " = " + written(*t.get(key)) + ": " + problem, keyLine(t, key), hint);
   };
   TilesConfig tiles;
   tiles.configLine = lineOf(t);
@@ -339,7 +339,8 @@ TilesConfig parseTiles(const Context& ctx, const toml::table& t, const std::file
   }
   if (const auto v = getString(ctx, t, "frame", tn)) {
     const auto f = parseContentFrame(*v);
-    if (!f) bad("frame", "unknown frame", "frame = \"ecef\" (on the globe) | \"local\" (ENU metres)");
+    if (!f)
+      bad("frame", "unknown frame", "frame = \"ecef\" (on the globe) | \"local\" (ENU metres)");
     tiles.job.frame = *f;
   }
   if (const auto v = getString(ctx, t, "geoid", tn)) {

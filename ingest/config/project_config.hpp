@@ -70,9 +70,10 @@ struct TinOptions {
 /// TileJobOptions' defaults (those of `tinsmith tile`); command-line flags
 /// override them.
 struct TilesConfig {
-  TileJobOptions job;            ///< tiler, compression, frame, geoid; nothing else is set
-  std::filesystem::path output;  ///< `output`: absolute (resolved against the config's folder); empty: not given
-  std::int64_t configLine = 0;   ///< line of [tiles]; 0: no [tiles] table
+  TileJobOptions job;  ///< tiler, compression, frame, geoid; nothing else is set
+  std::filesystem::path
+      output;  ///< `output`: absolute (resolved against the config's folder); empty: not given
+  std::int64_t configLine = 0;  ///< line of [tiles]; 0: no [tiles] table
 };
 
 struct ProjectConfig {

@@ -5,7 +5,6 @@
 
 #include <atomic>
 #include <memory>
-#include <set>
 #include <unordered_map>
 #include <vector>
 
@@ -71,9 +70,15 @@ template <typename T, void (*Free)(T*)>
 struct ProjDeleter {
   void operator()(T* p) const { Free(p); }
 };
-void destroyContext(PJ_CONTEXT* c) { proj_context_destroy(c); }
-void destroyPj(PJ* p) { proj_destroy(p); }
-void destroyList(PJ_OBJ_LIST* l) { proj_list_destroy(l); }
+void destroyContext(PJ_CONTEXT* c) {
+  proj_context_destroy(c);
+}
+void destroyPj(PJ* p) {
+  proj_destroy(p);
+}
+void destroyList(PJ_OBJ_LIST* l) {
+  proj_list_destroy(l);
+}
 void destroyFactory(PJ_OPERATION_FACTORY_CONTEXT* f) {
   proj_operation_factory_context_destroy(f);
 }
@@ -101,10 +106,10 @@ void checkHeightsConvert(const OGRSpatialReference& srs, const std::string& crs)
   const Object dst(proj_create(ctx.get(), "EPSG:4979"));
   const Factory factory(proj_create_operation_factory_context(ctx.get(), nullptr));
   if (!src || !dst || !factory) throw inputError("PROJ cannot read the CRS '" + crs + "'");
-  proj_operation_factory_context_set_grid_availability_use(
-      ctx.get(), factory.get(), PROJ_GRID_AVAILABILITY_USED_FOR_SORTING);
-  proj_operation_factory_context_set_spatial_criterion(
-      ctx.get(), factory.get(), PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
+  proj_operation_factory_context_set_grid_availability_use(ctx.get(), factory.get(),
+                                                           PROJ_GRID_AVAILABILITY_USED_FOR_SORTING);
+  proj_operation_factory_context_set_spatial_criterion(ctx.get(), factory.get(),
+                                                       PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
   const ObjectList ops(proj_create_operations(ctx.get(), src.get(), dst.get(), factory.get()));
   const int count = ops ? proj_list_get_count(ops.get()) : 0;
   std::vector<std::string> missing;  // of the best operation that converts heights
@@ -126,8 +131,8 @@ void checkHeightsConvert(const OGRSpatialReference& srs, const std::string& crs)
     if (absent.empty()) return;
     if (missing.empty()) missing = std::move(absent);
   }
-  const std::string datum = srs.GetAttrValue("VERT_DATUM") ? srs.GetAttrValue("VERT_DATUM")
-                                                             : "its vertical datum";
+  const std::string datum =
+      srs.GetAttrValue("VERT_DATUM") ? srs.GetAttrValue("VERT_DATUM") : "its vertical datum";
   const std::string approximation =
       "or, as an approximation, set the CRS to " + horizontalName(srs) +
       " alone with geoid = \"egm96\" ([tiles] geoid or --geoid; orthometric heights are "
@@ -145,8 +150,8 @@ void checkHeightsConvert(const OGRSpatialReference& srs, const std::string& crs)
   throw inputError("PROJ needs the grid " + names + " to turn heights in '" + crs + "' (" + datum +
                        ") into ellipsoidal heights, and it is not installed on this machine",
                    {},
-                   "install it: download " + urls + " into /usr/share/proj (or ~/.local/share/proj); " +
-                       approximation);
+                   "install it: download " + urls +
+                       " into /usr/share/proj (or ~/.local/share/proj); " + approximation);
 }
 
 }  // namespace
@@ -169,7 +174,8 @@ ProjGeoReference::ProjGeoReference(std::string crs, std::string geoid)
                            "' has a vertical datum of its own, so geoid = \"egm96\" would "
                            "contradict it",
                        "leave geoid out (PROJ converts the CRS's heights), or give the "
-                       "horizontal CRS alone (" + horizontalName(given) + ") with geoid = \"egm96\"");
+                       "horizontal CRS alone (" +
+                           horizontalName(given) + ") with geoid = \"egm96\"");
     }
     // A compound CRS: horizontal as given, EGM96 heights (EPSG:5773).
     OGRSpatialReference vertical;

@@ -168,7 +168,9 @@ std::optional<tiles::ContentFrame> parseContentFrame(std::string_view name) {
   return std::nullopt;
 }
 
-bool isKnownGeoid(std::string_view name) { return name.empty() || name == "egm96"; }
+bool isKnownGeoid(std::string_view name) {
+  return name.empty() || name == "egm96";
+}
 
 std::string_view compressionName(encode::Compression compression) {
   return compression == encode::Compression::Draco ? "draco" : "none";
@@ -186,18 +188,18 @@ void checkTileJobOptions(const TileJobOptions& o) {
                      "set [tiles] tolerance or --tolerance to e.g. 1");
   }
   if (t.maxTriangles < 64) {
-    throw usageError("max triangles must be at least 64 (got " + std::to_string(t.maxTriangles) +
-                         ")",
-                     "set [tiles] max_triangles or --max-triangles to e.g. 32768");
+    throw usageError(
+        "max triangles must be at least 64 (got " + std::to_string(t.maxTriangles) + ")",
+        "set [tiles] max_triangles or --max-triangles to e.g. 32768");
   }
   if (t.maxZoom && (*t.maxZoom < 0 || *t.maxZoom > 30)) {
     throw usageError("max zoom must be 0 to 30 (got " + std::to_string(*t.maxZoom) + ")",
                      "set [tiles] max_zoom or --max-zoom, or leave it out");
   }
   if (!(t.lambdaFactor > 0) || !std::isfinite(t.lambdaFactor)) {
-    throw usageError("lambda must be a positive multiple of λ_d (got " +
-                         std::to_string(t.lambdaFactor) + ")",
-                     "set [tiles] lambda or --lambda to e.g. 0.01");
+    throw usageError(
+        "lambda must be a positive multiple of λ_d (got " + std::to_string(t.lambdaFactor) + ")",
+        "set [tiles] lambda or --lambda to e.g. 0.01");
   }
   if (!isKnownGeoid(o.geoid)) {
     throw usageError("unknown geoid '" + o.geoid + "'",

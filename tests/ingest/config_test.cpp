@@ -233,8 +233,7 @@ output = "out/site.3dtiles"
 }
 
 TEST(Config, TilesKeysLeftOutAreTheTileCommandsDefaults) {
-  const auto f = makeFixture("config_tiles_defaults",
-                             "[project]\ncrs = \"EPSG:26912\"\n[tiles]\n");
+  const auto f = makeFixture("config_tiles_defaults", "[project]\ncrs = \"EPSG:26912\"\n[tiles]\n");
   const auto config = loadProjectConfig(f.config);
   const TileJobOptions defaults;
   const TileJobOptions& t = config.tiles.job;
@@ -247,10 +246,10 @@ TEST(Config, TilesKeysLeftOutAreTheTileCommandsDefaults) {
   EXPECT_EQ(t.geoid, "");
   EXPECT_TRUE(config.tiles.output.empty());
   EXPECT_EQ(config.tiles.configLine, 3);
-  EXPECT_EQ(loadProjectConfig(makeFixture("config_no_tiles", "[project]\ncrs = \"EPSG:26912\"\n")
-                                  .config)
-                .tiles.configLine,
-            0);
+  EXPECT_EQ(
+      loadProjectConfig(makeFixture("config_no_tiles", "[project]\ncrs = \"EPSG:26912\"\n").config)
+          .tiles.configLine,
+      0);
 }
 
 TEST(Config, BadTilesKeysNameTheFileLineKeyAndValue) {
@@ -276,17 +275,17 @@ TEST(Config, BadTilesKeysNameTheFileLineKeyAndValue) {
       {"threads = 2", "unknown key 'threads' in [tiles]", "allowed keys: compression, frame"},
   };
   for (const auto& c : cases) {
-    const auto e = configError("config_tiles_bad",
-                               std::string("[project]\ncrs = \"EPSG:26912\"\n[tiles]\n") +
-                                   c.line + "\n");
+    const auto e =
+        configError("config_tiles_bad",
+                    std::string("[project]\ncrs = \"EPSG:26912\"\n[tiles]\n") + c.line + "\n");
     EXPECT_EQ(e.kind(), ErrorKind::Input) << c.line;
     EXPECT_EQ(e.where().file, "project.toml") << c.line;
     EXPECT_EQ(e.where().line, 4) << c.line;
     EXPECT_NE(e.problem().find(c.expected), std::string::npos) << c.line << ": " << e.what();
     EXPECT_NE(e.hint().find(c.hint), std::string::npos) << c.line << ": " << e.what();
   }
-  const auto e = configError("config_tiles_not_table",
-                             "tiles = 5\n[project]\ncrs = \"EPSG:26912\"\n");
+  const auto e =
+      configError("config_tiles_not_table", "tiles = 5\n[project]\ncrs = \"EPSG:26912\"\n");
   EXPECT_NE(std::string(e.what()).find("'tiles' must be a table"), std::string::npos) << e.what();
 }
 

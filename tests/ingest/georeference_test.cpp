@@ -30,8 +30,7 @@ encode::Geodetic geodetic(const ProjGeoReference& geo, const Point3& p) {
 /// the cells centred on the nodes).
 double undulationFromGrid(double lon, double lat) {
   ensureGdalReady();
-  std::unique_ptr<GDALDataset> grid(
-      static_cast<GDALDataset*>(GDALOpen(kEgm96Grid, GA_ReadOnly)));
+  std::unique_ptr<GDALDataset> grid(static_cast<GDALDataset*>(GDALOpen(kEgm96Grid, GA_ReadOnly)));
   if (!grid) throw std::runtime_error(std::string("cannot open ") + kEgm96Grid);
   std::array<double, 6> t{};
   grid->GetGeoTransform(t.data());

@@ -62,9 +62,9 @@ TEST(BuildCli, TheStoreIsTinThenTileWithTheSameOptions) {
   fs::create_directories(ref);
   auto tin = runTinsmith("tin " + p.config.string() + " -q -o " + (ref / "site.tin").string());
   ASSERT_EQ(tin.exitCode, 0) << tin.err;
-  auto tile = runTinsmith("tile " + (ref / "site.tin").string() +
-                          " --tolerance 0.5 --max-triangles 2048 -q -o " +
-                          (ref / "site.3dtiles").string());
+  auto tile =
+      runTinsmith("tile " + (ref / "site.tin").string() +
+                  " --tolerance 0.5 --max-triangles 2048 -q -o " + (ref / "site.3dtiles").string());
   ASSERT_EQ(tile.exitCode, 0) << tile.err;
   EXPECT_EQ(readFile(p.out / "site.tin"), readFile(ref / "site.tin"));
   EXPECT_EQ(store, readFile(ref / "site.3dtiles"));
@@ -203,9 +203,9 @@ TEST(BuildCli, BadInputFailsClearlyAndLeavesNothingUnderTheOutputsNames) {
 TEST(BuildCli, HelpNamesTheSharedTileOptionsAndTheTinBesideTheStore) {
   auto r = runTinsmith("build --help");
   ASSERT_EQ(r.exitCode, 0) << r.err;
-  for (const char* option : {"--tolerance", "--max-triangles", "--max-zoom", "--lambda",
-                             "--compression", "--frame", "--geoid", "--threads", "--resume",
-                             "--json", "[tiles] tolerance", "STEM.tin"}) {
+  for (const char* option :
+       {"--tolerance", "--max-triangles", "--max-zoom", "--lambda", "--compression", "--frame",
+        "--geoid", "--threads", "--resume", "--json", "[tiles] tolerance", "STEM.tin"}) {
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
   }
 }

@@ -48,8 +48,8 @@ fs::path tinBesideStore(fs::path store) {
   return store.replace_extension(".tin");
 }
 
-/// `progress` with every stage name prefixed ("TIN readers.ogr"), so the bar
-/// says which part of the job runs; nothing when there is no bar.
+/// The bar's progress with every stage name prefixed ("1/2 TIN readers.ogr"),
+/// so it says which part of the job runs; no callback when there is no bar.
 ingest::Progress prefixed(const TerminalProgress& bar, const std::string& prefix) {
   ingest::Progress p;
   if (const ingest::Progress* inner = bar.get()) {
@@ -84,28 +84,36 @@ void run(const BuildCliOptions& o) {
   ingest::BuildOptions tinOptions = ingest::buildOptionsFrom(config);
   tinOptions.threads = static_cast<unsigned>(tileOptions.threads);
   const ingest::Progress tinProgress = prefixed(bar, "1/2 TIN ");
-  const ingest::BuildReport report = ingest::buildTinFromConfig(
-      config, tinOptions, [&](const Mesh& mesh) { ingest::writeTinFile(partialTin, mesh); },
-      bar.get() ? &tinProgress : nullptr);
+  const ingest::Progress tileProgress = prefixed(bar, "2/2 tiles ");
+  ingest::BuildReport report;
   ingest::TileJobSummary tiles;
   try {
+    report = ingest::buildTinFromConfig(
+        config, tinOptions, [&](const Mesh& mesh) { ingest::writeTinFile(partialTin, mesh); },
+        bar.get() ? &tinProgress : nullptr);
     // Read back, so the tiles see exactly what `tinsmith tile STEM.tin` would.
     const TinData tin = ingest::readTinFile(partialTin);
-    const ingest::Progress tileProgress = prefixed(bar, "2/2 tiles ");
     tiles = ingest::runTileJob(tin, tinPath.string(), store, tileOptions,
                                bar.get() ? &tileProgress : nullptr);
-    fs::rename(partialTin, tinPath);
   } catch (...) {
     std::error_code ec;
     fs::remove(partialTin, ec);
     throw;
   }
   bar.bar.reset();
+  std::error_code ec;
+  fs::rename(partialTin, tinPath, ec);
+  if (ec) {
+    throw ioError("cannot rename " + partialTin.string() + " to " + tinPath.filename().string() +
+                      ": " + ec.message(),
+                  {tinPath.string(), {}, {}, {}}, "the store is complete; rename the TIN by hand");
+  }
 
   if (f.json) {
     nlohmann::ordered_json j;
     j["config"] = config.file.string();
-    j["tin"] = {{"output", tinPath.string()}, {"report", nlohmann::ordered_json::parse(report.toJson())}};
+    j["tin"] = {{"output", tinPath.string()},
+                {"report", nlohmann::ordered_json::parse(report.toJson())}};
     j["tiles"] = tileSummaryObject(tiles, store.string());
     std::cout << j.dump(2) << "\n";
   } else if (!f.quiet) {
@@ -118,8 +126,8 @@ void run(const BuildCliOptions& o) {
 
 void addBuildCommand(CLI::App& app) {
   auto opt = std::make_shared<BuildCliOptions>();
-  auto* cmd = app.add_subcommand(
-      "build", "Run the whole job from a config: ingest → TIN → tiles → store");
+  auto* cmd =
+      app.add_subcommand("build", "Run the whole job from a config: ingest → TIN → tiles → store");
   cmd->add_option("config", opt->config, "Project config (TOML), see config/README.md")->required();
   cmd->add_option("-o,--output", opt->output,
                   "Tile store to write, a .3dtiles archive or a directory (default: [tiles] "

@@ -24,10 +24,10 @@ inline void checkOutputDirectory(const std::filesystem::path& path, const char* 
   else if (::access(dir.c_str(), W_OK) != 0)
     problem = "is not writable";
   if (problem) {
-    throw ioError(std::string("cannot write ") + option + " there: '" + dir.string() + "' " +
-                      problem,
-                  {path.string(), {}, {}, {}},
-                  "create the directory, or choose another path you may write to");
+    throw ioError(
+        std::string("cannot write ") + option + " there: '" + dir.string() + "' " + problem,
+        {path.string(), {}, {}, {}},
+        "create the directory, or choose another path you may write to");
   }
 }
 

@@ -19,16 +19,15 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig) {
                  "Triangles a tile may hold, about" + dflt("max_triangles", "32768"));
   cmd.add_option("--max-zoom", flags.maxZoom,
                  "Deepest tile zoom" + dflt("max_zoom", "the planned finest zoom + 6"));
-  cmd.add_option("--lambda", flags.lambda,
-                 "Smoothing λ of the zoom and tile fits as a multiple of λ_d" +
-                     dflt("lambda", "0.01"));
+  cmd.add_option(
+      "--lambda", flags.lambda,
+      "Smoothing λ of the zoom and tile fits as a multiple of λ_d" + dflt("lambda", "0.01"));
   cmd.add_option("--compression", flags.compression,
                  "draco or none" + dflt("compression", "draco"));
   cmd.add_option("--frame", flags.frame,
                  "ecef (3D Tiles on the globe) or local (ENU metres)" + dflt("frame", "ecef"));
   cmd.add_option("--geoid", flags.geoid,
-                 "egm96: the TIN's z are EGM96 heights; \"\": ellipsoidal" +
-                     dflt("geoid", "\"\""));
+                 "egm96: the TIN's z are EGM96 heights; \"\": ellipsoidal" + dflt("geoid", "\"\""));
   cmd.add_option("--threads", flags.threads,
                  "Worker threads (default 0: all cores); the same bytes for any");
   cmd.add_flag("--resume", flags.resume,
@@ -45,7 +44,8 @@ ingest::TileJobOptions withTileFlags(ingest::TileJobOptions o, const TileFlags& 
   if (flags.lambda) o.tiler.lambdaFactor = *flags.lambda;
   if (flags.compression) {
     const auto c = ingest::parseCompression(*flags.compression);
-    if (!c) throw usageError("--compression must be draco or none (got '" + *flags.compression + "')");
+    if (!c)
+      throw usageError("--compression must be draco or none (got '" + *flags.compression + "')");
     o.compression = *c;
   }
   if (flags.frame) {

@@ -34,7 +34,8 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
   return out;
 }
 
-nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s, const std::string& output) {
+nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
+                                         const std::string& output) {
   nlohmann::ordered_json j;
   j["output"] = output;
   j["tiles"] = s.tiles;

@@ -11,7 +11,8 @@ namespace tinsmith::cli {
 
 std::string tileSummaryText(const ingest::TileJobSummary& s);
 /// The JSON object; tileSummaryJson is its text (2-space indent, newline).
-nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s, const std::string& output);
+nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
+                                         const std::string& output);
 std::string tileSummaryJson(const ingest::TileJobSummary& s, const std::string& output);
 
 }  // namespace tinsmith::cli
