@@ -67,9 +67,10 @@ void run(const BuildCliOptions& o) {
   fs::path store = o.output;
   if (store.empty()) store = config.tiles.output;
   if (store.empty()) {
-    throw usageError("no tile store to write: " + config.file.filename().string() +
-                         " has no [tiles] output and -o was not given",
-                     "add output = \"NAME.3dtiles\" to [tiles], or give -o NAME.3dtiles");
+    SourceLocation where{config.file.filename().string(), {}, {}, {}};
+    if (config.tiles.configLine > 0) where.line = config.tiles.configLine;
+    throw Error(ErrorKind::Usage, "no tile store to write: no [tiles] output and no -o", where,
+                "add output = \"NAME.3dtiles\" to [tiles], or give -o NAME.3dtiles");
   }
   const fs::path tinPath = tinBesideStore(store);
   fs::path partialTin = tinPath;
