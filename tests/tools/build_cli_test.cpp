@@ -201,6 +201,23 @@ TEST(BuildCli, BadInputFailsClearlyAndLeavesNothingUnderTheOutputsNames) {
   EXPECT_EQ(entries(p.out), 2u);
 }
 
+TEST(BuildCli, ProgressNamesEachStageOnATerminal) {
+  const auto p = makeProject("build-cli-progress");
+  const std::string build = "build " + p.config.string();
+  auto r = runTinsmith(build);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err.find('\r'), std::string::npos) << "progress drawn on a non-terminal";
+  EXPECT_NE(r.err.find("wrote " + (p.out / "site.3dtiles").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("TIN build summary"), std::string::npos) << r.err;
+  if (runCommand("command -v script").exitCode != 0)
+    GTEST_SKIP() << "no `script` to make a terminal";
+  // `script` runs the command on a pseudo-terminal; its output is the terminal's.
+  r = runCommand("script -qec \"" + std::string(TINSMITH_BINARY) + " " + build + "\" /dev/null");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("\r\033[K1/2 TIN builders.tin"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\r\033[K2/2 tiles tiles.zoom"), std::string::npos) << r.out;
+}
+
 TEST(BuildCli, HelpNamesTheSharedTileOptionsAndTheTinBesideTheStore) {
   auto r = runTinsmith("build --help");
   ASSERT_EQ(r.exitCode, 0) << r.err;
