@@ -143,6 +143,14 @@ const char* typeName(const toml::node& node) {
   }
 }
 
+/// A value as the config wrote it, for messages: 0, -2.5, "zstd".
+std::string written(const toml::node& node) {
+  if (const auto* s = node.as_string()) return "\"" + s->get() + "\"";
+  std::ostringstream out;
+  node.visit([&out](const auto& value) { out << value; });
+  return out.str();
+}
+
 void checkKeys(const Context& ctx, const toml::table& table, const std::string& tableName,
                const std::set<std::string>& allowed) {
   for (const auto& [key, node] : table) {
@@ -155,12 +163,20 @@ void checkKeys(const Context& ctx, const toml::table& table, const std::string& 
   }
 }
 
+[[noreturn]] void failType(const Context& ctx, const toml::node& node, const std::string& name,
+                           const std::string& expected) {
+  ctx.fail(name + " must be " + expected + ", not " + typeName(node) + " (" + written(node) + ")",
+           lineOf(node),
+           node.is_string() ? "write " + expected + " without quotes"
+                            : (expected == "a string" ? "put it in quotes" : ""));
+}
+
 std::optional<std::string> getString(const Context& ctx, const toml::table& t,
                                      const std::string& key, const std::string& tableName) {
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* s = node->as_string()) return s->get();
-  ctx.fail(tableName + "." + key + " must be a string, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "a string");
 }
 
 std::optional<double> getNumber(const Context& ctx, const toml::table& t, const std::string& key,
@@ -173,7 +189,7 @@ std::optional<double> getNumber(const Context& ctx, const toml::table& t, const 
     return f->get();
   }
   if (const auto* i = node->as_integer()) return static_cast<double>(i->get());
-  ctx.fail(tableName + "." + key + " must be a number, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "a number");
 }
 
 std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t,
@@ -181,7 +197,7 @@ std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t,
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* i = node->as_integer()) return i->get();
-  ctx.fail(tableName + "." + key + " must be an integer, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "an integer");
 }
 
 std::optional<bool> getBool(const Context& ctx, const toml::table& t, const std::string& key,
@@ -189,7 +205,7 @@ std::optional<bool> getBool(const Context& ctx, const toml::table& t, const std:
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* b = node->as_boolean()) return b->get();
-  ctx.fail(tableName + "." + key + " must be true or false, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "true or false");
 }
 
 std::int64_t keyLine(const toml::table& t, const std::string& key) {
@@ -287,14 +303,6 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
     if (!layer.layer.empty()) layer.name += ":" + layer.layer;
   }
   return layer;
-}
-
-/// A value as the config wrote it, for messages: 0, -2.5, "zstd".
-std::string written(const toml::node& node) {
-  if (const auto* s = node.as_string()) return "\"" + s->get() + "\"";
-  std::ostringstream out;
-  node.visit([&out](const auto& value) { out << value; });
-  return out.str();
 }
 
 TilesConfig parseTiles(const Context& ctx, const toml::table& t,

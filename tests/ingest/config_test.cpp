@@ -261,7 +261,8 @@ TEST(Config, BadTilesKeysNameTheFileLineKeyAndValue) {
   const Case cases[] = {
       {"tolerance = 0", "tiles.tolerance = 0: must be greater than 0", "tolerance = 1"},
       {"tolerance = -1.5", "tiles.tolerance = -1.5: must be greater than 0", "tolerance = 1"},
-      {"tolerance = \"5\"", "tiles.tolerance must be a number, not a string", ""},
+      {"tolerance = \"5\"", "tiles.tolerance must be a number, not a string (\"5\")",
+       "write a number without quotes"},
       {"max_triangles = 10", "tiles.max_triangles = 10: must be at least 64", "32768"},
       {"max_triangles = 1e4", "tiles.max_triangles must be an integer, not a number", ""},
       {"max_zoom = 31", "tiles.max_zoom = 31: must be 0 to 30", "leave it out"},
