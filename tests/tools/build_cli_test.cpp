@@ -169,6 +169,13 @@ TEST(BuildCli, BadInputFailsClearlyAndLeavesNothingUnderTheOutputsNames) {
     EXPECT_NE(r.err.find("nowhere.toml, line 10: no tile store to write"), std::string::npos)
         << r.err;
   }
+  // A store that would be its own TIN.
+  {
+    auto r = runTinsmith("build " + p.config.string() + " -o " + (p.out / "site.tin").string());
+    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_NE(r.err.find("has the name of the TIN"), std::string::npos) << r.err;
+    EXPECT_EQ(entries(p.out), 0u);
+  }
   // Unwritable outputs: a folder that does not exist, a file where a folder
   // should be.
   std::ofstream(p.dir / "plain.txt") << "x";

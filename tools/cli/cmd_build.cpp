@@ -73,6 +73,11 @@ void run(const BuildCliOptions& o) {
                 "add output = \"NAME.3dtiles\" to [tiles], or give -o NAME.3dtiles");
   }
   const fs::path tinPath = tinBesideStore(store);
+  if (tinPath.lexically_normal() == store.lexically_normal()) {
+    throw usageError(
+        "the tile store '" + store.string() + "' has the name of the TIN written beside it",
+        "name the store NAME.3dtiles (an archive) or a folder without .tin");
+  }
   fs::path partialTin = tinPath;
   partialTin.replace_extension(".partial.tin");
   checkOutputDirectory(store, "the tile store");
