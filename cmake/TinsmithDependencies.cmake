@@ -52,6 +52,11 @@ if(NOT GDAL_FOUND)
 endif()
 tinsmith_require("GDAL 3.6" libgdal-dev GDAL_FOUND)
 
+# PROJ itself (GDAL's dependency) for what OGR does not expose: which grids a
+# height transformation needs and whether they are installed.
+pkg_check_modules(PROJ QUIET IMPORTED_TARGET proj)
+tinsmith_require("PROJ" "libproj-dev proj-data" PROJ_FOUND)
+
 find_package(SQLite3 QUIET)
 tinsmith_require("SQLite 3" libsqlite3-dev SQLite3_FOUND)
 

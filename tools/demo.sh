@@ -44,8 +44,8 @@ gdal_translate -q -of PNG out/red-butte-fit-hillshade.tif out/red-butte-fit-hill
 echo "-- shaded relief of the fitted surface: out/red-butte-fit-hillshade.png"
 
 echo
-echo "== 3. tiles: out/red-butte.tin → out/red-butte.3dtiles (first cut: see the README's status)"
-"$tinsmith" tile out/red-butte.tin -o out/red-butte.3dtiles --tolerance 5 --max-zoom 5
+echo "== 3. the whole job: config/red-butte.toml → out/red-butte.3dtiles (+ out/red-butte.tin, as in 1)"
+"$tinsmith" build config/red-butte.toml
 "$tinsmith" info out/red-butte.3dtiles
 echo "== 4. server: http://127.0.0.1:8080/"
 missing+=("server (tinsmith serve)")

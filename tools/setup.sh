@@ -22,7 +22,7 @@ packages=(
   clang libclang-rt-14-dev           # libFuzzer and sanitizer runtimes
   # libraries
   libeigen3-dev libgeographiclib-dev libopenexr-dev libtinygltf-dev libdraco-dev
-  libgdal-dev gdal-bin libsqlite3-dev sqlite3 libtomlplusplus-dev libcli11-dev
+  libgdal-dev gdal-bin libproj-dev proj-data libsqlite3-dev sqlite3 libtomlplusplus-dev libcli11-dev
   libcpp-httplib-dev nlohmann-json3-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev

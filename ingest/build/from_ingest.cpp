@@ -85,4 +85,14 @@ BuildOptions buildOptionsFrom(const ProjectConfig& config) {
   return o;
 }
 
+BuildReport buildTinFromConfig(const ProjectConfig& config, const BuildOptions& options,
+                               const std::function<void(const Mesh&)>& consume,
+                               const Progress* progress) {
+  IngestResult ingested = loadLayers(config, progress);
+  BuildReport report =
+      buildTinInto(toBuildLayers(std::move(ingested.layers)), options, consume, progress);
+  addIngestReport(report, ingested);
+  return report;
+}
+
 }  // namespace tinsmith::ingest

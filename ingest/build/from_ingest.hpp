@@ -3,6 +3,7 @@
 // and timings into the BuildReport.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "ingest/build/build_report.hpp"
@@ -24,5 +25,14 @@ void addIngestReport(BuildReport& report, const IngestResult& ingest);
 
 /// BuildOptions from the config's [tin] table and project CRS.
 BuildOptions buildOptionsFrom(const ProjectConfig& config);
+
+/// A config's TIN, as `tinsmith tin CONFIG` and `tinsmith build` make it:
+/// every layer read, reprojected and cleaned (loadLayers), then
+/// buildTinInto(…, options, consume, progress), with the ingest stages'
+/// counts and timings added to the report. `options` normally start from
+/// buildOptionsFrom(config). Throws what those throw.
+BuildReport buildTinFromConfig(const ProjectConfig& config, const BuildOptions& options,
+                               const std::function<void(const Mesh&)>& consume,
+                               const Progress* progress = nullptr);
 
 }  // namespace tinsmith::ingest

@@ -143,6 +143,14 @@ const char* typeName(const toml::node& node) {
   }
 }
 
+/// A value as the config wrote it, for messages: 0, -2.5, "zstd".
+std::string written(const toml::node& node) {
+  if (const auto* s = node.as_string()) return "\"" + s->get() + "\"";
+  std::ostringstream out;
+  node.visit([&out](const auto& value) { out << value; });
+  return out.str();
+}
+
 void checkKeys(const Context& ctx, const toml::table& table, const std::string& tableName,
                const std::set<std::string>& allowed) {
   for (const auto& [key, node] : table) {
@@ -155,12 +163,20 @@ void checkKeys(const Context& ctx, const toml::table& table, const std::string& 
   }
 }
 
+[[noreturn]] void failType(const Context& ctx, const toml::node& node, const std::string& name,
+                           const std::string& expected) {
+  ctx.fail(name + " must be " + expected + ", not " + typeName(node) + " (" + written(node) + ")",
+           lineOf(node),
+           node.is_string() ? "write " + expected + " without quotes"
+                            : (expected == "a string" ? "put it in quotes" : ""));
+}
+
 std::optional<std::string> getString(const Context& ctx, const toml::table& t,
                                      const std::string& key, const std::string& tableName) {
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* s = node->as_string()) return s->get();
-  ctx.fail(tableName + "." + key + " must be a string, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "a string");
 }
 
 std::optional<double> getNumber(const Context& ctx, const toml::table& t, const std::string& key,
@@ -173,7 +189,7 @@ std::optional<double> getNumber(const Context& ctx, const toml::table& t, const 
     return f->get();
   }
   if (const auto* i = node->as_integer()) return static_cast<double>(i->get());
-  ctx.fail(tableName + "." + key + " must be a number, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "a number");
 }
 
 std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t,
@@ -181,7 +197,7 @@ std::optional<std::int64_t> getInteger(const Context& ctx, const toml::table& t,
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* i = node->as_integer()) return i->get();
-  ctx.fail(tableName + "." + key + " must be an integer, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "an integer");
 }
 
 std::optional<bool> getBool(const Context& ctx, const toml::table& t, const std::string& key,
@@ -189,7 +205,7 @@ std::optional<bool> getBool(const Context& ctx, const toml::table& t, const std:
   const auto* node = t.get(key);
   if (!node) return std::nullopt;
   if (const auto* b = node->as_boolean()) return b->get();
-  ctx.fail(tableName + "." + key + " must be true or false, not " + typeName(*node), lineOf(*node));
+  failType(ctx, *node, tableName + "." + key, "true or false");
 }
 
 std::int64_t keyLine(const toml::table& t, const std::string& key) {
@@ -289,6 +305,68 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
   return layer;
 }
 
+TilesConfig parseTiles(const Context& ctx, const toml::table& t,
+                       const std::filesystem::path& baseDir) {
+  const std::string tn = "tiles";
+  checkKeys(ctx, t, "[tiles]",
+            {"tolerance", "max_triangles", "max_zoom", "lambda", "compression", "frame", "geoid",
+             "output"});
+  // "tiles.KEY = VALUE: PROBLEM", at the key's line.
+  auto bad = [&](const std::string& key, const std::string& problem, const std::string& hint) {
+    ctx.fail("tiles." + key + " = " + written(*t.get(key)) + ": " + problem, keyLine(t, key), hint);
+  };
+  TilesConfig tiles;
+  tiles.configLine = lineOf(t);
+  auto& tiler = tiles.job.tiler;
+  if (const auto v = getNumber(ctx, t, "tolerance", tn)) {
+    if (!(*v > 0))
+      bad("tolerance", "must be greater than 0 (metres)",
+          "the finest zoom's largest vertical error against the TIN, e.g. tolerance = 1");
+    tiler.tolerance = *v;
+  }
+  if (const auto v = getInteger(ctx, t, "max_triangles", tn)) {
+    if (*v < 64)
+      bad("max_triangles", "must be at least 64",
+          "about how many triangles a tile may hold; the default is 32768");
+    tiler.maxTriangles = static_cast<std::size_t>(*v);
+  }
+  if (const auto v = getInteger(ctx, t, "max_zoom", tn)) {
+    if (*v < 0 || *v > 30)
+      bad("max_zoom", "must be 0 to 30", "leave it out to stop 6 zooms below the planned finest");
+    tiler.maxZoom = static_cast<int>(*v);
+  }
+  if (const auto v = getNumber(ctx, t, "lambda", tn)) {
+    if (!(*v > 0))
+      bad("lambda", "must be greater than 0 (a multiple of λ_d)", "the default is 0.01");
+    tiler.lambdaFactor = *v;
+  }
+  if (const auto v = getString(ctx, t, "compression", tn)) {
+    const auto c = parseCompression(*v);
+    if (!c) bad("compression", "unknown compression", "compression = \"draco\" | \"none\"");
+    tiles.job.compression = *c;
+  }
+  if (const auto v = getString(ctx, t, "frame", tn)) {
+    const auto f = parseContentFrame(*v);
+    if (!f)
+      bad("frame", "unknown frame", "frame = \"ecef\" (on the globe) | \"local\" (ENU metres)");
+    tiles.job.frame = *f;
+  }
+  if (const auto v = getString(ctx, t, "geoid", tn)) {
+    if (!isKnownGeoid(*v))
+      bad("geoid", "unknown geoid",
+          "geoid = \"egm96\" when z are EGM96 (≈ mean sea level) heights, \"\" when ellipsoidal");
+    tiles.job.geoid = *v;
+  }
+  if (const auto v = getString(ctx, t, "output", tn)) {
+    if (v->empty())
+      bad("output", "is empty", "give the tile store's path: NAME.3dtiles or a directory");
+    std::filesystem::path out(*v);
+    if (out.is_relative()) out = baseDir / out;
+    tiles.output = out.lexically_normal();
+  }
+  return tiles;
+}
+
 }  // namespace
 
 ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::path& file) {
@@ -357,7 +435,13 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
     config.tin.strict = getBool(ctx, *tin, "strict", "tin").value_or(config.tin.strict);
   }
 
-  for (const char* name : {"fit", "tiles", "server"}) {
+  if (const auto* tilesNode = root.get("tiles")) {
+    const auto* tiles = tilesNode->as_table();
+    if (!tiles) ctx.fail("'tiles' must be a table", lineOf(*tilesNode));
+    config.tiles = parseTiles(ctx, *tiles, baseDir);
+  }
+
+  for (const char* name : {"fit", "server"}) {
     if (const auto* node = root.get(name)) {
       const auto* table = node->as_table();
       if (!table) ctx.fail(std::string("'") + name + "' must be a table", lineOf(*node));

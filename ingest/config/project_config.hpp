@@ -4,8 +4,10 @@
 //   [[layer]]  path, kind, layer, name, z, z_value, crs, weight, and for text
 //              files x, y, delimiter, header; for rasters band, nodata
 //   [tin]      snap_tolerance, flat_triangle_repair, river_descent, strict
-//   [fit], [tiles], [server]  accepted; their keys are kept as raw TOML text
-//              until their own parsers exist (see ProjectConfig::extraTables)
+//   [tiles]    tolerance, max_triangles, max_zoom, lambda, compression, frame,
+//              geoid (the options of `tinsmith tile`), output (the store)
+//   [fit], [server]  accepted; their keys are kept as raw TOML text until
+//              their own parsers exist (see ProjectConfig::extraTables)
 //
 // Every problem is a tinsmith::Error (kind Input) whose location names the
 // config file and the line, and whose message names the key: unknown keys,
@@ -21,6 +23,7 @@
 
 #include "core/tin/tin_data.hpp"
 #include "ingest/readers/text_points.hpp"
+#include "ingest/tiles/tile_job.hpp"
 
 namespace tinsmith::ingest {
 
@@ -63,13 +66,24 @@ struct TinOptions {
   bool strict = false;  ///< data errors (crossing contours) are fatal
 };
 
+/// [tiles]: how `tinsmith build` tiles the TIN. Keys left out keep
+/// TileJobOptions' defaults (those of `tinsmith tile`); command-line flags
+/// override them.
+struct TilesConfig {
+  TileJobOptions job;  ///< tiler, compression, frame, geoid; nothing else is set
+  std::filesystem::path
+      output;  ///< `output`: absolute (resolved against the config's folder); empty: not given
+  std::int64_t configLine = 0;  ///< line of [tiles]; 0: no [tiles] table
+};
+
 struct ProjectConfig {
   std::filesystem::path file;  ///< the config file (absolute)
   std::string name;            ///< [project] name; default: the config file's stem
   std::string crs;             ///< [project] crs as written: "EPSG:26912" or WKT
   std::vector<LayerConfig> layers;
   TinOptions tin;
-  /// Tables whose parsers live elsewhere ("fit", "tiles", "server"), each as
+  TilesConfig tiles;
+  /// Tables whose parsers live elsewhere ("fit", "server"), each as
   /// TOML text holding only that table, plus the line where it starts.
   struct RawTable {
     std::string toml;

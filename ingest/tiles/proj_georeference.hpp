@@ -5,6 +5,11 @@
 // (a projected CRS such as EPSG:26912 carries no vertical datum to convert
 // from). With a geoid ("egm96"), z is an EGM96 orthometric height and PROJ's
 // egm96_15.gtx grid (Debian's proj-data, offline) adds the geoid undulation.
+// A compound CRS with a vertical datum ("EPSG:26912+5703", NAVD88 height)
+// is converted by PROJ when the grids it needs are installed; when they are
+// not, the constructor throws, naming them (PROJ itself would silently leave
+// the heights unconverted). Debian bookworm's proj-data has EGM96's grid but
+// none of NAVD88's.
 // Thread-safe: each thread gets its own PROJ transformation.
 #pragma once
 
@@ -17,9 +22,10 @@ namespace tinsmith::ingest {
 
 class ProjGeoReference : public tiles::GeoReference {
  public:
-  /// `crs`: the TIN's CRS ("EPSG:n" or WKT); `geoid`: "" or "egm96". Throws
-  /// inputError for an empty or unknown CRS or a geoid PROJ cannot use, with
-  /// what to do.
+  /// `crs`: the TIN's CRS ("EPSG:n", "EPSG:h+v" or WKT); `geoid`: "" or
+  /// "egm96". Throws inputError, with what to do, for an empty or unknown CRS
+  /// and for heights PROJ cannot convert here (a grid missing: named);
+  /// usageError for an unknown geoid or a geoid given with a compound CRS.
   ProjGeoReference(std::string crs, std::string geoid);
   ~ProjGeoReference() override;
   void toGeodetic(std::span<const Point3> in, std::span<encode::Geodetic> out) const override;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -24,14 +25,11 @@ namespace {
 constexpr const char* kBuildKey = "tinsmith/build.json";
 constexpr const char* kTinKey = "tinsmith/terrain.tin";
 
-std::string compressionName(encode::Compression c) {
-  return c == encode::Compression::Draco ? "draco" : "none";
-}
-
 /// What the tiles are a function of (and nothing else: no subtree, no
 /// threads, no time), so shards and resumed runs can be checked against it.
 std::string buildRecord(const TinData& tin, const std::string& tinBytes, const std::string& tinName,
-                        const TileJobOptions& o, const tiles::Tiler& tiler) {
+                        const TileJobOptions& o, const tiles::Tiler& tiler,
+                        const tiles::ContentOptions& content) {
   nlohmann::ordered_json j;
   j["format"] = "tinsmith-tiles/1";
   j["tin"] = {{"name", fs::path(tinName).filename().string()},
@@ -44,12 +42,16 @@ std::string buildRecord(const TinData& tin, const std::string& tinBytes, const s
                   {"maxZoom", tiler.maxZoom()},
                   {"lambdaFactor", o.tiler.lambdaFactor},
                   {"compression", compressionName(o.compression)},
-                  {"frame", o.frame == tiles::ContentFrame::Ecef ? "ecef" : "local"},
+                  {"frame", contentFrameName(o.frame)},
                   {"geoid", o.geoid}};
   j["pyramid"] = {{"origin", {tiler.geometry().origin().x, tiler.geometry().origin().y}},
                   {"size", tiler.geometry().size()},
                   {"finestZoom", tiler.finestZoom()},
                   {"levelsPerTile", tiler.levelsPerTile()}};
+  if (o.frame == tiles::ContentFrame::Local) {
+    const auto& g = content.localOrigin;
+    j["pyramid"]["enuOrigin"] = {g.lon, g.lat, g.height};
+  }
   return j.dump(2) + "\n";
 }
 
@@ -71,6 +73,7 @@ std::string tilesetExtras(const std::string& build) {
   e["tinsmith"] = {{"crs", b["tin"]["crs"]},
                    {"tolerance", b["options"]["tolerance"]},
                    {"finestZoom", b["pyramid"]["finestZoom"]}};
+  if (b["pyramid"].contains("enuOrigin")) e["tinsmith"]["enuOrigin"] = b["pyramid"]["enuOrigin"];
   return e.dump();
 }
 
@@ -153,18 +156,75 @@ fs::path stagingPath(const fs::path& output) {
 
 }  // namespace
 
+std::optional<encode::Compression> parseCompression(std::string_view name) {
+  if (name == "draco") return encode::Compression::Draco;
+  if (name == "none") return encode::Compression::None;
+  return std::nullopt;
+}
+
+std::optional<tiles::ContentFrame> parseContentFrame(std::string_view name) {
+  if (name == "ecef") return tiles::ContentFrame::Ecef;
+  if (name == "local") return tiles::ContentFrame::Local;
+  return std::nullopt;
+}
+
+bool isKnownGeoid(std::string_view name) {
+  return name.empty() || name == "egm96";
+}
+
+std::string_view compressionName(encode::Compression compression) {
+  return compression == encode::Compression::Draco ? "draco" : "none";
+}
+
+std::string_view contentFrameName(tiles::ContentFrame frame) {
+  return frame == tiles::ContentFrame::Ecef ? "ecef" : "local";
+}
+
+void checkTileJobOptions(const TileJobOptions& o) {
+  const auto& t = o.tiler;
+  if (!(t.tolerance > 0) || !std::isfinite(t.tolerance)) {
+    throw usageError("the tile tolerance must be a positive number of metres (got " +
+                         std::to_string(t.tolerance) + ")",
+                     "set [tiles] tolerance or --tolerance to e.g. 1");
+  }
+  if (t.maxTriangles < 64) {
+    throw usageError(
+        "max triangles must be at least 64 (got " + std::to_string(t.maxTriangles) + ")",
+        "set [tiles] max_triangles or --max-triangles to e.g. 32768");
+  }
+  if (t.maxZoom && (*t.maxZoom < 0 || *t.maxZoom > 30)) {
+    throw usageError("max zoom must be 0 to 30 (got " + std::to_string(*t.maxZoom) + ")",
+                     "set [tiles] max_zoom or --max-zoom, or leave it out");
+  }
+  if (!(t.lambdaFactor > 0) || !std::isfinite(t.lambdaFactor)) {
+    throw usageError(
+        "lambda must be a positive multiple of λ_d (got " + std::to_string(t.lambdaFactor) + ")",
+        "set [tiles] lambda or --lambda to e.g. 0.01");
+  }
+  if (!isKnownGeoid(o.geoid)) {
+    throw usageError("unknown geoid '" + o.geoid + "'",
+                     "use geoid \"egm96\" or leave it out (ellipsoidal heights)");
+  }
+  if (o.threads < 0) throw usageError("--threads must be 0 (all cores) or more");
+  if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
+  if (o.subtree && o.untilZoom)
+    throw usageError("--subtree and --until-zoom make different shards: give one");
+}
+
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const fs::path& output,
                           const TileJobOptions& options, const Progress* progress) {
+  checkTileJobOptions(options);
   const auto start = std::chrono::steady_clock::now();
+  // Both frames place the tiles through the TIN's CRS (the local frame's
+  // east-north-up axes stand at the pyramid's centre); a CRS PROJ cannot use
+  // fails here, before the planning.
+  const ProjGeoReference geo(tin.crs, options.geoid);
   tiles::TilerOptions tilerOptions = options.tiler;
   tilerOptions.threads = options.threads;
   reportProgress(progress, "tiles.plan", "", 0, 0);
   const tiles::Tiler tiler(tin, tilerOptions);
   reportProgress(progress, "tiles.plan", "", 1, 1);
 
-  // Both frames place the tiles through the TIN's CRS (the local frame's
-  // east-north-up axes stand at the pyramid's centre).
-  const ProjGeoReference geo(tin.crs, options.geoid);
   tiles::ContentOptions content;
   content.compression = options.compression;
   content.frame = options.frame;
@@ -175,7 +235,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
 
   const std::string tinBytes = encodeTin(tin);
-  const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler);
+  const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler, content);
   const fs::path stagePath = stagingPath(output);
   auto stage = store::openStoreForWriting(stagePath, options.resume);
   if (options.resume) {

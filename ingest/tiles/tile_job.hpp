@@ -3,7 +3,11 @@
 //   tinsmith/build.json   what was built from what (TIN checksum, options)
 //   tinsmith/terrain.tin  the TIN itself (the server answers elevations from it)
 //   tiles/{z}/{x}/{y}.glb one per tile; asset.extras carries the tile's record
-//   tileset.json (+ tilesets/…) written last, from the records
+//   tileset.json (+ tilesets/…) written last, from the records; its
+//                         extras.tinsmith holds the CRS, the tolerance and,
+//                         for the local frame, "enuOrigin": [lon°, lat°, h m]
+//                         (WGS84, ellipsoidal), the origin of the tiles'
+//                         east-north-up axes
 // An archive output X.3dtiles is staged in "X.partial.3dtiles" (resumable) and written
 // out at the end in one canonical key order, atomically, so one run, a resumed
 // run and merged shards give the same bytes and a half-done archive never
@@ -14,6 +18,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/encode/glb.hpp"
@@ -35,6 +40,21 @@ struct TileJobOptions {
   bool resume = false;
   int threads = 0;
 };
+
+/// The names `tinsmith tile` and the config's [tiles] use: "draco" | "none",
+/// "ecef" | "local", "" | "egm96"; nullopt (false) for any other.
+std::optional<encode::Compression> parseCompression(std::string_view name);
+std::optional<tiles::ContentFrame> parseContentFrame(std::string_view name);
+bool isKnownGeoid(std::string_view name);
+std::string_view compressionName(encode::Compression compression);
+std::string_view contentFrameName(tiles::ContentFrame frame);
+
+/// Throws usageError (naming the option and the bad value) unless the
+/// options can make a pyramid: tolerance > 0, max triangles ≥ 64, max zoom in
+/// [0, 30], λ factor > 0, a known geoid, threads ≥ 0, until-zoom ≥ 1, not
+/// both a subtree and an until-zoom. runTileJob checks the same; callers that
+/// do long work first (tinsmith build) call it before.
+void checkTileJobOptions(const TileJobOptions& options);
 
 struct ZoomSummary {
   int z = 0;

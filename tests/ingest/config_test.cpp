@@ -196,6 +196,100 @@ TEST(Config, BadValues) {
   EXPECT_NE(std::string(e.what()).find("two layers"), std::string::npos) << e.what();
 }
 
+TEST(Config, TilesKeysToTileJobOptions) {
+  const auto f = makeFixture("config_tiles", R"([project]
+crs = "EPSG:26912"
+
+[tiles]
+tolerance = 2.5
+max_triangles = 4096
+max_zoom = 7
+lambda = 0.1
+compression = "none"
+frame = "local"
+geoid = "egm96"
+output = "out/site.3dtiles"
+)");
+  const auto config = loadProjectConfig(f.config);
+  const TilesConfig& t = config.tiles;
+  EXPECT_EQ(t.configLine, 4);
+  EXPECT_EQ(t.job.tiler.tolerance, 2.5);
+  EXPECT_EQ(t.job.tiler.maxTriangles, 4096u);
+  EXPECT_EQ(t.job.tiler.maxZoom, 7);
+  EXPECT_EQ(t.job.tiler.lambdaFactor, 0.1);
+  EXPECT_EQ(t.job.compression, encode::Compression::None);
+  EXPECT_EQ(t.job.frame, tiles::ContentFrame::Local);
+  EXPECT_EQ(t.job.geoid, "egm96");
+  EXPECT_EQ(t.output, (f.dir / "out/site.3dtiles").lexically_normal());
+  EXPECT_EQ(config.extraTables.count("tiles"), 0u);
+
+  // An integer tolerance is a number; an absolute output stays as written.
+  const auto g = makeFixture("config_tiles_int",
+                             "[project]\ncrs = \"EPSG:26912\"\n[tiles]\ntolerance = 3\n"
+                             "output = \"/srv/tiles/site\"\n");
+  const auto other = loadProjectConfig(g.config);
+  EXPECT_EQ(other.tiles.job.tiler.tolerance, 3.0);
+  EXPECT_EQ(other.tiles.output, std::filesystem::path("/srv/tiles/site"));
+}
+
+TEST(Config, TilesKeysLeftOutAreTheTileCommandsDefaults) {
+  const auto f = makeFixture("config_tiles_defaults", "[project]\ncrs = \"EPSG:26912\"\n[tiles]\n");
+  const auto config = loadProjectConfig(f.config);
+  const TileJobOptions defaults;
+  const TileJobOptions& t = config.tiles.job;
+  EXPECT_EQ(t.tiler.tolerance, defaults.tiler.tolerance);
+  EXPECT_EQ(t.tiler.maxTriangles, defaults.tiler.maxTriangles);
+  EXPECT_FALSE(t.tiler.maxZoom.has_value());
+  EXPECT_EQ(t.tiler.lambdaFactor, defaults.tiler.lambdaFactor);
+  EXPECT_EQ(t.compression, encode::Compression::Draco);
+  EXPECT_EQ(t.frame, tiles::ContentFrame::Ecef);
+  EXPECT_EQ(t.geoid, "");
+  EXPECT_TRUE(config.tiles.output.empty());
+  EXPECT_EQ(config.tiles.configLine, 3);
+  EXPECT_EQ(
+      loadProjectConfig(makeFixture("config_no_tiles", "[project]\ncrs = \"EPSG:26912\"\n").config)
+          .tiles.configLine,
+      0);
+}
+
+TEST(Config, BadTilesKeysNameTheFileLineKeyAndValue) {
+  struct Case {
+    const char* line;
+    const char* expected;  // in the message, besides the file name
+    const char* hint;      // in the hint
+  };
+  const Case cases[] = {
+      {"tolerance = 0", "tiles.tolerance = 0: must be greater than 0", "tolerance = 1"},
+      {"tolerance = -1.5", "tiles.tolerance = -1.5: must be greater than 0", "tolerance = 1"},
+      {"tolerance = \"5\"", "tiles.tolerance must be a number, not a string (\"5\")",
+       "write a number without quotes"},
+      {"max_triangles = 10", "tiles.max_triangles = 10: must be at least 64", "32768"},
+      {"max_triangles = 1e4", "tiles.max_triangles must be an integer, not a number", ""},
+      {"max_zoom = 31", "tiles.max_zoom = 31: must be 0 to 30", "leave it out"},
+      {"max_zoom = -1", "tiles.max_zoom = -1: must be 0 to 30", ""},
+      {"lambda = 0", "tiles.lambda = 0: must be greater than 0", "0.01"},
+      {"compression = \"zstd\"", "tiles.compression = \"zstd\": unknown compression",
+       "\"draco\" | \"none\""},
+      {"frame = \"enu\"", "tiles.frame = \"enu\": unknown frame", "\"local\""},
+      {"geoid = \"egm2008\"", "tiles.geoid = \"egm2008\": unknown geoid", "egm96"},
+      {"output = \"\"", "tiles.output = \"\": is empty", ".3dtiles"},
+      {"threads = 2", "unknown key 'threads' in [tiles]", "allowed keys: compression, frame"},
+  };
+  for (const auto& c : cases) {
+    const auto e =
+        configError("config_tiles_bad",
+                    std::string("[project]\ncrs = \"EPSG:26912\"\n[tiles]\n") + c.line + "\n");
+    EXPECT_EQ(e.kind(), ErrorKind::Input) << c.line;
+    EXPECT_EQ(e.where().file, "project.toml") << c.line;
+    EXPECT_EQ(e.where().line, 4) << c.line;
+    EXPECT_NE(e.problem().find(c.expected), std::string::npos) << c.line << ": " << e.what();
+    EXPECT_NE(e.hint().find(c.hint), std::string::npos) << c.line << ": " << e.what();
+  }
+  const auto e =
+      configError("config_tiles_not_table", "tiles = 5\n[project]\ncrs = \"EPSG:26912\"\n");
+  EXPECT_NE(std::string(e.what()).find("'tiles' must be a table"), std::string::npos) << e.what();
+}
+
 TEST(Config, ProjectCrsMustBeProjectedMetres) {
   auto e = configError("config_geographic", "[project]\ncrs = \"EPSG:4326\"\n");
   EXPECT_EQ(e.where().line, 2);

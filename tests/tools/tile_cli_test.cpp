@@ -3,9 +3,9 @@
 // run and for shards merged; bad input fails clearly and leaves no store.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <fstream>
 
+#include "tests/support/hill_points.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -15,14 +15,7 @@ std::filesystem::path smallTin(const std::filesystem::path& dir) {
   const auto xyz = dir / "hill.xyz";
   {
     std::ofstream out(xyz);
-    out.precision(17);
-    for (int j = 0; j <= 30; ++j)
-      for (int i = 0; i <= 30; ++i) {
-        const double x = 430000 + i * 25.0 + (i % 3) * 1.7, y = 4515000 + j * 25.0 + (j % 4) * 1.3;
-        const double z =
-            1600 + 80 * std::exp(-(std::pow(i - 12, 2) + std::pow(j - 17, 2)) / 60.0) + 0.3 * i;
-        out << x << " " << y << " " << z << "\n";
-      }
+    writeHillPoints(out, ' ');
   }
   const auto tin = dir / "hill.tin";
   const auto r =

@@ -31,6 +31,7 @@
 #include "ingest/tinfile/atomic_file.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/output_paths.hpp"
 #include "tools/cli/progress_bar.hpp"
 
 namespace tinsmith::cli {
@@ -51,15 +52,6 @@ struct TinOptions {
   unsigned threads = 0;
   bool quiet = false;
 };
-
-void checkOutputDirectory(const std::string& path, const char* option) {
-  const std::filesystem::path p(path);
-  const auto dir = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
-  std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec))
-    throw ioError(std::string("the directory of ") + option + " '" + dir.string() + "' does not exist",
-                  {path, {}, {}, {}}, "create it first or choose another path");
-}
 
 bool isTextPolylineFile(const std::filesystem::path& p) {
   const auto ext = p.extension().string();
@@ -136,8 +128,8 @@ void run(const TinOptions& o) {
   if (plain && o.strict) throw usageError("--strict applies to config runs");
   if (!plain && o.snap) throw usageError("--snap applies to --points/--breaklines runs; set [tin] snap_tolerance in the config");
   if (o.snap && !(*o.snap >= 0)) throw usageError("--snap must be a distance in metres, 0 or more");
-  checkOutputDirectory(o.output, "-o");
-  if (!o.report.empty()) checkOutputDirectory(o.report, "--report");
+  checkOutputDirectory(o.output, "the TIN (-o)");
+  if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
 
   auto bar = terminalProgress(o.quiet);
   const ingest::Progress* p = bar.get();
@@ -146,10 +138,10 @@ void run(const TinOptions& o) {
   // triangulation is freed: no TinData copy of it is ever made.
   auto writeTin = [&o](const Mesh& mesh) { ingest::writeTinFile(o.output, mesh); };
   // The options both modes take from the command line.
-  auto build = [&](std::vector<ingest::BuildLayer> layers, ingest::BuildOptions options) {
+  auto withFlags = [&o](ingest::BuildOptions options) {
     if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
     options.threads = o.threads;
-    return ingest::buildTinInto(std::move(layers), options, writeTin, p);
+    return options;
   };
   ingest::BuildReport report;
   if (plain) {
@@ -162,17 +154,15 @@ void run(const TinOptions& o) {
     auto layers = plainLayers(o);
     const double readSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    report = build(std::move(layers), options);
+    report = ingest::buildTinInto(std::move(layers), withFlags(options), writeTin, p);
     report.times.insert(report.times.begin(), {"read", readSeconds});
     report.totalSeconds += readSeconds;
   } else {
     ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
     if (o.strict) config.tin.strict = true;
     if (o.noFlatRepair) config.tin.flatTriangleRepair = false;
-    ingest::IngestResult ingested = ingest::loadLayers(config, p);
-    auto layers = ingest::toBuildLayers(std::move(ingested.layers));
-    report = build(std::move(layers), ingest::buildOptionsFrom(config));
-    ingest::addIngestReport(report, ingested);
+    report = ingest::buildTinFromConfig(config, withFlags(ingest::buildOptionsFrom(config)),
+                                        writeTin, p);
   }
   bar.bar.reset();
   if (!o.report.empty()) {

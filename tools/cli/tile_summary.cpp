@@ -34,7 +34,8 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
   return out;
 }
 
-std::string tileSummaryJson(const ingest::TileJobSummary& s, const std::string& output) {
+nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
+                                         const std::string& output) {
   nlohmann::ordered_json j;
   j["output"] = output;
   j["tiles"] = s.tiles;
@@ -57,7 +58,11 @@ std::string tileSummaryJson(const ingest::TileJobSummary& s, const std::string& 
                      {"breakLineVertices", z.breakLineVertices}});
   }
   j["zooms"] = zooms;
-  return j.dump(2) + "\n";
+  return j;
+}
+
+std::string tileSummaryJson(const ingest::TileJobSummary& s, const std::string& output) {
+  return tileSummaryObject(s, output).dump(2) + "\n";
 }
 
 }  // namespace tinsmith::cli

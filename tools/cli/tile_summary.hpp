@@ -1,7 +1,8 @@
-// The human and JSON forms of a tiling summary, shared by tile, merge and
-// info.
+// The human and JSON forms of a tiling summary, shared by tile, merge, build
+// and info.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "ingest/tiles/tile_job.hpp"
@@ -9,6 +10,9 @@
 namespace tinsmith::cli {
 
 std::string tileSummaryText(const ingest::TileJobSummary& s);
+/// The JSON object; tileSummaryJson is its text (2-space indent, newline).
+nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
+                                         const std::string& output);
 std::string tileSummaryJson(const ingest::TileJobSummary& s, const std::string& output);
 
 }  // namespace tinsmith::cli
