@@ -28,25 +28,10 @@ struct Plane {
   }
 };
 
-/// Inexact side test, used only to cut convex polygons (the result is within
-/// rounding of the exact overlay, which is all a bound on a difference needs).
+/// Inexact side test (the result is within rounding of the exact overlay,
+/// which is all a bound on a difference needs).
 double sideOf(P2 a, P2 b, P2 p) {
   return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-}
-
-/// Clips `poly` to the left half-plane of a → b.
-void clipLeft(const std::vector<P2>& poly, P2 a, P2 b, std::vector<P2>& out) {
-  out.clear();
-  const std::size_t n = poly.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const P2 p = poly[i], q = poly[(i + 1) % n];
-    const double sp = sideOf(a, b, p), sq = sideOf(a, b, q);
-    if (sp >= 0) out.push_back(p);
-    if ((sp > 0 && sq < 0) || (sp < 0 && sq > 0)) {
-      const double t = sp / (sp - sq);
-      out.push_back({p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)});
-    }
-  }
 }
 
 }  // namespace
@@ -61,6 +46,19 @@ TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
   grid_->build(tin.triangles.size(), [&](std::size_t t, auto&& emit) {
     const Rect b = triangleBox(static_cast<std::uint32_t>(t));
     grid_->forEachCellOfBox(b.x0, b.y0, b.x1, b.y1, emit);
+  });
+  vertexGrid_.emplace(extent.x0, extent.y0, extent.x1, extent.y1, cell);
+  vertexGrid_->build(tin.vertices.size(), [&](std::size_t v, auto&& emit) {
+    emit(vertexGrid_->index(vertexGrid_->cellX(tin.vertices[v].x),
+                            vertexGrid_->cellY(tin.vertices[v].y)));
+  });
+}
+
+void TinIndex::verticesIn(const Rect& box, std::vector<std::uint32_t>& out) const {
+  out.clear();
+  if (!vertexGrid_) return;
+  vertexGrid_->forEachInBox(box.x0, box.y0, box.x1, box.y1, [&](std::uint32_t v) {
+    if (box.contains(tin_.vertices[v].xy())) out.push_back(v);
   });
 }
 
@@ -99,8 +97,26 @@ std::optional<double> TinIndex::z(Point2 p) const {
 void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const {
   out.clear();
   if (!grid_) return;
+  // The triangles along the segment, a grid cell's length at a time (the
+  // box of a long diagonal segment holds far more).
   std::vector<std::uint32_t> candidates;
-  overlapping(boundsOf(std::array{a, b}), candidates);
+  {
+    const double length = std::hypot(b.x - a.x, b.y - a.y);
+    const auto pieces =
+        static_cast<std::size_t>(std::min(1e6, std::ceil(length / grid_->cell()))) + 1;
+    for (std::size_t k = 0; k < pieces; ++k) {
+      const double s0 = static_cast<double>(k) / static_cast<double>(pieces);
+      const double s1 = static_cast<double>(k + 1) / static_cast<double>(pieces);
+      const Rect box = boundsOf(std::array{
+          Point2{a.x + s0 * (b.x - a.x), a.y + s0 * (b.y - a.y)},
+          k + 1 == pieces ? b : Point2{a.x + s1 * (b.x - a.x), a.y + s1 * (b.y - a.y)}});
+      grid_->forEachInBox(box.x0, box.y0, box.x1, box.y1, [&](std::uint32_t t) {
+        if (triangleBox(t).overlaps(box)) candidates.push_back(t);
+      });
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  }
   // Each triangle's stretch of the segment, by clipping t ∈ [0, 1] to the
   // left of its three (CCW) edges; relative to a for precision.
   struct Stretch {
@@ -155,49 +171,50 @@ std::vector<SurfaceDifference> triangleDifferences(
   std::vector<SurfaceDifference> result(triangles.size());
   if (triangles.empty()) return result;
   const TinData& tin = index.tin();
-  // Work relative to the first vertex: UTM-sized coordinates lose less.
-  const double ox = vertices[triangles[0][0]].x, oy = vertices[triangles[0][0]].y;
-  auto local = [&](const Point3& p) { return P2{p.x - ox, p.y - oy}; };
-  std::vector<std::uint32_t> candidates;
-  std::vector<P2> poly, next;
+  std::vector<TinIndex::SectionPoint> section;
+  std::vector<std::uint32_t> inside;
   for (std::size_t i = 0; i < triangles.size(); ++i) {
     const auto& m = triangles[i];
     SurfaceDifference& r = result[i];
-    const P2 a = local(vertices[m[0]]), b = local(vertices[m[1]]), c = local(vertices[m[2]]);
-    const Plane meshPlane(a, b, c, vertices[m[0]].z, vertices[m[1]].z, vertices[m[2]].z);
-    index.overlapping(boundsOf(std::array{vertices[m[0]], vertices[m[1]], vertices[m[2]]}),
-                      candidates);
-    for (std::uint32_t k : candidates) {
-      const auto& t = tin.triangles[k];
-      const P2 ta = local(tin.vertices[t[0]]), tb = local(tin.vertices[t[1]]),
-               tc = local(tin.vertices[t[2]]);
-      poly = {ta, tb, tc};
-      clipLeft(poly, a, b, next);
-      clipLeft(next, b, c, poly);
-      clipLeft(poly, c, a, next);
-      if (next.empty()) continue;
-      const Plane tinPlane(ta, tb, tc, tin.vertices[t[0]].z, tin.vertices[t[1]].z,
-                           tin.vertices[t[2]].z);
+    auto consider = [&](Point2 p, double zm, double zt) {
+      const double d = std::abs(zm - zt);
       ++r.pieces;
-      for (const P2& p : next) {
-        const double zm = meshPlane.at(p), zt = tinPlane.at(p);
-        const double d = std::abs(zm - zt);
-        if (d > r.maxAbs) {
-          r.maxAbs = d;
-          r.at = {p.x + ox, p.y + oy};
-          r.meshZ = zm;
-          r.tinZ = zt;
-          r.tinTriangle = k;
-        }
-        // Clipping keeps a TIN corner inside the mesh triangle bit for bit.
-        for (int i = 0; i < 3; ++i) {
-          const P2 corner = i == 0 ? ta : i == 1 ? tb : tc;
-          if (p.x == corner.x && p.y == corner.y && d > r.vertexAbs) {
-            r.vertexAbs = d;
-            r.vertex = {tin.vertices[t[i]].x, tin.vertices[t[i]].y};
-            r.vertexZ = tin.vertices[t[i]].z;
-          }
-        }
+      if (d > r.maxAbs) {
+        r.maxAbs = d;
+        r.at = p;
+        r.meshZ = zm;
+        r.tinZ = zt;
+      }
+      return d;
+    };
+    // The overlay's vertices on the triangle's edges: its corners (where the
+    // TIN has them) and every crossing with a TIN edge, from the TIN's section
+    // along each edge; the mesh is linear along it.
+    for (int e = 0; e < 3; ++e) {
+      const Point3& p = vertices[m[e]];
+      const Point3& q = vertices[m[(e + 1) % 3]];
+      index.section(p.xy(), q.xy(), section);
+      for (const auto& sp : section) {
+        if (std::isnan(sp.z)) continue;
+        consider({p.x + sp.t * (q.x - p.x), p.y + sp.t * (q.y - p.y)}, p.z + sp.t * (q.z - p.z),
+                 sp.z);
+      }
+    }
+    // The TIN vertices inside, against the triangle's plane (relative to its
+    // first corner: UTM-sized coordinates lose less).
+    const P2 o{vertices[m[0]].x, vertices[m[0]].y};
+    auto local = [&](const Point3& p) { return P2{p.x - o.x, p.y - o.y}; };
+    const P2 a = local(vertices[m[0]]), b = local(vertices[m[1]]), c = local(vertices[m[2]]);
+    const Plane plane(a, b, c, vertices[m[0]].z, vertices[m[1]].z, vertices[m[2]].z);
+    index.verticesIn(boundsOf(std::array{vertices[m[0]], vertices[m[1]], vertices[m[2]]}), inside);
+    for (std::uint32_t v : inside) {
+      const P2 p = local(tin.vertices[v]);
+      if (sideOf(a, b, p) < 0 || sideOf(b, c, p) < 0 || sideOf(c, a, p) < 0) continue;
+      const double d = consider(tin.vertices[v].xy(), plane.at(p), tin.vertices[v].z);
+      if (d > r.vertexAbs) {
+        r.vertexAbs = d;
+        r.vertex = tin.vertices[v].xy();
+        r.vertexZ = tin.vertices[v].z;
       }
     }
   }

@@ -3,11 +3,12 @@
 // (each piece of a mesh triangle cut by the TIN triangles under it), so its
 // largest absolute value is taken at a vertex of the overlay: a TIN vertex
 // inside a mesh triangle, a mesh vertex inside a TIN triangle, or a crossing of
-// a TIN edge with a mesh edge. Each mesh triangle is intersected with every TIN
-// triangle it overlaps (convex polygons: Sutherland–Hodgman) and both planes are
-// evaluated at the vertices of the intersection. The result is a bound up to
-// the rounding of those crossings (about 1e-12 of the tile's size), not a
-// sample. Only the overlap of the two domains counts.
+// a TIN edge with a mesh edge. So per mesh triangle: the TIN's section along
+// each of its edges (the crossings, and its corners where the TIN has them)
+// against the mesh's line, and the TIN vertices inside it against the mesh's
+// plane — work in proportion to the overlay's vertices, not its cells. The
+// result is a bound up to the rounding of those crossings (about 1e-12 of the
+// tile's size), not a sample. Only the overlap of the two domains counts.
 #pragma once
 
 #include <array>
@@ -31,6 +32,8 @@ class TinIndex {
   [[nodiscard]] const TinData& tin() const { return tin_; }
   /// The triangles whose bounding boxes meet `box`, each once, ascending.
   void overlapping(const Rect& box, std::vector<std::uint32_t>& out) const;
+  /// The vertices inside `box` (closed).
+  void verticesIn(const Rect& box, std::vector<std::uint32_t>& out) const;
 
   /// A point of the TIN's section along a segment: the parameter t ∈ [0, 1]
   /// from a to b and the TIN's z there. z is NaN at a marker that starts a gap
@@ -52,15 +55,15 @@ class TinIndex {
  private:
   [[nodiscard]] Rect triangleBox(std::uint32_t t) const;
   const TinData& tin_;
-  std::optional<CellGrid> grid_;
+  std::optional<CellGrid> grid_;        // triangles by their boxes
+  std::optional<CellGrid> vertexGrid_;  // vertices
 };
 
 struct SurfaceDifference {
   double maxAbs = 0.0;  ///< max |mesh − TIN| over the overlap (m)
   Point2 at;            ///< where it is reached
   double meshZ = 0.0, tinZ = 0.0;
-  std::uint32_t tinTriangle = 0;  ///< the TIN triangle the largest difference lies in
-  std::size_t pieces = 0;  ///< overlay cells visited
+  std::size_t pieces = 0;  ///< overlay vertices visited
   /// The largest difference at a TIN vertex of the overlay (0 when none), where
   /// and the TIN's z there.
   double vertexAbs = 0.0;

@@ -29,7 +29,10 @@ class Refiner {
  public:
   Refiner(TileSurface& tile, std::vector<SurfaceDifference> differences, const TinIndex& tin,
           const RefineOptions& options)
-      : tile_(tile), tri_(tile.triangles), tin_(tin), options_(options),
+      : tile_(tile),
+        tri_(tile.triangles),
+        tin_(tin),
+        options_(options),
         diff_(std::move(differences)) {
     const std::size_t nt = tri_.size();
     twin_.assign(3 * nt, kNone);
@@ -247,7 +250,8 @@ class Refiner {
       h = twin_[prev(h)];
     } while (h != kNone && h != start);
     if (h == kNone) {
-      for (std::uint32_t g = twin_[start]; g != kNone; g = twin_[next(g)]) touched_.push_back(g / 3);
+      for (std::uint32_t g = twin_[start]; g != kNone; g = twin_[next(g)])
+        touched_.push_back(g / 3);
     }
     return true;
   }
@@ -273,11 +277,19 @@ class Refiner {
     const Rect& rect = tile_.bounds;
     const double margin = options_.sideMargin;
     Point2 p = d.vertexAbs > options_.tolerance ? d.vertex : d.at;
+    // On a side the error is the side's own (its simplification), which the
+    // neighbour shares: nothing in this tile changes it. Beside one, the
+    // point comes in to the margin.
+    const double onSide = 1e-9 * rect.width();
+    if (p.x <= rect.x0 + onSide || p.x >= rect.x1 - onSide || p.y <= rect.y0 + onSide ||
+        p.y >= rect.y1 - onSide)
+      return false;
     p.x = std::clamp(p.x, rect.x0 + margin, rect.x1 - margin);
     p.y = std::clamp(p.y, rect.y0 + margin, rect.y1 - margin);
     // p by its barycentric weights; an edge whose weight is within rounding
     // of zero (or below: p computed a rounding outside) is the edge p is on.
-    const double area = (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
+    const double area =
+        (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
     if (!(area > 0)) return false;
     auto weight = [&](Point2 q, int i) {  // of corner i: the edge opposite it is i + 1
       const Point2& a = c[(i + 1) % 3];
@@ -311,11 +323,13 @@ class Refiner {
       // Beside a side: a little into the triangle instead (sides are shared).
       const Point2 a = c[edge], b = c[(edge + 1) % 3], o = c[(edge + 2) % 3];
       const double dx = b.x - a.x, dy = b.y - a.y;
-      const double u = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.05, 0.95);
+      const double u =
+          std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.05, 0.95);
       const Point2 foot{a.x + u * dx, a.y + u * dy};
       const double s = std::min(0.05, 2 * margin / std::max(longest, 1e-300) + 1e-6);
       const Point2 q{foot.x + s * (o.x - foot.x), foot.y + s * (o.y - foot.y)};
-      if (orient2d(c[0], c[1], q) <= 0 || orient2d(c[1], c[2], q) <= 0 || orient2d(c[2], c[0], q) <= 0)
+      if (orient2d(c[0], c[1], q) <= 0 || orient2d(c[1], c[2], q) <= 0 ||
+          orient2d(c[2], c[0], q) <= 0)
         return false;
       const auto z = tin_.z(q);
       return z && insertInside(t, {q.x, q.y, *z});
@@ -323,7 +337,8 @@ class Refiner {
     // On an edge that may be split: at p's foot on it, on the TIN.
     const Point3 a = tile_.vertices[v[edge]], b = tile_.vertices[v[(edge + 1) % 3]];
     const double dx = b.x - a.x, dy = b.y - a.y;
-    const double u = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 1e-6, 1 - 1e-6);
+    const double u =
+        std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 1e-6, 1 - 1e-6);
     const Point2 foot{a.x + u * dx, a.y + u * dy};
     auto z = tin_.z(foot);
     if (!z) return false;

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/tin/hull_trim.hpp"
 #include "ingest/base/progress.hpp"
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/build/text_polylines.hpp"
@@ -49,6 +50,7 @@ struct TinOptions {
   bool strict = false;
   bool noFlatRepair = false;
   bool fullValidation = false;
+  std::optional<double> trimHull;
   unsigned threads = 0;
   bool quiet = false;
 };
@@ -128,6 +130,8 @@ void run(const TinOptions& o) {
   if (plain && o.strict) throw usageError("--strict applies to config runs");
   if (!plain && o.snap) throw usageError("--snap applies to --points/--breaklines runs; set [tin] snap_tolerance in the config");
   if (o.snap && !(*o.snap >= 0)) throw usageError("--snap must be a distance in metres, 0 or more");
+  if (o.trimHull && !(*o.trimHull > 0))
+    throw usageError("--trim-hull must be a length in metres greater than 0");
   checkOutputDirectory(o.output, "the TIN (-o)");
   if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
 
@@ -136,7 +140,14 @@ void run(const TinOptions& o) {
 
   // The TIN is written straight from the triangulation's mesh, before the
   // triangulation is freed: no TinData copy of it is ever made.
-  auto writeTin = [&o](const Mesh& mesh) { ingest::writeTinFile(o.output, mesh); };
+  // With --trim-hull the mesh is copied once, trimmed and written.
+  std::size_t trimmed = 0;
+  auto writeTin = [&o, &trimmed](const Mesh& mesh) {
+    if (!o.trimHull) return ingest::writeTinFile(o.output, mesh);
+    TinData tin = mesh.toTinData();
+    trimmed = trimHull(tin, *o.trimHull);
+    ingest::writeTinFile(o.output, tin);
+  };
   // The options both modes take from the command line.
   auto withFlags = [&o](ingest::BuildOptions options) {
     if (o.fullValidation) options.validation = ingest::BuildValidation::Full;
@@ -174,7 +185,11 @@ void run(const TinOptions& o) {
       throw;
     }
   }
-  if (!o.quiet) std::cerr << report.summary() << "wrote " << o.output << "\n";
+  if (!o.quiet) {
+    std::cerr << report.summary();
+    if (o.trimHull) std::cerr << "  hull trimmed: " << trimmed << " triangles removed\n";
+    std::cerr << "wrote " << o.output << "\n";
+  }
 }
 
 }  // namespace
@@ -193,6 +208,10 @@ void addTinCommand(CLI::App& app) {
   cmd->add_option("--crs", opt->crs, "Plain mode: the CRS to record in the TIN (e.g. EPSG:26912)");
   cmd->add_flag("--strict", opt->strict, "Config mode: crossing contours are fatal, not just reported");
   cmd->add_flag("--no-flat-repair", opt->noFlatRepair, "Config mode: keep flat triangles");
+  cmd->add_option("--trim-hull", opt->trimHull,
+                  "Remove the convex hull's slivers around non-convex data (a projected DEM's "
+                  "curved edges): hull triangles whose outer edge is longer than this many "
+                  "metres, from the outside in (e.g. 3 × the grid spacing)");
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
