@@ -88,6 +88,70 @@ class CellGrid {
   void forEachInBox(double x0, double y0, double x1, double y1, F&& f) const {
     forEachCellOfBox(x0, y0, x1, y1, [&](std::size_t c) { forEachInCell(c, f); });
   }
+  /// Calls visit(cell index) for every cell the segment a → b passes through
+  /// (a cell it only grazes at a corner may be visited too), in order from a,
+  /// each once: a grid walk (Amanatides & Woo), not the cells of its box.
+  template <typename Visit>
+  void forEachCellOfSegment(double ax, double ay, double bx, double by, Visit&& visit) const {
+    // Clipped to the grid's square first (Liang–Barsky): outside it there is
+    // nothing to visit, and the walk must start and end in the cells the
+    // segment is in, not in border cells it was clamped to.
+    {
+      double t0 = 0.0, t1 = 1.0;
+      const double dx = bx - ax, dy = by - ay;
+      const double lo[2] = {minX_, minY_};
+      const double hi[2] = {minX_ + static_cast<double>(nx_) * cell_,
+                            minY_ + static_cast<double>(ny_) * cell_};
+      const double p[2] = {ax, ay}, d[2] = {dx, dy};
+      for (int axis = 0; axis < 2; ++axis) {
+        if (d[axis] == 0) {
+          if (p[axis] < lo[axis] || p[axis] > hi[axis]) return;
+          continue;
+        }
+        double ta = (lo[axis] - p[axis]) / d[axis], tb = (hi[axis] - p[axis]) / d[axis];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+      }
+      if (t0 > t1) return;
+      const double cax = ax + t0 * dx, cay = ay + t0 * dy;
+      bx = ax + t1 * dx;
+      by = ay + t1 * dy;
+      ax = cax;
+      ay = cay;
+    }
+    std::int64_t cx = cellX(ax), cy = cellY(ay);
+    const std::int64_t ex = cellX(bx), ey = cellY(by);
+    const double dx = bx - ax, dy = by - ay;
+    const std::int64_t sx = dx > 0 ? 1 : -1, sy = dy > 0 ? 1 : -1;
+    // The segment's parameter where it crosses the next vertical and
+    // horizontal grid line, and how far apart those crossings are.
+    auto firstCrossing = [&](double a, double d, std::int64_t c, double origin, std::int64_t s) {
+      if (d == 0) return HUGE_VAL;
+      const double line = origin + static_cast<double>(c + (s > 0 ? 1 : 0)) * cell_;
+      return (line - a) / d;
+    };
+    double tx = firstCrossing(ax, dx, cx, minX_, sx), ty = firstCrossing(ay, dy, cy, minY_, sy);
+    const double stepX = dx != 0 ? cell_ / std::abs(dx) : HUGE_VAL;
+    const double stepY = dy != 0 ? cell_ / std::abs(dy) : HUGE_VAL;
+    // One step per cell boundary between the ends' cells; a step that would
+    // overshoot the end's column or row (rounding at a grid corner) goes the
+    // other way.
+    const std::int64_t steps = std::abs(ex - cx) + std::abs(ey - cy);
+    visit(index(cx, cy));
+    for (std::int64_t k = 0; k < steps; ++k) {
+      const bool xDone = cx == ex, yDone = cy == ey;
+      if (!xDone && (yDone || tx < ty)) {
+        cx = std::clamp<std::int64_t>(cx + sx, 0, nx_ - 1);
+        tx += stepX;
+      } else {
+        cy = std::clamp<std::int64_t>(cy + sy, 0, ny_ - 1);
+        ty += stepY;
+      }
+      visit(index(cx, cy));
+    }
+  }
+
   /// Calls f(item) for each item in the cells the box [x-r, x+r] x [y-r, y+r] overlaps.
   template <typename F>
   void forEachNear(double x, double y, double r, F&& f) const {

@@ -97,26 +97,14 @@ std::optional<double> TinIndex::z(Point2 p) const {
 void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const {
   out.clear();
   if (!grid_) return;
-  // The triangles along the segment, a grid cell's length at a time (the
+  // The triangles listed in the grid cells the segment passes through (the
   // box of a long diagonal segment holds far more).
   std::vector<std::uint32_t> candidates;
-  {
-    const double length = std::hypot(b.x - a.x, b.y - a.y);
-    const auto pieces =
-        static_cast<std::size_t>(std::min(1e6, std::ceil(length / grid_->cell()))) + 1;
-    for (std::size_t k = 0; k < pieces; ++k) {
-      const double s0 = static_cast<double>(k) / static_cast<double>(pieces);
-      const double s1 = static_cast<double>(k + 1) / static_cast<double>(pieces);
-      const Rect box = boundsOf(std::array{
-          Point2{a.x + s0 * (b.x - a.x), a.y + s0 * (b.y - a.y)},
-          k + 1 == pieces ? b : Point2{a.x + s1 * (b.x - a.x), a.y + s1 * (b.y - a.y)}});
-      grid_->forEachInBox(box.x0, box.y0, box.x1, box.y1, [&](std::uint32_t t) {
-        if (triangleBox(t).overlaps(box)) candidates.push_back(t);
-      });
-    }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-  }
+  grid_->forEachCellOfSegment(a.x, a.y, b.x, b.y, [&](std::size_t c) {
+    grid_->forEachInCell(c, [&](std::uint32_t t) { candidates.push_back(t); });
+  });
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
   // Each triangle's stretch of the segment, by clipping t ∈ [0, 1] to the
   // left of its three (CCW) edges; relative to a for precision.
   struct Stretch {
