@@ -6,7 +6,8 @@
 # the Khronos validator, draco3dgltf against the twin and the tileset rules
 # (check_tiles.mjs), the archive against 3d-tiles-tools (check_archive.mjs)
 # and CesiumJS in headless Chromium (cesium_smoke.mjs, screenshot kept in
-# OUT). Usage: check_demo_tiles.sh TINSMITH_BINARY OUT_DIR
+# OUT); then a plan view of each zoom's mesh (draw_zooms.mjs, OUT/zoom-Z.png,
+# about 5 s). Usage: check_demo_tiles.sh TINSMITH_BINARY OUT_DIR
 set -euo pipefail
 bin=$1
 out=$2
@@ -32,3 +33,4 @@ node "$here/check_tiles.mjs" "$draco" --plain "$plain"
 node "$here/check_tiles.mjs" "$plain"
 node "$here/check_archive.mjs" "$out/red-butte.3dtiles" "$draco"
 timeout 300 node "$here/cesium_smoke.mjs" "$draco" --out "$out/cesium.png" --timeout 180
+node "$here/draw_zooms.mjs" "$plain" "$out/zoom-"
