@@ -136,6 +136,38 @@ TEST(TinCli, TheTinIsTheSameForAnyThreadCount) {
   }
 }
 
+// A grid whose west edge bows inwards, as a projected DEM's does: the hull
+// closes it with slivers that --trim-hull removes, every point staying a
+// vertex and the result a valid TIN with one boundary.
+TEST(TinCli, TrimHullRemovesTheSliversOfACurvedEdge) {
+  const fs::path dir = test::scratchDir("cli-trim-hull");
+  std::string pts;
+  char buf[128];
+  for (int j = 0; j < 30; ++j) {
+    const double bow = 300 * std::sin(3.14159265358979 * j / 29.0);
+    for (int i = 0; i < 30; ++i) {
+      std::snprintf(buf, sizeof buf, "%.3f %.3f %.3f\n", 431000 + 90.0 * i + bow, 4512000 + 90.0 * j,
+                    1500.0 + i);
+      pts += buf;
+    }
+  }
+  writeText(dir / "grid.xyz", pts);
+  const fs::path plain = dir / "plain.tin", trimmed = dir / "trimmed.tin";
+  ASSERT_EQ(runTinsmith("tin -q --points " + (dir / "grid.xyz").string() + " -o " + plain.string()).exitCode, 0);
+  auto r = runTinsmith("tin --points " + (dir / "grid.xyz").string() + " --trim-hull 270 -o " +
+                       trimmed.string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("hull trimmed: "), std::string::npos) << r.err;
+  const auto before = nlohmann::json::parse(runTinsmith("info " + plain.string() + " --json").out);
+  const auto after = nlohmann::json::parse(runTinsmith("info " + trimmed.string() + " --json").out);
+  EXPECT_EQ(after["vertices"], 900);
+  EXPECT_LT(after["triangles"].get<int>(), before["triangles"].get<int>());
+  r = runTinsmith("validate " + trimmed.string());
+  EXPECT_EQ(r.exitCode, 0) << r.out << r.err;
+  r = runTinsmith("tin --points " + (dir / "grid.xyz").string() + " --trim-hull 0 -o " + trimmed.string());
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+}
+
 TEST(TinCli, InfoAndQueryDescribeTheTin) {
   const auto in = makePlainInputs("cli-info");
   const fs::path tin = in.dir / "out.tin";
