@@ -83,7 +83,8 @@ std::optional<double> TinIndex::z(Point2 p) const {
   for (std::uint32_t k : candidates) {
     const auto& tri = tin_.triangles[k];
     std::array<P2, 3> c{};
-    for (int i = 0; i < 3; ++i) c[i] = {tin_.vertices[tri[i]].x - p.x, tin_.vertices[tri[i]].y - p.y};
+    for (int i = 0; i < 3; ++i)
+      c[i] = {tin_.vertices[tri[i]].x - p.x, tin_.vertices[tri[i]].y - p.y};
     bool inside = true;
     for (int i = 0; i < 3 && inside; ++i) inside = sideOf(c[i], c[(i + 1) % 3], {0.0, 0.0}) >= 0;
     if (!inside) continue;
@@ -153,14 +154,52 @@ void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const
   }
 }
 
+namespace {
+
+EdgeDifference edgeDifference(Point3 p, Point3 q, const TinIndex& index,
+                              std::vector<TinIndex::SectionPoint>& section) {
+  if (q.x < p.x || (q.x == p.x && q.y < p.y)) std::swap(p, q);
+  EdgeDifference r;
+  index.section(p.xy(), q.xy(), section);
+  for (const auto& sp : section) {
+    if (std::isnan(sp.z)) continue;
+    ++r.points;
+    const double zm = p.z + sp.t * (q.z - p.z);
+    const double d = std::abs(zm - sp.z);
+    if (d > r.maxAbs) {
+      r.maxAbs = d;
+      r.at = {p.x + sp.t * (q.x - p.x), p.y + sp.t * (q.y - p.y)};
+      r.meshZ = zm;
+      r.tinZ = sp.z;
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
 std::vector<SurfaceDifference> triangleDifferences(
     std::span<const Point3> vertices, std::span<const std::array<std::uint32_t, 3>> triangles,
-    const TinIndex& index) {
+    const TinIndex& index, EdgeDifferenceCache* cache) {
   std::vector<SurfaceDifference> result(triangles.size());
   if (triangles.empty()) return result;
   const TinData& tin = index.tin();
   std::vector<TinIndex::SectionPoint> section;
   std::vector<std::uint32_t> inside;
+  if (cache && cache->generation_.size() < vertices.size())
+    cache->generation_.resize(vertices.size(), 0);
+  auto edge = [&](std::uint32_t a, std::uint32_t b) {
+    if (!cache) return edgeDifference(vertices[a], vertices[b], index, section);
+    const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
+    const std::uint64_t key = (std::uint64_t{lo} << 32) | hi;
+    const std::uint32_t ga = cache->generation_[lo], gb = cache->generation_[hi];
+    auto [it, fresh] = cache->edges_.try_emplace(key);
+    auto& entry = it->second;
+    if (fresh || entry.generationA != ga || entry.generationB != gb) {
+      entry = {edgeDifference(vertices[a], vertices[b], index, section), ga, gb};
+    }
+    return entry.difference;
+  };
   for (std::size_t i = 0; i < triangles.size(); ++i) {
     const auto& m = triangles[i];
     SurfaceDifference& r = result[i];
@@ -179,13 +218,13 @@ std::vector<SurfaceDifference> triangleDifferences(
     // TIN has them) and every crossing with a TIN edge, from the TIN's section
     // along each edge; the mesh is linear along it.
     for (int e = 0; e < 3; ++e) {
-      const Point3& p = vertices[m[e]];
-      const Point3& q = vertices[m[(e + 1) % 3]];
-      index.section(p.xy(), q.xy(), section);
-      for (const auto& sp : section) {
-        if (std::isnan(sp.z)) continue;
-        consider({p.x + sp.t * (q.x - p.x), p.y + sp.t * (q.y - p.y)}, p.z + sp.t * (q.z - p.z),
-                 sp.z);
+      const EdgeDifference d = edge(m[e], m[(e + 1) % 3]);
+      r.pieces += d.points;
+      if (d.maxAbs > r.maxAbs) {
+        r.maxAbs = d.maxAbs;
+        r.at = d.at;
+        r.meshZ = d.meshZ;
+        r.tinZ = d.tinZ;
       }
     }
     // The TIN vertices inside, against the triangle's plane (relative to its

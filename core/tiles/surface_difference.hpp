@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -71,12 +72,46 @@ struct SurfaceDifference {
   double vertexZ = 0.0;
 };
 
+/// The largest difference along a mesh edge p → q (z linear from p.z to q.z)
+/// against the TIN's section under it: the same doubles whichever end comes
+/// first (the section is taken from the lesser end in x, then y).
+struct EdgeDifference {
+  double maxAbs = 0.0;
+  Point2 at;
+  double meshZ = 0.0, tinZ = 0.0;
+  std::size_t points = 0;  ///< section points visited
+};
+
+/// Edge differences remembered by their end vertices (ids into the
+/// `vertices` the triangles index), for a caller that measures triangles
+/// sharing edges again and again (a mesh refined in place). forget(v) when
+/// vertex v moves or changes z.
+class EdgeDifferenceCache {
+ public:
+  void forget(std::uint32_t v) {
+    if (v < generation_.size()) ++generation_[v];
+  }
+
+ private:
+  friend std::vector<SurfaceDifference> triangleDifferences(
+      std::span<const Point3>, std::span<const std::array<std::uint32_t, 3>>, const TinIndex&,
+      EdgeDifferenceCache*);
+  struct Entry {
+    EdgeDifference difference;
+    std::uint32_t generationA, generationB;
+  };
+  std::unordered_map<std::uint64_t, Entry> edges_;
+  std::vector<std::uint32_t> generation_;
+};
+
 /// The difference of a triangle mesh (CCW triangles over `vertices`) and the
 /// indexed TIN within each mesh triangle, in the triangles' order (maxAbs 0
-/// and `at` unset for a triangle outside the TIN).
+/// and `at` unset for a triangle outside the TIN). With a cache, an edge
+/// measured before (same ends, neither forgotten since) is not measured again;
+/// the results are the same doubles.
 std::vector<SurfaceDifference> triangleDifferences(
     std::span<const Point3> vertices, std::span<const std::array<std::uint32_t, 3>> triangles,
-    const TinIndex& tin);
+    const TinIndex& tin, EdgeDifferenceCache* cache = nullptr);
 
 /// The largest of triangleDifferences (pieces summed).
 SurfaceDifference maxVerticalDifference(std::span<const Point3> vertices,

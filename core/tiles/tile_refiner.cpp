@@ -27,13 +27,12 @@ enum class EdgeKind : std::uint8_t {
 
 class Refiner {
  public:
-  Refiner(TileSurface& tile, std::vector<SurfaceDifference> differences, const TinIndex& tin,
-          const RefineOptions& options)
+  Refiner(TileSurface& tile, const TinIndex& tin, const RefineOptions& options)
       : tile_(tile),
         tri_(tile.triangles),
         tin_(tin),
         options_(options),
-        diff_(std::move(differences)) {
+        diff_(triangleDifferences(tile.vertices, tile.triangles, tin, &edges_)) {
     const std::size_t nt = tri_.size();
     twin_.assign(3 * nt, kNone);
     kind_.assign(3 * nt, EdgeKind::Free);
@@ -241,6 +240,7 @@ class Refiner {
     if (!z) return false;
     tile_.vertices[v].z = *z;
     tile_.flags[v] |= kHeld | kPinned;
+    edges_.forget(v);
     // The triangles around v: counter-clockwise from vout, then clockwise
     // when a boundary stops the first walk.
     const std::uint32_t start = vout_[v];
@@ -355,7 +355,7 @@ class Refiner {
     touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
     batch_.clear();
     for (std::uint32_t t : touched_) batch_.push_back(tri_[t]);
-    const auto fresh = triangleDifferences(tile_.vertices, batch_, tin_);
+    const auto fresh = triangleDifferences(tile_.vertices, batch_, tin_, &edges_);
     for (std::size_t k = 0; k < touched_.size(); ++k) {
       const std::uint32_t t = touched_[k];
       diff_[t] = fresh[k];
@@ -385,6 +385,7 @@ class Refiner {
   std::vector<std::array<std::uint32_t, 3>>& tri_;
   const TinIndex& tin_;
   RefineOptions options_;
+  EdgeDifferenceCache edges_;  // before diff_, which the constructor measures with it
   std::vector<SurfaceDifference> diff_;
   std::vector<std::uint32_t> twin_;
   std::vector<EdgeKind> kind_;
@@ -397,9 +398,8 @@ class Refiner {
 
 }  // namespace
 
-std::size_t refineTile(TileSurface& tile, std::vector<SurfaceDifference> differences,
-                       const TinIndex& tin, const RefineOptions& options) {
-  Refiner refiner(tile, std::move(differences), tin, options);
+std::size_t refineTile(TileSurface& tile, const TinIndex& tin, const RefineOptions& options) {
+  Refiner refiner(tile, tin, options);
   return refiner.run();
 }
 

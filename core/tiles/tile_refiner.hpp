@@ -39,11 +39,11 @@ struct RefineOptions {
 };
 
 /// Refines `tile` (a constrained Delaunay triangulation: CCW triangles,
-/// heldEdges, flags as TileSurface documents) in place. `differences` are the
-/// exact differences of its triangles (triangleDifferences, same order).
+/// heldEdges, riverEdges, flags as TileSurface documents) in place. Each
+/// triangle's exact difference (triangleDifferences) is measured once and
+/// again only when the triangle changes; an edge's, once for its life.
 /// Sets tile.error and tile.errorAt from the final triangles and returns how
 /// many vertices it inserted or held.
-std::size_t refineTile(TileSurface& tile, std::vector<SurfaceDifference> differences,
-                       const TinIndex& tin, const RefineOptions& options);
+std::size_t refineTile(TileSurface& tile, const TinIndex& tin, const RefineOptions& options);
 
 }  // namespace tinsmith::tiles

@@ -277,8 +277,7 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   refine.tolerance = zd.tolerance;
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = 1e-4 * rect.width();
-  auto differences = triangleDifferences(tile.vertices, tile.triangles, index_);
-  tile.heldPoints = refineTile(tile, std::move(differences), index_, refine);
+  tile.heldPoints = refineTile(tile, index_, refine);
   return tile;
 }
 

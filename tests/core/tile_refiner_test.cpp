@@ -153,8 +153,7 @@ TEST(TileRefiner, MeetsTheToleranceWithAValidMeshAndTheExactError) {
     options.tolerance = tolerance;
     options.maxTriangles = 100000;
     options.sideMargin = 1e-4 * kSize;
-    const std::size_t added =
-        refineTile(tile, triangleDifferences(tile.vertices, tile.triangles, tin), tin, options);
+    const std::size_t added = refineTile(tile, tin, options);
     EXPECT_GT(added, 0u);
     EXPECT_GT(tile.triangles.size(), before);
     EXPECT_LE(tile.error, tolerance) << tile.triangles.size() << " triangles";
@@ -179,7 +178,7 @@ TEST(TileRefiner, TheRiverKeepsDescendingThroughItsNewVertices) {
   options.tolerance = 0.5;
   options.maxTriangles = 4000;
   options.sideMargin = 1e-4 * kSize;
-  refineTile(tile, triangleDifferences(tile.vertices, tile.triangles, tin), tin, options);
+  refineTile(tile, tin, options);
   // The river's vertices, west to east, from its edges.
   std::map<double, double> river;
   for (std::size_t t = 0; t < tile.triangles.size(); ++t) {
@@ -206,7 +205,7 @@ TEST(TileRefiner, StopsAtTheTriangleBudgetAndSaysWhatItReached) {
   options.tolerance = 1e-6;
   options.maxTriangles = 600;
   options.sideMargin = 1e-4 * kSize;
-  refineTile(tile, triangleDifferences(tile.vertices, tile.triangles, tin), tin, options);
+  refineTile(tile, tin, options);
   EXPECT_LE(tile.triangles.size(), 600u + 2);  // the last split adds at most 2 over
   EXPECT_GT(tile.error, options.tolerance);
   EXPECT_EQ(tile.error, maxVerticalDifference(tile.vertices, tile.triangles, tin).maxAbs);
