@@ -319,21 +319,9 @@ class Refiner {
       return z && insertInside(t, {p.x, p.y, *z});
     }
     const std::uint32_t h = 3 * t + static_cast<std::uint32_t>(edge);
-    if (kind_[h] == EdgeKind::Side) {
-      // Beside a side: a little into the triangle instead (sides are shared).
-      const Point2 a = c[edge], b = c[(edge + 1) % 3], o = c[(edge + 2) % 3];
-      const double dx = b.x - a.x, dy = b.y - a.y;
-      const double u =
-          std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.05, 0.95);
-      const Point2 foot{a.x + u * dx, a.y + u * dy};
-      const double s = std::min(0.05, 2 * margin / std::max(longest, 1e-300) + 1e-6);
-      const Point2 q{foot.x + s * (o.x - foot.x), foot.y + s * (o.y - foot.y)};
-      if (orient2d(c[0], c[1], q) <= 0 || orient2d(c[1], c[2], q) <= 0 ||
-          orient2d(c[2], c[0], q) <= 0)
-        return false;
-      const auto z = tin_.z(q);
-      return z && insertInside(t, {q.x, q.y, *z});
-    }
+    // p keeps the margin from the sides, so a side edge is never the one it is
+    // on; were it, the side stays as it is.
+    if (kind_[h] == EdgeKind::Side) return false;
     // On an edge that may be split: at p's foot on it, on the TIN.
     const Point3 a = tile_.vertices[v[edge]], b = tile_.vertices[v[(edge + 1) % 3]];
     const double dx = b.x - a.x, dy = b.y - a.y;

@@ -16,7 +16,8 @@
 //   - inside a triangle: a new vertex on the TIN (the worst TIN vertex of the
 //     triangle when that one misses the tolerance too, else the worst point).
 // A point never goes onto a tile side, nor closer to one than `sideMargin`
-// (sides are shared with the neighbouring tile bit for bit).
+// (sides are shared with the neighbouring tile bit for bit); an error on a
+// side is the side's own, left as it is.
 //
 // Every new vertex lies on the TIN, so the mesh converges to the TIN at
 // worst; the free vertices keep their fitted z. Deterministic: the same tile
