@@ -1,0 +1,160 @@
+#include "server/app/tileset_catalog.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/base/error.hpp"
+#include "ingest/tinfile/tin_file.hpp"
+#include "server/http/route.hpp"
+
+namespace tinsmith::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kBuildKey = "tinsmith/build.json";
+constexpr const char* kTinKey = "tinsmith/terrain.tin";
+
+nlohmann::json parseStoredJson(const store::TileStore& s, const std::string& key) {
+  const auto text = s.get(key);
+  if (!text) return nlohmann::json();
+  auto j = nlohmann::json::parse(*text, nullptr, false);
+  return j.is_discarded() ? nlohmann::json() : j;
+}
+
+bool isStoreDirectory(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_directory(p, ec) && fs::is_regular_file(p / "tileset.json", ec);
+}
+
+bool isArchive(const fs::path& p) {
+  std::error_code ec;
+  return store::storeKindFor(p) == store::StoreKind::Archive && fs::is_regular_file(p, ec);
+}
+
+std::string idFor(const fs::path& p) {
+  std::string name = p.filename().string();
+  if (name.empty()) name = p.parent_path().filename().string();
+  if (store::storeKindFor(p) == store::StoreKind::Archive) name = p.stem().string();
+  for (char& c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+          c == '.'))
+      c = '-';
+  if (name.size() > 64) name.resize(64);
+  if (name.empty() || name.front() == '.') name.insert(name.begin(), 't');
+  return name;
+}
+
+}  // namespace
+
+Tileset::Tileset(std::string id, const fs::path& path)
+    : id_(std::move(id)), store_(store::openStoreForReading(path)) {
+  const auto tileset = parseStoredJson(*store_, "tileset.json");
+  if (!tileset.is_object())
+    throw inputError("has no readable tileset.json", {path.string(), {}, {}, {}},
+                     "serve a finished store (tinsmith tile writes tileset.json last)");
+  const auto build = parseStoredJson(*store_, kBuildKey);
+
+  int minZoom = -1, maxStoredZoom = -1;
+  std::size_t tiles = 0;
+  for (const auto& key : store_->keys()) {
+    int z = 0;
+    if (!key.starts_with("tiles/") || std::sscanf(key.c_str(), "tiles/%d/", &z) != 1) continue;
+    ++tiles;
+    minZoom = minZoom < 0 ? z : std::min(minZoom, z);
+    maxStoredZoom = std::max(maxStoredZoom, z);
+  }
+  maxZoom_ = kMaxZoom;
+  if (build.is_object() && build.contains("options"))
+    maxZoom_ = std::clamp(build["options"].value("maxZoom", kMaxZoom), 0, kMaxZoom);
+  if (build.is_object() && build.contains("tin")) crs_ = build["tin"].value("crs", "");
+
+  summary_["id"] = id_;
+  summary_["name"] = path.filename().string();
+  summary_["crs"] = crs_;
+  nlohmann::ordered_json bounds;
+  const auto& region = tileset["root"]["boundingVolume"]["region"];
+  if (region.is_array() && region.size() == 6) {
+    const double deg = 180.0 / std::numbers::pi;
+    bounds["lonlat"] = {region[0].get<double>() * deg, region[1].get<double>() * deg,
+                        region[2].get<double>() * deg, region[3].get<double>() * deg};
+    summary_["heights"] = {region[4], region[5]};
+  }
+  if (build.is_object() && build.contains("pyramid")) {
+    const auto& p = build["pyramid"];
+    const double x0 = p["origin"][0], y0 = p["origin"][1], size = p["size"];
+    bounds["project"] = {x0, y0, x0 + size, y0 + size};
+  }
+  summary_["bounds"] = bounds;
+  summary_["zooms"] = {{"min", std::max(minZoom, 0)}, {"max", std::max(maxStoredZoom, 0)},
+                       {"pyramidMax", maxZoom_}};
+  summary_["tileCount"] = tiles;
+  if (build.is_object() && build.contains("options"))
+    summary_["tolerance"] = build["options"].value("tolerance", 0.0);
+  summary_["elevation"] = store_->contains(kTinKey);
+  summary_["links"] = {{"tileset", "/tilesets/" + id_ + "/tileset.json"},
+                       {"elevation", "/tilesets/" + id_ + "/elevation"},
+                       {"profile", "/tilesets/" + id_ + "/profile"}};
+}
+
+Tileset::~Tileset() = default;
+
+const Surface& Tileset::surface() const {
+  std::call_once(surfaceOnce_, [this] {
+    const auto bytes = store_->get(kTinKey);
+    if (!bytes)
+      throw inputError("tileset '" + id_ + "' carries no TIN, so it has no elevations", {},
+                       "rebuild it with tinsmith tile, which stores the TIN");
+    surface_ = std::make_unique<Surface>(ingest::decodeTin(*bytes, id_ + ":" + kTinKey));
+  });
+  return *surface_;
+}
+
+Point2 Tileset::fromLonLat(double lon, double lat) const {
+  Point3 p{lon, lat, 0};
+  std::lock_guard lock(transformMutex_);
+  if (!fromLonLat_)
+    fromLonLat_ = std::make_unique<ingest::CrsTransform>("EPSG:4326", crs_,
+                                                         SourceLocation{id_, {}, {}, {}});
+  if (fromLonLat_->transform(&p, 1) >= 0 || !std::isfinite(p.x) || !std::isfinite(p.y))
+    throw inputError("lon, lat cannot be transformed into " + crs_, {}, "check lon and lat");
+  return {p.x, p.y};
+}
+
+TilesetCatalog::TilesetCatalog(const std::vector<fs::path>& paths) {
+  std::vector<fs::path> stores;
+  for (const auto& path : paths) {
+    if (isArchive(path) || isStoreDirectory(path)) {
+      stores.push_back(path);
+      continue;
+    }
+    std::error_code ec;
+    if (!fs::is_directory(path, ec))
+      throw usageError("'" + path.string() + "' is neither a tile store nor a folder of them",
+                       "give .3dtiles files, store directories or folders holding them");
+    std::vector<fs::path> found;
+    for (const auto& entry : fs::directory_iterator(path, ec))
+      if (!entry.path().filename().string().ends_with(".partial.3dtiles") &&  // a run's staging
+          (isArchive(entry.path()) || isStoreDirectory(entry.path())))
+        found.push_back(entry.path());
+    std::sort(found.begin(), found.end());
+    stores.insert(stores.end(), found.begin(), found.end());
+  }
+  for (const auto& path : stores) {
+    const std::string id = idFor(path);
+    if (find(id))
+      throw usageError("two stores would be served as '" + id + "' (" + path.string() + ")",
+                       "rename one of them");
+    tilesets_.push_back(std::make_unique<Tileset>(id, path));
+  }
+}
+
+const Tileset* TilesetCatalog::find(std::string_view id) const {
+  for (const auto& t : tilesets_)
+    if (t->id() == id) return t.get();
+  return nullptr;
+}
+
+}  // namespace tinsmith::server

@@ -1,0 +1,76 @@
+// The tilesets a server holds: each store opened read-only once, described
+// once (the /tilesets entry, from tinsmith/build.json and tileset.json), and
+// its TIN loaded on the first elevation query. Ids come from file names and
+// are looked up, never joined into a path.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/base/point.hpp"
+#include "core/surface/surface.hpp"
+#include "ingest/filters/reproject.hpp"
+#include "ingest/store/tile_store.hpp"
+
+namespace tinsmith::server {
+
+class Tileset {
+ public:
+  /// Opens the store at `path` read-only and describes it. Throws inputError
+  /// naming the path when it is not a store or has no tileset.json.
+  Tileset(std::string id, const std::filesystem::path& path);
+  ~Tileset();
+
+  [[nodiscard]] const std::string& id() const { return id_; }
+  [[nodiscard]] const store::TileStore& store() const { return *store_; }
+  /// The /tilesets entry: id, name, crs, bounds (lon/lat degrees from the
+  /// root's region; the pyramid's square in the project CRS), heights,
+  /// zooms, tile count, tolerance, links.
+  [[nodiscard]] const nlohmann::ordered_json& summary() const { return summary_; }
+  /// The deepest zoom of the pyramid (the build's maxZoom).
+  [[nodiscard]] int maxZoom() const { return maxZoom_; }
+  [[nodiscard]] const std::string& crs() const { return crs_; }
+
+  /// The TIN's surface, loaded from tinsmith/terrain.tin on first use
+  /// (thread-safe). Throws inputError when the store carries no TIN.
+  [[nodiscard]] const Surface& surface() const;
+  /// Longitude, latitude (WGS84 degrees) into the project CRS. Thread-safe.
+  /// Throws inputError when PROJ cannot transform the point.
+  [[nodiscard]] Point2 fromLonLat(double lon, double lat) const;
+
+ private:
+  std::string id_;
+  std::unique_ptr<store::TileStore> store_;
+  nlohmann::ordered_json summary_;
+  int maxZoom_ = 0;
+  std::string crs_;
+  mutable std::once_flag surfaceOnce_;
+  mutable std::unique_ptr<Surface> surface_;
+  mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
+  mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;
+};
+
+class TilesetCatalog {
+ public:
+  /// Each path is a store (a .3dtiles file, or a directory with a
+  /// tileset.json) or a folder of stores (every *.3dtiles file and store
+  /// directory directly in it). The id is the file name without
+  /// ".3dtiles" (characters other than [A-Za-z0-9_.-] become '-'). Throws
+  /// usageError for a path that holds no store or two stores with one id.
+  explicit TilesetCatalog(const std::vector<std::filesystem::path>& paths);
+
+  /// The tileset with this id, or null.
+  [[nodiscard]] const Tileset* find(std::string_view id) const;
+  [[nodiscard]] const std::vector<std::unique_ptr<Tileset>>& tilesets() const { return tilesets_; }
+
+ private:
+  std::vector<std::unique_ptr<Tileset>> tilesets_;
+};
+
+}  // namespace tinsmith::server
