@@ -140,11 +140,10 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
   void onRead(beast::error_code ec) {
     started_ = std::chrono::steady_clock::now();
     if (ec == http::error::header_limit) {
-      // 414 when the request line itself did not fit, else 431.
-      const auto data = buffer_.data();
-      const std::string_view seen(static_cast<const char*>(data.data()), data.size());
-      const std::size_t eol = seen.find("\r\n");
-      if (eol == std::string_view::npos || eol > server_.options.limits.maxTargetBytes)
+      // 414 when the request line itself did not fit (the parser had not
+      // got the target yet) or its target is too long, else 431.
+      const std::size_t target = parser_->get().target().size();
+      if (target == 0 || target > server_.options.limits.maxTargetBytes)
         return respond(transportError(414, "the request target is too long"), false);
       return respond(transportError(431, "the request headers are too large"), false);
     }
@@ -315,7 +314,14 @@ HttpServer::HttpServer(ServerOptions options, Handler handler, Observer observer
 }
 
 HttpServer::~HttpServer() {
-  for (auto& c : impl_->contexts) c->stop();
+  // Destroying a context destroys the connections its handlers hold, and they
+  // unregister under the mutex: so the contexts go first, the mutex after.
+  auto& m = *impl_;
+  for (auto& c : m.contexts) c->stop();
+  m.guards.clear();
+  m.acceptRetry.reset();
+  m.acceptor.reset();
+  m.contexts.clear();
 }
 
 unsigned short HttpServer::port() const { return impl_->acceptor->local_endpoint().port(); }
@@ -350,12 +356,17 @@ void HttpServer::stop() {
     m.acceptor->close(ec);
     m.acceptRetry->cancel();
   });
+  // Collected under the lock, released outside it: dropping the last
+  // reference destroys a connection, which takes the lock.
+  std::vector<std::shared_ptr<Impl::Connection>> open;
   {
     std::lock_guard lock(m.mutex);
     for (auto& [raw, weak] : m.connections)
-      if (auto c = weak.lock()) asio::post(c->executor(), [c] { c->closeIfIdle(); });
+      if (auto c = weak.lock()) open.push_back(std::move(c));
     m.stopRequested = true;
   }
+  for (auto& c : open) asio::post(c->executor(), [c] { c->closeIfIdle(); });
+  open.clear();
   for (auto& g : m.guards) g.reset();
   m.changed.notify_all();
 }

@@ -77,8 +77,9 @@ class RunningServer {
       : server_(std::make_unique<server::TileServer>(std::move(options))),
         thread_([this] { server_->run(); }) {}
   ~RunningServer() {
+    if (!thread_.joinable()) return;
     server_->stop();
-    if (thread_.joinable()) thread_.join();
+    thread_.join();
   }
   static server::TileServerOptions defaults() {
     server::TileServerOptions o;
@@ -181,6 +182,20 @@ class HttpConnection {
     buffer_.erase(0, length);
     r.status = status;
     return r;
+  }
+  /// Reads up to n raw bytes (fewer when the connection ends first).
+  std::string readBytes(std::size_t n) {
+    while (buffer_.size() < n)
+      if (!fill()) break;
+    std::string out = buffer_.substr(0, n);
+    buffer_.erase(0, out.size());
+    return out;
+  }
+  /// Closes with a TCP reset (SO_LINGER 0), as a crashed client would.
+  void resetAndClose() {
+    linger hard{1, 0};
+    ::setsockopt(fd_, SOL_SOCKET, SO_LINGER, &hard, sizeof hard);
+    close();
   }
   /// True when the server closed the connection (read returns 0) before
   /// the timeout, with no more bytes.
