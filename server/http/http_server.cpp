@@ -131,6 +131,30 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
     parser_->body_limit(server_.options.limits.maxBodyBytes);
     stream_.expires_after(served_ == 0 ? server_.options.limits.readTimeout
                                        : server_.options.limits.idleTimeout);
+    http::async_read_header(stream_, buffer_, *parser_,
+                            [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                              self->onHeader(ec);
+                            });
+  }
+
+  /// The header is in: a client waiting on `Expect: 100-continue` (curl
+  /// does for bodies over 1 KiB) is told to go on, then the body is read.
+  void onHeader(beast::error_code ec) {
+    if (ec || parser_->is_done()) return onRead(ec);
+    const auto& message = parser_->get();
+    if (beast::iequals(message[http::field::expect], "100-continue") && message.version() == 11) {
+      static constexpr std::string_view kContinue = "HTTP/1.1 100 Continue\r\n\r\n";
+      asio::async_write(stream_, asio::buffer(kContinue.data(), kContinue.size()),
+                        [self = shared_from_this()](beast::error_code e, std::size_t) {
+                          if (e) return self->close();
+                          self->readBody();
+                        });
+      return;
+    }
+    readBody();
+  }
+
+  void readBody() {
     http::async_read(stream_, buffer_, *parser_,
                      [self = shared_from_this()](beast::error_code ec, std::size_t) {
                        self->onRead(ec);

@@ -302,6 +302,18 @@ TEST_F(Routes, ElevationsAgreeWithTinsmithQuery) {
   EXPECT_NEAR(ll["y"].get<double>(), 4515600, 100);
 }
 
+TEST_F(Routes, ABodyBehindExpect100ContinueIsAskedFor) {
+  HttpConnection c(port());
+  const std::string body = R"({"points": [[430100.5, 4515100.25]]})";
+  ASSERT_TRUE(c.send("POST /tilesets/hill/elevation HTTP/1.1\r\nHost: x\r\nExpect: 100-continue\r\n"
+                     "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n"));
+  EXPECT_EQ(c.read().status, 100);  // sent before the body
+  ASSERT_TRUE(c.send(body));
+  const auto r = c.read();
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(json::parse(r.body)["points"][0]["z"].get<double>(), queryZ(430100.5, 4515100.25));
+}
+
 TEST_F(Routes, ProfilesSampleTheLineAtTheSpacing) {
   const auto r = httpGet(port(), "/tilesets/hill/profile?line=430100,4515100;430900,4515100;430900,4515700&spacing=100");
   ASSERT_EQ(r.status, 200) << r.body;
