@@ -3,8 +3,6 @@
 // `tinsmith query` on the same TIN.
 #include <gtest/gtest.h>
 
-#include <zlib.h>
-
 #include <nlohmann/json.hpp>
 
 #include "ingest/store/tile_store.hpp"
@@ -14,20 +12,6 @@ namespace tinsmith::test {
 namespace {
 
 using nlohmann::json;
-
-std::string gunzip(const std::string& packed) {
-  std::string out(1 << 24, '\0');
-  z_stream z{};
-  EXPECT_EQ(inflateInit2(&z, 31), Z_OK);
-  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(packed.data()));
-  z.avail_in = static_cast<uInt>(packed.size());
-  z.next_out = reinterpret_cast<Bytef*>(out.data());
-  z.avail_out = static_cast<uInt>(out.size());
-  EXPECT_EQ(inflate(&z, Z_FINISH), Z_STREAM_END);
-  out.resize(z.total_out);
-  inflateEnd(&z);
-  return out;
-}
 
 class Routes : public ::testing::Test {
  protected:

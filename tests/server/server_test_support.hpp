@@ -11,6 +11,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <zlib.h>
+
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -225,6 +227,21 @@ class HttpConnection {
   bool connected_ = false;
   std::string buffer_;
 };
+
+/// The bytes of a gzip stream (RFC 1952); "" when it is not one.
+inline std::string gunzip(const std::string& packed) {
+  std::string out(std::max<std::size_t>(1 << 20, packed.size() * 64), '\0');
+  z_stream z{};
+  if (inflateInit2(&z, 31) != Z_OK) return {};
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(packed.data()));
+  z.avail_in = static_cast<uInt>(packed.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = static_cast<uInt>(out.size());
+  const bool whole = inflate(&z, Z_FINISH) == Z_STREAM_END;
+  out.resize(whole ? z.total_out : 0);
+  inflateEnd(&z);
+  return out;
+}
 
 /// One request on a fresh connection.
 inline HttpResponse httpGet(unsigned short port, const std::string& target,

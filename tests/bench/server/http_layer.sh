@@ -8,6 +8,7 @@
 #   bash tests/bench/server/http_layer.sh [BYTES ...]     (default 1024 10240 102400)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+. "$here/bench_lib.sh"
 work="$(mktemp -d)"
 trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 sizes=("$@")
@@ -23,27 +24,12 @@ measure() {  # name port
   p99=$(awk '$1=="99%" {print $2}' "$work/wrk.txt")
   printf '| %s | %s | %s | %s | %s |\n' "$bytes" "$1" "$rps" "$p50" "$p99"
 }
-wait_port() { for _ in $(seq 100); do (exec 3<>/dev/tcp/127.0.0.1/$1) 2>/dev/null && return; sleep 0.05; done; }
 
 echo "| body bytes | server | req/s | p50 | p99 |"
 echo "|---|---|---|---|---|"
 for bytes in "${sizes[@]}"; do
   head -c "$bytes" /dev/zero | tr '\0' x >"$work/body"
-  cat >"$work/nginx.conf" <<CONF
-worker_processes 2;
-pid $work/nginx.pid;
-error_log $work/nginx.err;
-events { worker_connections 4096; }
-http {
-  access_log off;
-  sendfile on; tcp_nopush on; tcp_nodelay on;
-  keepalive_requests 1000000;
-  open_file_cache max=1000;
-  client_body_temp_path $work; proxy_temp_path $work; fastcgi_temp_path $work;
-  uwsgi_temp_path $work; scgi_temp_path $work;
-  server { listen 127.0.0.1:18081; root $work; default_type application/octet-stream; }
-}
-CONF
+  write_nginx_conf "$work" 18081 "root $work;"
   nginx -c "$work/nginx.conf" -e "$work/nginx.err"
   wait_port 18081; measure "nginx 1.22 (2 workers, sendfile)" 18081
   kill "$(cat "$work/nginx.pid")"

@@ -12,12 +12,12 @@ set -euo pipefail
 store="$(realpath "$1")"
 seconds="${2:-30}"
 root="$(cd "$(dirname "$0")/../../.." && pwd)"
+. "$root/tests/bench/server/bench_lib.sh"
 tinsmith="${TINSMITH:-$root/build/release/bin/tinsmith}"
 id="$(basename "$store" .3dtiles)"
 work="$(mktemp -d)"
 pids=()
 trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$work"' EXIT
-wait_port() { for _ in $(seq 200); do (exec 3<>/dev/tcp/127.0.0.1/$1) 2>/dev/null && return; sleep 0.05; done; echo "port $1 never opened" >&2; exit 1; }
 
 # The store's files as a directory, for nginx.
 mkdir -p "$work/files"
@@ -35,22 +35,7 @@ math.randomseed(os.time())
 request = function() return wrk.format("GET", paths[math.random(#paths)]) end
 LUA
 
-cat >"$work/nginx.conf" <<CONF
-worker_processes 2;
-pid $work/nginx.pid;
-error_log $work/nginx.err;
-events { worker_connections 4096; }
-http {
-  access_log off;
-  sendfile on; tcp_nopush on; tcp_nodelay on;
-  keepalive_requests 1000000;
-  open_file_cache max=10000;
-  types { model/gltf-binary glb; application/json json; }
-  client_body_temp_path $work; proxy_temp_path $work; fastcgi_temp_path $work;
-  uwsgi_temp_path $work; scgi_temp_path $work;
-  server { listen 127.0.0.1:18181; location /tilesets/$id/ { alias $work/files/; etag on; } }
-}
-CONF
+write_nginx_conf "$work" 18181 "location /tilesets/$id/ { alias $work/files/; etag on; }"
 
 row() {  # name wrk-output-file
   local rps p50 p99 non2xx
