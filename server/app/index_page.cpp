@@ -21,18 +21,18 @@ std::string escapeHtml(std::string_view text) {
 
 }  // namespace
 
-std::string indexPageHtml(const TilesetCatalog& catalog) {
+std::string indexPageHtml(const std::vector<std::shared_ptr<const Tileset>>& tilesets) {
   std::string html =
       "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
       "<title>tinsmith</title><style>body{font:15px system-ui,sans-serif;margin:2em;max-width:60em}"
       "table{border-collapse:collapse}td,th{padding:.3em .8em;border-bottom:1px solid #ddd;"
       "text-align:left}</style></head><body>\n<h1>tinsmith</h1>\n<p>";
-  html += std::to_string(catalog.tilesets().size());
+  html += std::to_string(tilesets.size());
   html += " tileset(s). JSON: <a href=\"/tilesets\">/tilesets</a>, "
           "<a href=\"/health\">/health</a>, <a href=\"/metrics\">/metrics</a>.</p>\n"
           "<table><tr><th>id</th><th>store</th><th>CRS</th><th>tiles</th><th>zooms</th>"
           "<th>links</th></tr>\n";
-  for (const auto& t : catalog.tilesets()) {
+  for (const auto& t : tilesets) {
     const auto& s = t->summary();
     const std::string id = escapeHtml(t->id());
     html += "<tr><td>" + id + "</td><td>" + escapeHtml(s["name"].get<std::string>()) + "</td><td>" +

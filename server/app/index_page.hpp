@@ -9,6 +9,6 @@ namespace tinsmith::server {
 
 /// A small self-contained HTML page listing every tileset (id, name, CRS,
 /// tiles, zooms) with links to its tileset.json and the JSON routes.
-std::string indexPageHtml(const TilesetCatalog& catalog);
+std::string indexPageHtml(const std::vector<std::shared_ptr<const Tileset>>& tilesets);
 
 }  // namespace tinsmith::server

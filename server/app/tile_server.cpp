@@ -1,6 +1,7 @@
 #include "server/app/tile_server.hpp"
 
 #include <ctime>
+#include <thread>
 
 namespace tinsmith::server {
 
@@ -44,6 +45,33 @@ TileServer::TileServer(TileServerOptions options)
 }
 
 TileServer::~TileServer() { http_.reset(); }
+
+void TileServer::run() {
+  std::thread watcher;
+  if (options_.reloadInterval.count() > 0) {
+    watcher = std::thread([this] {
+      std::unique_lock lock(watchMutex_);
+      while (!watchChanged_.wait_for(lock, options_.reloadInterval, [this] { return stopping_; })) {
+        lock.unlock();
+        for (const auto& line : catalog_.refresh())
+          if (options_.notices) std::fprintf(options_.notices, "tinsmith serve: %s\n", line.c_str());
+        lock.lock();
+      }
+    });
+  }
+  http_->run();
+  stop();  // run() can also end by itself: the watcher stops either way
+  if (watcher.joinable()) watcher.join();
+}
+
+void TileServer::stop() {
+  {
+    std::lock_guard lock(watchMutex_);
+    stopping_ = true;
+  }
+  watchChanged_.notify_all();
+  http_->stop();
+}
 
 void TileServer::logExchange(const Exchange& e) {
   metrics_.countRequest(e.response.route, e.response.status, e.bytesWritten, e.elapsed);

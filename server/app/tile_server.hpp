@@ -3,6 +3,8 @@
 // tests run one on an ephemeral loopback port.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -23,6 +25,11 @@ struct TileServerOptions {
   ServiceOptions service;
   /// One line per request (access log) to `log`; null: none (--quiet).
   std::FILE* log = stderr;
+  /// How often the stores are checked for a replacement (see
+  /// TilesetCatalog::refresh); zero: never.
+  std::chrono::milliseconds reloadInterval{2000};
+  /// Where reloads are reported; null: nowhere.
+  std::FILE* notices = stderr;
 };
 
 class TileServer {
@@ -35,10 +42,11 @@ class TileServer {
   [[nodiscard]] unsigned short port() const { return http_->port(); }
   [[nodiscard]] const TilesetCatalog& catalog() const { return catalog_; }
   [[nodiscard]] const Metrics& metrics() const { return metrics_; }
-  /// Serves until stop() (see HttpServer::run).
-  void run() { http_->run(); }
+  /// Serves until stop() (see HttpServer::run), checking the stores for
+  /// replacements every reloadInterval meanwhile.
+  void run();
   /// Graceful shutdown; thread-safe.
-  void stop() { http_->stop(); }
+  void stop();
 
  private:
   void logExchange(const Exchange& exchange);
@@ -49,6 +57,9 @@ class TileServer {
   TileService service_;
   std::mutex logMutex_;
   std::unique_ptr<HttpServer> http_;
+  std::mutex watchMutex_;  // with watchChanged_, guards stopping_
+  std::condition_variable watchChanged_;
+  bool stopping_ = false;
 };
 
 /// The access-log line of one exchange (no newline): peer, time (UTC),

@@ -25,12 +25,22 @@ Response notFound(const std::string& message) {
 }  // namespace
 
 TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
-    : catalog_(catalog), metrics_(metrics), options_(std::move(options)), cache_(options_.cacheBytes) {
+    : catalog_(catalog), metrics_(metrics), options_(std::move(options)), cache_(options_.cacheBytes) {}
+
+std::shared_ptr<const TileService::Listing> TileService::listing() {
+  std::lock_guard lock(listingMutex_);
+  const std::uint64_t version = catalog_.version();
+  if (listing_ && listing_->version == version) return listing_;
+  auto fresh = std::make_shared<Listing>();
+  fresh->version = version;
+  const auto tilesets = catalog_.tilesets();
   nlohmann::ordered_json list;
   list["tilesets"] = nlohmann::ordered_json::array();
-  for (const auto& t : catalog_.tilesets()) list["tilesets"].push_back(t->summary());
-  tilesetsList_ = makeContent(list.dump(2) + "\n", true);
-  indexPage_ = makeContent(indexPageHtml(catalog_), true);
+  for (const auto& t : tilesets) list["tilesets"].push_back(t->summary());
+  fresh->tilesets = makeContent(list.dump(2) + "\n", true);
+  fresh->index = makeContent(indexPageHtml(tilesets), true);
+  listing_ = std::move(fresh);
+  return listing_;
 }
 
 Response TileService::handle(const Request& request) {
@@ -100,7 +110,7 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
 
   switch (route.kind) {
     case RouteKind::Index:
-      return serveContent(request, *indexPage_, "text/html; charset=utf-8", "no-cache", false);
+      return serveContent(request, *listing()->index, "text/html; charset=utf-8", "no-cache", false);
     case RouteKind::Health: {
       Response r;
       r.addHeader("Content-Type", kJson);
@@ -116,11 +126,11 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
       return r;
     }
     case RouteKind::Tilesets:
-      return serveContent(request, *tilesetsList_, kJson, "no-cache", false);
+      return serveContent(request, *listing()->tilesets, kJson, "no-cache", false);
     default: break;
   }
 
-  const Tileset* tileset = catalog_.find(route.tileset);
+  const auto tileset = catalog_.find(route.tileset);  // held for the whole request
   if (!tileset) return notFound("no tileset '" + route.tileset + "' (see /tilesets)");
   switch (route.kind) {
     case RouteKind::TilesetJson: return serveStored(request, *tileset, "tileset.json", false);
@@ -153,7 +163,7 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
 
 Response TileService::serveStored(const Request& request, const Tileset& tileset,
                                   const std::string& key, bool tile) {
-  const std::string cacheKey = tileset.id() + '/' + key;
+  const std::string cacheKey = std::to_string(tileset.generation()) + '/' + key;
   auto content = cache_.find(cacheKey);
   metrics_.countCache(content != nullptr);
   const bool hit = content != nullptr;

@@ -6,6 +6,9 @@
 // (500 for anything unexpected).
 #pragma once
 
+#include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
 
 #include "server/app/content_cache.hpp"
@@ -31,6 +34,14 @@ class TileService {
   [[nodiscard]] Response handle(const Request& request);
 
  private:
+  /// The /tilesets body and the index page, rebuilt when the catalog swapped
+  /// a store in.
+  struct Listing {
+    std::uint64_t version = 0;
+    std::shared_ptr<const Content> tilesets, index;
+  };
+  std::shared_ptr<const Listing> listing();
+
   Response dispatch(const Request& request, const RequestTarget& target, const Route& route);
   Response serveStored(const Request& request, const Tileset& tileset, const std::string& key,
                        bool tile);
@@ -43,8 +54,8 @@ class TileService {
   Metrics& metrics_;
   ServiceOptions options_;
   ContentCache cache_;
-  std::shared_ptr<const Content> tilesetsList_;
-  std::shared_ptr<const Content> indexPage_;
+  std::mutex listingMutex_;
+  std::shared_ptr<const Listing> listing_;
 };
 
 }  // namespace tinsmith::server

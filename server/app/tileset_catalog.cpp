@@ -1,5 +1,7 @@
 #include "server/app/tileset_catalog.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -47,10 +49,37 @@ std::string idFor(const fs::path& p) {
   return name;
 }
 
+/// What identifies a version of a store on disk: its archive file, or a
+/// directory store's tileset.json (written last).
+struct FileStamp {
+  dev_t device = 0;
+  ino_t inode = 0;
+  off_t size = 0;
+  std::int64_t mtimeNanos = 0;
+  friend bool operator==(const FileStamp&, const FileStamp&) = default;
+};
+
+FileStamp stampOf(const fs::path& store) {
+  const fs::path file = isArchive(store) ? store : store / "tileset.json";
+  struct stat st {};
+  if (::stat(file.c_str(), &st) != 0) return {};
+  return {st.st_dev, st.st_ino, st.st_size,
+          static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
+}
+
+std::atomic<std::uint64_t> nextGeneration{1};
+
 }  // namespace
 
+struct TilesetCatalog::Entry {
+  std::string id;
+  fs::path path;
+  FileStamp stamp;
+  std::atomic<std::shared_ptr<const Tileset>> current;
+};
+
 Tileset::Tileset(std::string id, const fs::path& path)
-    : id_(std::move(id)), store_(store::openStoreForReading(path)) {
+    : id_(std::move(id)), generation_(nextGeneration++), store_(store::openStoreForReading(path)) {
   const auto tileset = parseStoredJson(*store_, "tileset.json");
   if (!tileset.is_object())
     throw inputError("has no readable tileset.json", {path.string(), {}, {}, {}},
@@ -143,18 +172,48 @@ TilesetCatalog::TilesetCatalog(const std::vector<fs::path>& paths) {
     stores.insert(stores.end(), found.begin(), found.end());
   }
   for (const auto& path : stores) {
-    const std::string id = idFor(path);
-    if (find(id))
-      throw usageError("two stores would be served as '" + id + "' (" + path.string() + ")",
+    auto entry = std::make_unique<Entry>();
+    entry->id = idFor(path);
+    entry->path = path;
+    if (find(entry->id))
+      throw usageError("two stores would be served as '" + entry->id + "' (" + path.string() + ")",
                        "rename one of them");
-    tilesets_.push_back(std::make_unique<Tileset>(id, path));
+    entry->stamp = stampOf(path);
+    entry->current = std::make_shared<const Tileset>(entry->id, path);
+    entries_.push_back(std::move(entry));
   }
 }
 
-const Tileset* TilesetCatalog::find(std::string_view id) const {
-  for (const auto& t : tilesets_)
-    if (t->id() == id) return t.get();
+TilesetCatalog::~TilesetCatalog() = default;
+
+std::shared_ptr<const Tileset> TilesetCatalog::find(std::string_view id) const {
+  for (const auto& e : entries_)
+    if (e->id == id) return e->current.load();
   return nullptr;
+}
+
+std::vector<std::shared_ptr<const Tileset>> TilesetCatalog::tilesets() const {
+  std::vector<std::shared_ptr<const Tileset>> out;
+  for (const auto& e : entries_) out.push_back(e->current.load());
+  return out;
+}
+
+std::vector<std::string> TilesetCatalog::refresh() {
+  std::vector<std::string> log;
+  for (auto& e : entries_) {
+    const FileStamp now = stampOf(e->path);
+    if (now == e->stamp || now == FileStamp{}) continue;  // unchanged, or gone for the moment
+    try {
+      e->current = std::make_shared<const Tileset>(e->id, e->path);
+      e->stamp = now;
+      ++version_;
+      log.push_back("reloaded " + e->path.string() + " as '" + e->id + "'");
+    } catch (const std::exception& ex) {
+      e->stamp = now;  // not retried until it changes again
+      log.push_back("kept the old '" + e->id + "': " + ex.what());
+    }
+  }
+  return log;
 }
 
 }  // namespace tinsmith::server

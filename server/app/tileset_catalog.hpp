@@ -1,9 +1,17 @@
-// The tilesets a server holds: each store opened read-only once, described
-// once (the /tilesets entry, from tinsmith/build.json and tileset.json), and
-// its TIN loaded on the first elevation query. Ids come from file names and
-// are looked up, never joined into a path.
+// The tilesets a server holds: each store opened read-only, described once
+// (the /tilesets entry, from tinsmith/build.json and tileset.json), and its
+// TIN loaded on the first elevation query. Ids come from file names and are
+// looked up, never joined into a path.
+//
+// A store replaced on disk (a new archive renamed over the old one, as
+// `tinsmith tile` writes it; or a directory store's tileset.json rewritten)
+// is picked up by refresh(): the new store is opened beside the old one and
+// swapped in whole. A request holds the Tileset it started with, whose open
+// SQLite connections keep reading the old file, so no response mixes the two
+// (no torn read); the old one is closed when its last request ends.
 #pragma once
 
+#include <atomic>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -28,6 +36,9 @@ class Tileset {
   ~Tileset();
 
   [[nodiscard]] const std::string& id() const { return id_; }
+  /// Unique per opened store in this process: a reloaded store gets a new
+  /// one, so what was cached of the old one is never served for it.
+  [[nodiscard]] std::uint64_t generation() const { return generation_; }
   [[nodiscard]] const store::TileStore& store() const { return *store_; }
   /// The /tilesets entry: id, name, crs, bounds (lon/lat degrees from the
   /// root's region; the pyramid's square in the project CRS), heights,
@@ -46,6 +57,7 @@ class Tileset {
 
  private:
   std::string id_;
+  std::uint64_t generation_;
   std::unique_ptr<store::TileStore> store_;
   nlohmann::ordered_json summary_;
   int maxZoom_ = 0;
@@ -62,15 +74,29 @@ class TilesetCatalog {
   /// tileset.json) or a folder of stores (every *.3dtiles file and store
   /// directory directly in it). The id is the file name without
   /// ".3dtiles" (characters other than [A-Za-z0-9_.-] become '-'). Throws
-  /// usageError for a path that holds no store or two stores with one id.
+  /// usageError for a path that is neither or two stores with one id, and
+  /// what Tileset throws for a store that cannot be served.
   explicit TilesetCatalog(const std::vector<std::filesystem::path>& paths);
+  ~TilesetCatalog();
 
-  /// The tileset with this id, or null.
-  [[nodiscard]] const Tileset* find(std::string_view id) const;
-  [[nodiscard]] const std::vector<std::unique_ptr<Tileset>>& tilesets() const { return tilesets_; }
+  /// The tileset with this id, or null. Thread-safe.
+  [[nodiscard]] std::shared_ptr<const Tileset> find(std::string_view id) const;
+  /// Every tileset, in the order given. Thread-safe.
+  [[nodiscard]] std::vector<std::shared_ptr<const Tileset>> tilesets() const;
+  /// Counts swaps: changes whenever refresh() swapped a store in.
+  [[nodiscard]] std::uint64_t version() const { return version_.load(); }
+
+  /// Reopens every store whose file (an archive) or tileset.json (a
+  /// directory) changed since it was opened (inode, size or mtime). A store
+  /// that cannot be opened now keeps serving its old version. Returns one
+  /// line per store reloaded or refused, for the log. Thread-safe with the
+  /// readers; one refresh at a time.
+  std::vector<std::string> refresh();
 
  private:
-  std::vector<std::unique_ptr<Tileset>> tilesets_;
+  struct Entry;
+  std::vector<std::unique_ptr<Entry>> entries_;
+  std::atomic<std::uint64_t> version_{0};
 };
 
 }  // namespace tinsmith::server

@@ -111,9 +111,10 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
   [[nodiscard]] auto executor() { return stream_.get_executor(); }
 
   /// Posted by stop(): closes the connection when it waits for a request
-  /// and has received nothing of one.
+  /// and has received nothing of one (a body being read is a request in
+  /// flight, though its bytes have left the buffer).
   void closeIfIdle() {
-    if (state_ == State::Reading && buffer_.size() == 0) {
+    if (state_ == State::Reading && buffer_.size() == 0 && !(parser_ && parser_->got_some())) {
       beast::error_code ec;
       stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
       stream_.close();

@@ -71,6 +71,21 @@ inline std::filesystem::path testStoreDir() {
   return dir;
 }
 
+/// "hill-coarse.3dtiles" beside testStoreDir()'s archive: the same TIN
+/// tiled at another tolerance, so its files differ; built on first use.
+inline std::filesystem::path coarseStore() {
+  static const std::filesystem::path path = [] {
+    const auto p = testStoreDir() / "hill-coarse.3dtiles";
+    ingest::TileJobOptions options;
+    options.tiler.tolerance = 2;
+    options.tiler.maxTriangles = 512;
+    options.tiler.maxZoom = 2;
+    ingest::runTileJob(testTin(), (testStoreDir() / "hill.tin").string(), p, options);
+    return p;
+  }();
+  return path;
+}
+
 /// A TileServer on 127.0.0.1, an ephemeral port, serving in a background
 /// thread until destroyed (or stopped).
 class RunningServer {
@@ -92,6 +107,7 @@ class RunningServer {
     o.http.limits.idleTimeout = std::chrono::milliseconds(5000);
     o.http.limits.shutdownGrace = std::chrono::milliseconds(5000);
     o.log = nullptr;
+    o.notices = nullptr;
     return o;
   }
   [[nodiscard]] unsigned short port() const { return server_->port(); }

@@ -30,7 +30,7 @@ struct ServeOptions {
   std::size_t cacheMb = 256;
   int threads = 0;
   int maxConnections = 10000;
-  double readTimeout = 10, idleTimeout = 30;
+  double readTimeout = 10, idleTimeout = 30, reloadSeconds = 2;
   bool quiet = false;
 };
 
@@ -91,6 +91,10 @@ void addServeCommand(CLI::App& app) {
                   "Seconds a keep-alive connection may wait for its next request")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
+  cmd->add_option("--reload", opt->reloadSeconds,
+                  "Seconds between checks for a store replaced on disk, picked up whole (0: never)")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
   cmd->add_flag("-q,--quiet", opt->quiet, "No access log (one line per request on stderr)");
   cmd->footer(
       "Routes: / (what is served), /health, /metrics (Prometheus), /tilesets,\n"
@@ -112,6 +116,7 @@ void addServeCommand(CLI::App& app) {
     o.service.cors = opt->cors == "off" ? "" : opt->cors;
     o.service.cacheBytes = opt->cacheMb << 20;
     o.log = opt->quiet ? nullptr : stderr;
+    o.reloadInterval = seconds(opt->reloadSeconds);
     server::TileServer server(std::move(o));
     std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
               << " tileset(s) on http://" << opt->host << ":" << server.port() << "/" << std::endl;
