@@ -75,6 +75,12 @@ void TileServer::stop() {
 
 void TileServer::logExchange(const Exchange& e) {
   metrics_.countRequest(e.response.route, e.response.status, e.bytesWritten, e.elapsed);
+  if (!e.response.failure.empty() && options_.notices) {  // every 5xx is logged, --quiet or not
+    const std::string line = "tinsmith serve: " + std::to_string(e.response.status) + " for " +
+                             accessLogLine(e) + ": " + e.response.failure + "\n";
+    std::lock_guard lock(logMutex_);
+    std::fwrite(line.data(), 1, line.size(), options_.notices);
+  }
   if (!options_.log) return;
   const std::string line = accessLogLine(e) + "\n";
   std::lock_guard lock(logMutex_);

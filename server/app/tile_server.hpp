@@ -28,7 +28,8 @@ struct TileServerOptions {
   /// How often the stores are checked for a replacement (see
   /// TilesetCatalog::refresh); zero: never.
   std::chrono::milliseconds reloadInterval{2000};
-  /// Where reloads are reported; null: nowhere.
+  /// Where reloads and failures (5xx, with their details) are reported;
+  /// null: nowhere.
   std::FILE* notices = stderr;
 };
 

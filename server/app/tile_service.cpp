@@ -22,6 +22,13 @@ Response notFound(const std::string& message) {
   return errorResponse(404, ErrorKind::Input, message);
 }
 
+/// A 500 whose details (store paths, library messages) go to the log only.
+Response internalFailure(ErrorKind kind, const std::string& what) {
+  Response r = errorResponse(500, kind, "the server failed to answer; its log has the details");
+  r.failure = what;
+  return r;
+}
+
 }  // namespace
 
 TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
@@ -66,9 +73,11 @@ Response TileService::handle(const Request& request) {
   } catch (const ParameterError& e) {
     response = errorResponse(400, ErrorKind::Input, e.what(), e.parameter);
   } catch (const Error& e) {
-    response = errorResponse(httpStatusFor(e.kind()), e.kind(), e.what());
+    const int status = httpStatusFor(e.kind());
+    response = status >= 500 ? internalFailure(e.kind(), e.what())
+                             : errorResponse(status, e.kind(), e.what());
   } catch (const std::exception& e) {
-    response = errorResponse(500, ErrorKind::Internal, std::string("internal error: ") + e.what());
+    response = internalFailure(ErrorKind::Internal, e.what());
   }
   response.route = kind;
   response.head = request.method == "HEAD";

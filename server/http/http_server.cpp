@@ -207,9 +207,11 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
     try {
       response = server_.handler(request_);
     } catch (const std::exception& e) {
-      response = transportError(500, std::string("internal error: ") + e.what());
+      response = transportError(500, "the server failed to answer; its log has the details");
+      response.failure = e.what();
     } catch (...) {
-      response = transportError(500, "internal error");
+      response = transportError(500, "the server failed to answer; its log has the details");
+      response.failure = "an exception that is not a std::exception";
     }
     respond(std::move(response), keepAlive);
   }

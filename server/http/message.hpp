@@ -34,6 +34,9 @@ struct Response {
   bool head = false;
   RouteKind route = RouteKind::Unknown;
   bool cacheHit = false;  ///< the tile came from the memory cache
+  /// For a 5xx: what went wrong, for the server's log (the client gets a
+  /// generic message, without paths or internals).
+  std::string failure;
 
   [[nodiscard]] std::size_t bodyLength() const {
     if (!body) return 0;

@@ -240,3 +240,39 @@ TEST(Hostile, ClientsVanishingMidResponseLeaveTheServerWhole) {
 
 }  // namespace
 }  // namespace tinsmith::test
+
+namespace tinsmith::test {
+namespace {
+
+TEST(Hostile, AFailingStoreReadIsA500WithABodyAndALogLine) {
+  namespace fs = std::filesystem;
+  const auto dir = scratchDir("server-failing-" + std::to_string(::getpid()));
+  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
+  const auto keys = source->keys();
+  store::writeStore(*source, keys, dir / "broken");
+  fs::remove(dir / "broken/tiles/0/0/0.glb");
+  fs::create_symlink("0.glb", dir / "broken/tiles/0/0/0.glb");  // a loop: open() fails with ELOOP
+
+  auto options = RunningServer::defaults();
+  options.stores = {dir / "broken"};
+  std::FILE* log = std::tmpfile();
+  options.notices = log;
+  RunningServer server(options);
+  HttpConnection c(server.port());
+  const auto r = c.request("/tilesets/broken/tiles/0/0/0.glb");
+  EXPECT_EQ(r.status, 500);
+  EXPECT_EQ(r.header("content-type"), "application/json");
+  EXPECT_NE(r.body.find("\"status\":500"), std::string::npos) << r.body;
+  EXPECT_EQ(r.body.find(dir.string()), std::string::npos) << r.body;  // no server paths
+  EXPECT_EQ(c.request("/tilesets/broken/tileset.json").status, 200);  // and it goes on
+  server.stopAndJoin();  // every exchange logged
+  std::rewind(log);
+  std::string text(4096, '\0');
+  text.resize(std::fread(text.data(), 1, text.size(), log));
+  std::fclose(log);
+  EXPECT_NE(text.find("500 for"), std::string::npos) << text;
+  EXPECT_NE(text.find("tiles/0/0/0.glb"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace tinsmith::test
