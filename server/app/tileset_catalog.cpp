@@ -69,6 +69,18 @@ FileStamp stampOf(const fs::path& store) {
 
 std::atomic<std::uint64_t> nextGeneration{1};
 
+/// The stores directly in `folder`, sorted (staging archives left out).
+std::vector<fs::path> storesIn(const fs::path& folder) {
+  std::vector<fs::path> found;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec))
+    if (!entry.path().filename().string().ends_with(".partial.3dtiles") &&  // a run's staging
+        (isArchive(entry.path()) || isStoreDirectory(entry.path())))
+      found.push_back(entry.path());
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
 }  // namespace
 
 struct TilesetCatalog::Entry {
@@ -163,44 +175,51 @@ TilesetCatalog::TilesetCatalog(const std::vector<fs::path>& paths) {
     if (!fs::is_directory(path, ec))
       throw usageError("'" + path.string() + "' is neither a tile store nor a folder of them",
                        "give .3dtiles files, store directories or folders holding them");
-    std::vector<fs::path> found;
-    for (const auto& entry : fs::directory_iterator(path, ec))
-      if (!entry.path().filename().string().ends_with(".partial.3dtiles") &&  // a run's staging
-          (isArchive(entry.path()) || isStoreDirectory(entry.path())))
-        found.push_back(entry.path());
-    std::sort(found.begin(), found.end());
+    folders_.push_back(path);
+    const auto found = storesIn(path);
     stores.insert(stores.end(), found.begin(), found.end());
   }
+  auto entries = std::make_shared<Entries>();
   for (const auto& path : stores) {
-    auto entry = std::make_unique<Entry>();
-    entry->id = idFor(path);
-    entry->path = path;
-    if (find(entry->id))
-      throw usageError("two stores would be served as '" + entry->id + "' (" + path.string() + ")",
+    auto entry = makeEntry(path, *entries);
+    if (!entry)
+      throw usageError("two stores would be served as '" + idFor(path) + "' (" + path.string() + ")",
                        "rename one of them");
-    entry->stamp = stampOf(path);
-    entry->current = std::make_shared<const Tileset>(entry->id, path);
-    entries_.push_back(std::move(entry));
+    entries->push_back(std::move(entry));
   }
+  entries_ = std::move(entries);
+}
+
+std::shared_ptr<TilesetCatalog::Entry> TilesetCatalog::makeEntry(const fs::path& path,
+                                                                 const Entries& existing) {
+  auto entry = std::make_shared<Entry>();
+  entry->id = idFor(path);
+  entry->path = path;
+  for (const auto& e : existing)
+    if (e->id == entry->id) return nullptr;
+  entry->stamp = stampOf(path);
+  entry->current = std::make_shared<const Tileset>(entry->id, path);
+  return entry;
 }
 
 TilesetCatalog::~TilesetCatalog() = default;
 
 std::shared_ptr<const Tileset> TilesetCatalog::find(std::string_view id) const {
-  for (const auto& e : entries_)
+  for (const auto& e : *entries_.load())
     if (e->id == id) return e->current.load();
   return nullptr;
 }
 
 std::vector<std::shared_ptr<const Tileset>> TilesetCatalog::tilesets() const {
   std::vector<std::shared_ptr<const Tileset>> out;
-  for (const auto& e : entries_) out.push_back(e->current.load());
+  for (const auto& e : *entries_.load()) out.push_back(e->current.load());
   return out;
 }
 
 std::vector<std::string> TilesetCatalog::refresh() {
   std::vector<std::string> log;
-  for (auto& e : entries_) {
+  const auto entries = entries_.load();
+  for (const auto& e : *entries) {
     const FileStamp now = stampOf(e->path);
     if (now == e->stamp || now == FileStamp{}) continue;  // unchanged, or gone for the moment
     try {
@@ -212,6 +231,32 @@ std::vector<std::string> TilesetCatalog::refresh() {
       e->stamp = now;  // not retried until it changes again
       log.push_back("kept the old '" + e->id + "': " + ex.what());
     }
+  }
+  // Stores new in the folders served: added under a new list, swapped in.
+  auto grown = std::make_shared<Entries>(*entries);
+  for (const auto& folder : folders_) {
+    for (const auto& path : storesIn(folder)) {
+      if (refused_.contains(path.string())) continue;
+      bool known = false;
+      for (const auto& e : *grown) known = known || e->path == path;
+      if (known) continue;
+      try {
+        auto entry = makeEntry(path, *grown);
+        if (!entry) {
+          refused_.insert(path.string());
+          log.push_back("not serving " + path.string() + ": its id '" + idFor(path) + "' is taken");
+          continue;
+        }
+        log.push_back("added " + path.string() + " as '" + entry->id + "'");
+        grown->push_back(std::move(entry));
+      } catch (const std::exception& ex) {  // half-copied, say: tried again next time
+        log.push_back("cannot serve " + path.string() + " yet: " + ex.what());
+      }
+    }
+  }
+  if (grown->size() != entries->size()) {
+    entries_ = std::move(grown);
+    ++version_;
   }
   return log;
 }

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -87,15 +88,23 @@ class TilesetCatalog {
   [[nodiscard]] std::uint64_t version() const { return version_.load(); }
 
   /// Reopens every store whose file (an archive) or tileset.json (a
-  /// directory) changed since it was opened (inode, size or mtime). A store
-  /// that cannot be opened now keeps serving its old version. Returns one
-  /// line per store reloaded or refused, for the log. Thread-safe with the
-  /// readers; one refresh at a time.
+  /// directory) changed since it was opened (inode, size or mtime), and
+  /// adds the stores that appeared in the folders served. A store that
+  /// cannot be opened now keeps serving its old version (a new one is tried
+  /// again next time); a new store whose id is taken is not served. Returns
+  /// one line per store reloaded, added or refused, for the log. Thread-safe
+  /// with the readers; one refresh at a time.
   std::vector<std::string> refresh();
 
  private:
   struct Entry;
-  std::vector<std::unique_ptr<Entry>> entries_;
+  using Entries = std::vector<std::shared_ptr<Entry>>;
+  /// Null when `path`'s id is taken in `existing`; throws what Tileset throws.
+  static std::shared_ptr<Entry> makeEntry(const std::filesystem::path& path, const Entries& existing);
+
+  std::vector<std::filesystem::path> folders_;
+  std::set<std::string> refused_;  // new stores not served for their id (refresh only)
+  std::atomic<std::shared_ptr<const Entries>> entries_;
   std::atomic<std::uint64_t> version_{0};
 };
 

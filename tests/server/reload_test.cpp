@@ -69,3 +69,35 @@ TEST(Reload, AStoreRenamedOverIsServedWholeNeverTorn) {
 
 }  // namespace
 }  // namespace tinsmith::test
+
+namespace tinsmith::test {
+namespace {
+
+TEST(Reload, AStoreAddedToAServedFolderIsServed) {
+  namespace fs = std::filesystem;
+  const auto dir = scratchDir("server-folder-" + std::to_string(::getpid()));
+  fs::create_directories(dir / "stores");
+  auto options = RunningServer::defaults();
+  options.stores = {dir / "stores"};  // empty at the start, as in the Docker image
+  options.reloadInterval = std::chrono::milliseconds(50);
+  RunningServer server(options);
+  EXPECT_EQ(nlohmann::json::parse(httpGet(server.port(), "/tilesets").body)["tilesets"].size(), 0u);
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/late/tileset.json").status, 404);
+
+  fs::copy_file(testStoreDir() / "hill.3dtiles", dir / "late.copying");
+  fs::rename(dir / "late.copying", dir / "stores/late.3dtiles");
+  HttpResponse r;
+  for (int i = 0; i < 2000 && r.status != 200; ++i) {  // at most 20 s
+    r = httpGet(server.port(), "/tilesets/late/tileset.json");
+    if (r.status != 200) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body,
+            store::openStoreForReading(testStoreDir() / "hill.3dtiles")->get("tileset.json").value());
+  const auto list = nlohmann::json::parse(httpGet(server.port(), "/tilesets").body);
+  ASSERT_EQ(list["tilesets"].size(), 1u);
+  EXPECT_EQ(list["tilesets"][0]["id"], "late");
+}
+
+}  // namespace
+}  // namespace tinsmith::test
