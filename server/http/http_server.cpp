@@ -177,7 +177,7 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
                                             std::to_string(server_.options.limits.maxBodyBytes) +
                                             " bytes)"),
                      false);
-    if (ec == beast::error::timeout && buffer_.size() > 0)
+    if (ec == beast::error::timeout && (buffer_.size() > 0 || parser_->got_some()))
       return respond(transportError(408, "the request did not arrive in time"), false);
     if (ec == http::error::end_of_stream || ec == beast::error::timeout ||
         ec == asio::error::operation_aborted || ec == asio::error::connection_reset ||

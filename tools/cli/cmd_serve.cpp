@@ -88,11 +88,11 @@ void addServeCommand(CLI::App& app) {
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
   cmd->add_option("--idle-timeout", opt->idleTimeout,
-                  "Seconds a keep-alive connection may wait for its next request")
+                  "Seconds a keep-alive connection has to send its next request whole")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
   cmd->add_option("--reload", opt->reloadSeconds,
-                  "Seconds between checks for a store replaced on disk, picked up whole (0: never)")
+                  "Seconds between checks for stores replaced on disk or new in a served folder (0: never)")
       ->check(CLI::Range(0.0, 86400.0))
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", opt->quiet, "No access log (one line per request on stderr)");
