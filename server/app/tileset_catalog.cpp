@@ -3,7 +3,10 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <optional>
 #include <numbers>
 
 #include "core/base/error.hpp"
@@ -107,33 +110,39 @@ Tileset::Tileset(std::string id, const fs::path& path)
     minZoom = minZoom < 0 ? z : std::min(minZoom, z);
     maxStoredZoom = std::max(maxStoredZoom, z);
   }
-  maxZoom_ = kMaxZoom;
-  if (build.is_object() && build.contains("options"))
-    maxZoom_ = std::clamp(build["options"].value("maxZoom", kMaxZoom), 0, kMaxZoom);
-  if (build.is_object() && build.contains("tin")) crs_ = build["tin"].value("crs", "");
+  // Stores are files from outside: every field is looked up, never assumed.
+  const auto number = [](const nlohmann::json& j, const char* pointer) -> std::optional<double> {
+    const nlohmann::json::json_pointer at(pointer);
+    if (!j.is_object() || !j.contains(at) || !j.at(at).is_number()) return std::nullopt;
+    return j.at(at).get<double>();
+  };
+  const nlohmann::json::json_pointer crsAt("/tin/crs");
+  if (build.is_object() && build.contains(crsAt) && build.at(crsAt).is_string())
+    crs_ = build.at(crsAt).get<std::string>();
+  maxZoom_ = static_cast<int>(std::clamp(number(build, "/options/maxZoom").value_or(kMaxZoom), 0.0,
+                                         static_cast<double>(kMaxZoom)));
 
   summary_["id"] = id_;
   summary_["name"] = path.filename().string();
   summary_["crs"] = crs_;
   nlohmann::ordered_json bounds;
-  const auto& region = tileset["root"]["boundingVolume"]["region"];
-  if (region.is_array() && region.size() == 6) {
-    const double deg = 180.0 / std::numbers::pi;
-    bounds["lonlat"] = {region[0].get<double>() * deg, region[1].get<double>() * deg,
-                        region[2].get<double>() * deg, region[3].get<double>() * deg};
-    summary_["heights"] = {region[4], region[5]};
+  const double deg = 180.0 / std::numbers::pi;
+  std::array<std::optional<double>, 6> region;
+  for (int i = 0; i < 6; ++i)
+    region[static_cast<std::size_t>(i)] =
+        number(tileset, ("/root/boundingVolume/region/" + std::to_string(i)).c_str());
+  if (std::all_of(region.begin(), region.end(), [](const auto& v) { return v.has_value(); })) {
+    bounds["lonlat"] = {*region[0] * deg, *region[1] * deg, *region[2] * deg, *region[3] * deg};
+    summary_["heights"] = {*region[4], *region[5]};
   }
-  if (build.is_object() && build.contains("pyramid")) {
-    const auto& p = build["pyramid"];
-    const double x0 = p["origin"][0], y0 = p["origin"][1], size = p["size"];
-    bounds["project"] = {x0, y0, x0 + size, y0 + size};
-  }
+  const auto x0 = number(build, "/pyramid/origin/0"), y0 = number(build, "/pyramid/origin/1");
+  const auto size = number(build, "/pyramid/size");
+  if (x0 && y0 && size) bounds["project"] = {*x0, *y0, *x0 + *size, *y0 + *size};
   summary_["bounds"] = bounds;
   summary_["zooms"] = {{"min", std::max(minZoom, 0)}, {"max", std::max(maxStoredZoom, 0)},
                        {"pyramidMax", maxZoom_}};
   summary_["tileCount"] = tiles;
-  if (build.is_object() && build.contains("options"))
-    summary_["tolerance"] = build["options"].value("tolerance", 0.0);
+  if (const auto tolerance = number(build, "/options/tolerance")) summary_["tolerance"] = *tolerance;
   summary_["elevation"] = store_->contains(kTinKey);
   summary_["links"] = {{"tileset", "/tilesets/" + id_ + "/tileset.json"},
                        {"elevation", "/tilesets/" + id_ + "/elevation"},

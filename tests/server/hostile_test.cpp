@@ -276,3 +276,36 @@ TEST(Hostile, AFailingStoreReadIsA500WithABodyAndALogLine) {
 
 }  // namespace
 }  // namespace tinsmith::test
+
+namespace tinsmith::test {
+namespace {
+
+TEST(Hostile, AStoreWithOddMetadataIsServedWithWhatItHas) {
+  namespace fs = std::filesystem;
+  const auto dir = scratchDir("server-odd-" + std::to_string(::getpid()));
+  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
+  store::writeStore(*source, source->keys(), dir / "odd");
+  {
+    auto odd = store::openStoreForWriting(dir / "odd", true);
+    odd->put("tinsmith/build.json", R"({"options": 5, "tin": [], "pyramid": {"origin": "x", "size": null}})");
+    odd->put("tileset.json", R"({"asset": {"version": "1.1"}, "root": {"boundingVolume": {"box": [0,0,0,1,0,0,0,1,0,0,0,1]}}})");
+    odd->put("tinsmith/terrain.tin", "not a TIN");
+  }
+  auto options = RunningServer::defaults();
+  options.stores = {dir / "odd"};
+  RunningServer server(options);
+  const auto list = nlohmann::json::parse(httpGet(server.port(), "/tilesets").body);
+  const auto& t = list["tilesets"][0];
+  EXPECT_EQ(t["id"], "odd");
+  EXPECT_EQ(t["crs"], "");
+  EXPECT_FALSE(t["bounds"].contains("lonlat"));
+  EXPECT_FALSE(t["bounds"].contains("project"));
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/odd/tiles/0/0/0.glb").status, 200);
+  const auto e = httpGet(server.port(), "/tilesets/odd/elevation?x=430100&y=4515100");
+  EXPECT_EQ(e.status, 400) << e.body;  // the TIN cannot be read: said, not crashed
+  EXPECT_NE(e.body.find("odd"), std::string::npos) << e.body;
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/odd/elevation?lon=-111.8&lat=40.8").status, 400);
+}
+
+}  // namespace
+}  // namespace tinsmith::test
