@@ -154,6 +154,14 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
                : "tilesets/" + route.tile.name() + ".json";
       return serveStored(request, *tileset, key, tile);
     }
+    case RouteKind::Elevation:
+    case RouteKind::Profile:
+      if (!tileset->hasTin())
+        return notFound("tileset '" + tileset->id() + "' carries no TIN, so it has no elevations");
+      break;
+    default: break;
+  }
+  switch (route.kind) {
     case RouteKind::Elevation: {
       if (post) return serveJson(request, elevationBatch(*tileset, request.body).dump(), "no-store");
       auto answer = elevationAt(*tileset, target);

@@ -143,7 +143,8 @@ Tileset::Tileset(std::string id, const fs::path& path)
                        {"pyramidMax", maxZoom_}};
   summary_["tileCount"] = tiles;
   if (const auto tolerance = number(build, "/options/tolerance")) summary_["tolerance"] = *tolerance;
-  summary_["elevation"] = store_->contains(kTinKey);
+  hasTin_ = store_->contains(kTinKey);
+  summary_["elevation"] = hasTin_;
   summary_["links"] = {{"tileset", "/tilesets/" + id_ + "/tileset.json"},
                        {"elevation", "/tilesets/" + id_ + "/elevation"},
                        {"profile", "/tilesets/" + id_ + "/profile"}};
@@ -157,7 +158,12 @@ const Surface& Tileset::surface() const {
     if (!bytes)
       throw inputError("tileset '" + id_ + "' carries no TIN, so it has no elevations", {},
                        "rebuild it with tinsmith tile, which stores the TIN");
-    surface_ = std::make_unique<Surface>(ingest::decodeTin(*bytes, id_ + ":" + kTinKey));
+    try {
+      surface_ = std::make_unique<Surface>(ingest::decodeTin(*bytes, id_ + ":" + kTinKey));
+    } catch (const Error& e) {
+      throw ioError("the TIN in tileset '" + id_ + "' cannot be read: " + e.what(), {},
+                    "rebuild the store with tinsmith tile");
+    }
   });
   return *surface_;
 }

@@ -49,8 +49,11 @@ class Tileset {
   [[nodiscard]] int maxZoom() const { return maxZoom_; }
   [[nodiscard]] const std::string& crs() const { return crs_; }
 
+  /// Whether the store carries its TIN (tinsmith/terrain.tin).
+  [[nodiscard]] bool hasTin() const { return hasTin_; }
   /// The TIN's surface, loaded from tinsmith/terrain.tin on first use
-  /// (thread-safe). Throws inputError when the store carries no TIN.
+  /// (thread-safe). Throws inputError when the store carries no TIN, ioError
+  /// when it cannot be decoded (the store is damaged: a server-side fault).
   [[nodiscard]] const Surface& surface() const;
   /// Longitude, latitude (WGS84 degrees) into the project CRS. Thread-safe.
   /// Throws inputError when PROJ cannot transform the point.
@@ -62,6 +65,7 @@ class Tileset {
   std::unique_ptr<store::TileStore> store_;
   nlohmann::ordered_json summary_;
   int maxZoom_ = 0;
+  bool hasTin_ = false;
   std::string crs_;
   mutable std::once_flag surfaceOnce_;
   mutable std::unique_ptr<Surface> surface_;

@@ -301,10 +301,25 @@ TEST(Hostile, AStoreWithOddMetadataIsServedWithWhatItHas) {
   EXPECT_FALSE(t["bounds"].contains("lonlat"));
   EXPECT_FALSE(t["bounds"].contains("project"));
   EXPECT_EQ(httpGet(server.port(), "/tilesets/odd/tiles/0/0/0.glb").status, 200);
-  const auto e = httpGet(server.port(), "/tilesets/odd/elevation?x=430100&y=4515100");
-  EXPECT_EQ(e.status, 400) << e.body;  // the TIN cannot be read: said, not crashed
-  EXPECT_NE(e.body.find("odd"), std::string::npos) << e.body;
-  EXPECT_EQ(httpGet(server.port(), "/tilesets/odd/elevation?lon=-111.8&lat=40.8").status, 400);
+  // The TIN cannot be read: the store's fault, a 500 (its details logged).
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/odd/elevation?x=430100&y=4515100").status, 500);
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/odd/profile?line=1,2;3,4").status, 500);
+}
+
+TEST(Hostile, AStoreWithoutItsTinHasNoElevations) {
+  const auto dir = scratchDir("server-no-tin-" + std::to_string(::getpid()));
+  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
+  std::vector<std::string> keys;
+  for (const auto& k : source->keys())
+    if (k != "tinsmith/terrain.tin") keys.push_back(k);
+  store::writeStore(*source, keys, dir / "bare.3dtiles");
+  auto options = RunningServer::defaults();
+  options.stores = {dir / "bare.3dtiles"};
+  RunningServer server(options);
+  const auto e = httpGet(server.port(), "/tilesets/bare/elevation?x=430100&y=4515100");
+  EXPECT_EQ(e.status, 404);
+  EXPECT_NE(e.body.find("no TIN"), std::string::npos) << e.body;
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/bare/tiles/0/0/0.glb").status, 200);
 }
 
 }  // namespace
