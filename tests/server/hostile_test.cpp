@@ -238,23 +238,14 @@ TEST(Hostile, ClientsVanishingMidResponseLeaveTheServerWhole) {
   EXPECT_TRUE(steady.finish());
 }
 
-}  // namespace
-}  // namespace tinsmith::test
-
-namespace tinsmith::test {
-namespace {
-
 TEST(Hostile, AFailingStoreReadIsA500WithABodyAndALogLine) {
   namespace fs = std::filesystem;
-  const auto dir = scratchDir("server-failing-" + std::to_string(::getpid()));
-  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
-  const auto keys = source->keys();
-  store::writeStore(*source, keys, dir / "broken");
-  fs::remove(dir / "broken/tiles/0/0/0.glb");
-  fs::create_symlink("0.glb", dir / "broken/tiles/0/0/0.glb");  // a loop: open() fails with ELOOP
+  const auto broken = testStoreCopy("server-failing", "broken");
+  fs::remove(broken / "tiles/0/0/0.glb");
+  fs::create_symlink("0.glb", broken / "tiles/0/0/0.glb");  // a loop: open() fails with ELOOP
 
   auto options = RunningServer::defaults();
-  options.stores = {dir / "broken"};
+  options.stores = {broken};
   std::FILE* log = std::tmpfile();
   options.notices = log;
   RunningServer server(options);
@@ -263,7 +254,7 @@ TEST(Hostile, AFailingStoreReadIsA500WithABodyAndALogLine) {
   EXPECT_EQ(r.status, 500);
   EXPECT_EQ(r.header("content-type"), "application/json");
   EXPECT_NE(r.body.find("\"status\":500"), std::string::npos) << r.body;
-  EXPECT_EQ(r.body.find(dir.string()), std::string::npos) << r.body;  // no server paths
+  EXPECT_EQ(r.body.find(broken.string()), std::string::npos) << r.body;  // no server paths
   EXPECT_EQ(c.request("/tilesets/broken/tileset.json").status, 200);  // and it goes on
   server.stopAndJoin();  // every exchange logged
   std::rewind(log);
@@ -274,25 +265,16 @@ TEST(Hostile, AFailingStoreReadIsA500WithABodyAndALogLine) {
   EXPECT_NE(text.find("tiles/0/0/0.glb"), std::string::npos) << text;
 }
 
-}  // namespace
-}  // namespace tinsmith::test
-
-namespace tinsmith::test {
-namespace {
-
 TEST(Hostile, AStoreWithOddMetadataIsServedWithWhatItHas) {
-  namespace fs = std::filesystem;
-  const auto dir = scratchDir("server-odd-" + std::to_string(::getpid()));
-  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
-  store::writeStore(*source, source->keys(), dir / "odd");
+  const auto path = testStoreCopy("server-odd", "odd");
   {
-    auto odd = store::openStoreForWriting(dir / "odd", true);
+    auto odd = store::openStoreForWriting(path, true);
     odd->put("tinsmith/build.json", R"({"options": 5, "tin": [], "pyramid": {"origin": "x", "size": null}})");
     odd->put("tileset.json", R"({"asset": {"version": "1.1"}, "root": {"boundingVolume": {"box": [0,0,0,1,0,0,0,1,0,0,0,1]}}})");
     odd->put("tinsmith/terrain.tin", "not a TIN");
   }
   auto options = RunningServer::defaults();
-  options.stores = {dir / "odd"};
+  options.stores = {path};
   RunningServer server(options);
   const auto list = nlohmann::json::parse(httpGet(server.port(), "/tilesets").body);
   const auto& t = list["tilesets"][0];
@@ -307,14 +289,9 @@ TEST(Hostile, AStoreWithOddMetadataIsServedWithWhatItHas) {
 }
 
 TEST(Hostile, AStoreWithoutItsTinHasNoElevations) {
-  const auto dir = scratchDir("server-no-tin-" + std::to_string(::getpid()));
-  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
-  std::vector<std::string> keys;
-  for (const auto& k : source->keys())
-    if (k != "tinsmith/terrain.tin") keys.push_back(k);
-  store::writeStore(*source, keys, dir / "bare.3dtiles");
   auto options = RunningServer::defaults();
-  options.stores = {dir / "bare.3dtiles"};
+  options.stores = {testStoreCopy("server-no-tin", "bare.3dtiles",
+                                  [](const std::string& k) { return k != "tinsmith/terrain.tin"; })};
   RunningServer server(options);
   const auto e = httpGet(server.port(), "/tilesets/bare/elevation?x=430100&y=4515100");
   EXPECT_EQ(e.status, 404);

@@ -67,12 +67,6 @@ TEST(Reload, AStoreRenamedOverIsServedWholeNeverTorn) {
   EXPECT_EQ(list["tilesets"][0]["tileCount"], newTiles);
 }
 
-}  // namespace
-}  // namespace tinsmith::test
-
-namespace tinsmith::test {
-namespace {
-
 TEST(Reload, AStoreAddedToAServedFolderIsServed) {
   namespace fs = std::filesystem;
   const auto dir = scratchDir("server-folder-" + std::to_string(::getpid()));

@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "core/cdt/cdt.hpp"
+#include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "server/app/tile_server.hpp"
@@ -84,6 +85,20 @@ inline std::filesystem::path coarseStore() {
     return p;
   }();
   return path;
+}
+
+/// A copy of the test store written as `name` (its kind from the name: an
+/// archive for ".3dtiles", else a directory) in a fresh scratch directory
+/// `scratch`, with the keys `keep` accepts (all by default).
+inline std::filesystem::path testStoreCopy(const std::string& scratch, const std::string& name,
+                                           bool (*keep)(const std::string&) = nullptr) {
+  const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
+  std::vector<std::string> keys;
+  for (const auto& k : source->keys())
+    if (!keep || keep(k)) keys.push_back(k);
+  const auto target = scratchDir(scratch + "-" + std::to_string(::getpid())) / name;
+  store::writeStore(*source, keys, target);
+  return target;
 }
 
 /// A TileServer on 127.0.0.1, an ephemeral port, serving in a background
