@@ -66,8 +66,13 @@ tinsmith_require("toml++" libtomlplusplus-dev tomlplusplus_FOUND)
 find_package(CLI11 2 QUIET)
 tinsmith_require("CLI11" libcli11-dev CLI11_FOUND)
 
-pkg_check_modules(HTTPLIB QUIET IMPORTED_TARGET cpp-httplib)
-tinsmith_require("cpp-httplib" libcpp-httplib-dev HTTPLIB_FOUND)
+# The server's HTTP layer: Boost.Beast over Asio, header-only (chosen by
+# measurement, docs/server-http-layer.md). Debian's default Boost: 1.81's -dev
+# package conflicts with the 1.74 one GDAL's and CGAL's -dev packages need.
+find_package(Boost 1.74 QUIET)
+tinsmith_require("Boost 1.74 (Beast, Asio)" libboost-dev Boost_FOUND)
+find_package(ZLIB QUIET)
+tinsmith_require("zlib" zlib1g-dev ZLIB_FOUND)
 
 if(TINSMITH_TESTS)
   find_package(GTest QUIET)

@@ -23,7 +23,8 @@ packages=(
   # libraries
   libeigen3-dev libgeographiclib-dev libopenexr-dev libtinygltf-dev libdraco-dev
   libgdal-dev gdal-bin libproj-dev proj-data libsqlite3-dev sqlite3 libtomlplusplus-dev libcli11-dev
-  libcpp-httplib-dev nlohmann-json3-dev
+  nlohmann-json3-dev
+  libboost-dev zlib1g-dev            # the server: Beast/Asio (Debian's default Boost), gzip
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev
   chromium                           # tests/js/cesium_smoke.mjs renders in it
@@ -36,6 +37,9 @@ if [ "$bench" -eq 1 ]; then
     # benchmark-only references (tests/bench/): GRASS GIS v.surf.rst, and
     # python3 GDAL + NumPy for the error evaluator
     grass-core python3-gdal python3-numpy
+    # the server's benchmarks (tests/bench/server/): load generator, the
+    # static server it is measured against, the cpp-httplib prototype
+    wrk nginx-light libcpp-httplib-dev
   )
 fi
 

@@ -16,10 +16,23 @@ int httpStatusFor(ErrorKind kind) {
   return 500;
 }
 
-std::string errorBodyJson(int status, ErrorKind kind, const std::string& message) {
+std::string errorBodyJson(int status, ErrorKind kind, const std::string& message,
+                          const std::string& parameter) {
   nlohmann::json body;
   body["error"] = {{"status", status}, {"kind", std::string(toString(kind))}, {"message", message}};
-  return body.dump();
+  if (!parameter.empty()) body["error"]["parameter"] = parameter;
+  // Messages may quote what a client sent: replace invalid UTF-8 rather than throw.
+  return body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+Response errorResponse(int status, ErrorKind kind, const std::string& message,
+                       const std::string& parameter) {
+  Response r;
+  r.status = status;
+  r.addHeader("Content-Type", "application/json");
+  r.addHeader("Cache-Control", "no-store");
+  r.setBody(errorBodyJson(status, kind, message, parameter) + "\n");
+  return r;
 }
 
 }  // namespace tinsmith::server

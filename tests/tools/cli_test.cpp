@@ -57,7 +57,7 @@ namespace tinsmith {
 namespace {
 
 TEST(Cli, UnbuiltStageSaysSoAndExitsWithNotImplemented) {
-  const auto r = test::runTinsmith("serve some.3dtiles");
+  const auto r = test::runTinsmith("build some.toml");
   EXPECT_EQ(r.exitCode, 6) << r.err;
   EXPECT_NE(r.err.find("not implemented yet"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.rfind("ERROR: ", 0), 0u) << r.err;

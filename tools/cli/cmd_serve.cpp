@@ -1,15 +1,128 @@
-// `tinsmith serve`: serve tile stores over HTTP: tilesets, tiles, elevation, viewer.
+// `tinsmith serve`: serve tile stores over HTTP: tilesets, tiles, elevation,
+// a page listing them, health and metrics (DESIGN.md "Server").
+//   tinsmith serve STORE|FOLDER [MORE…] [--host H] [--port P] [--cors ORIGIN|off]
+//                  [--cache-mb N] [--threads N] [--quiet]
+// SIGTERM and SIGINT shut it down gracefully (requests in flight finish) and
+// it exits 0.
+#include <pthread.h>
+#include <signal.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
 #include "core/base/error.hpp"
+#include "server/app/tile_server.hpp"
 #include "tools/cli/commands.hpp"
 
 namespace tinsmith::cli {
 
+namespace {
+
+struct ServeOptions {
+  std::vector<std::string> stores;
+  std::string host = "127.0.0.1";
+  int port = 8080;
+  std::string cors = "*";
+  std::size_t cacheMb = 256;
+  int threads = 0;
+  int maxConnections = 10000;
+  double readTimeout = 10, idleTimeout = 30, reloadSeconds = 2;
+  bool quiet = false;
+};
+
+std::chrono::milliseconds seconds(double s) {
+  return std::chrono::milliseconds(static_cast<long long>(s * 1000));
+}
+
+/// Runs `server` until SIGTERM or SIGINT: the signals are blocked in every
+/// thread (the server's threads inherit the mask) and one thread waits for
+/// them with sigwait, so no code runs in a signal handler.
+void serveUntilSignalled(server::TileServer& server) {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGUSR1);  // wakes the waiter when the server stops by itself
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::thread waiter([&] {
+    int received = 0;
+    sigwait(&signals, &received);
+    server.stop();
+  });
+  server.run();
+  pthread_kill(waiter.native_handle(), SIGUSR1);
+  waiter.join();
+}
+
+}  // namespace
+
 void addServeCommand(CLI::App& app) {
+  auto opt = std::make_shared<ServeOptions>();
   auto* cmd = app.add_subcommand("serve", "Serve tile stores over HTTP: tilesets, tiles, elevation, viewer");
-  cmd->add_option("stores", "Tile stores (.3dtiles archives or directories)")->required();
-  cmd->add_option("--host", "Address to listen on (default 127.0.0.1)");
-  cmd->add_option("--port", "Port to listen on (default 8080)");
-  cmd->callback([] { throw notImplemented("tinsmith serve (the HTTP tile server)"); });
+  cmd->add_option("stores", opt->stores,
+                  "Tile stores (.3dtiles archives or store directories), or folders of them")
+      ->required();
+  cmd->add_option("--host", opt->host, "Address to listen on")->capture_default_str();
+  cmd->add_option("--port", opt->port, "Port to listen on (0: any free port)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  cmd->add_option("--cors", opt->cors,
+                  "Access-Control-Allow-Origin for every response: * , one origin, or off")
+      ->capture_default_str();
+  cmd->add_option("--cache-mb", opt->cacheMb, "Memory for hot tiles and tileset files, MiB (0: none)")
+      ->check(CLI::Range(0, 1 << 20))
+      ->capture_default_str();
+  cmd->add_option("--threads", opt->threads, "I/O threads (0: one per core)")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
+  cmd->add_option("--max-connections", opt->maxConnections,
+                  "Open connections at most; more get 503 and are closed")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--read-timeout", opt->readTimeout,
+                  "Seconds a new connection has to send its first request whole")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--idle-timeout", opt->idleTimeout,
+                  "Seconds a keep-alive connection has to send its next request whole")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--reload", opt->reloadSeconds,
+                  "Seconds between checks for stores replaced on disk or new in a served folder (0: never)")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
+  cmd->add_flag("-q,--quiet", opt->quiet, "No access log (one line per request on stderr)");
+  cmd->footer(
+      "Routes: / (what is served), /health, /metrics (Prometheus), /tilesets,\n"
+      "/tilesets/ID/tileset.json, /tilesets/ID/tilesets/Z/X/Y.json,\n"
+      "/tilesets/ID/tiles/Z/X/Y.glb, /tilesets/ID/elevation?x=&y= (or lon=&lat=; POST\n"
+      "{\"points\": [[x, y], …]}), /tilesets/ID/profile?line=x,y;x,y&spacing=S (or\n"
+      "lonlat=; POST {\"line\": …}). ID is a store's file name without .3dtiles.\n"
+      "SIGTERM/SIGINT: requests in flight finish, then exit 0.\n\n" +
+      cmd->get_footer());
+  cmd->callback([opt] {
+    server::TileServerOptions o;
+    for (const auto& s : opt->stores) o.stores.emplace_back(s);
+    o.http.host = opt->host;
+    o.http.port = static_cast<unsigned short>(opt->port);
+    o.http.threads = opt->threads;
+    o.http.limits.maxConnections = static_cast<std::size_t>(opt->maxConnections);
+    o.http.limits.readTimeout = seconds(opt->readTimeout);
+    o.http.limits.idleTimeout = seconds(opt->idleTimeout);
+    o.service.cors = opt->cors == "off" ? "" : opt->cors;
+    o.service.cacheBytes = opt->cacheMb << 20;
+    o.log = opt->quiet ? nullptr : stderr;
+    o.reloadInterval = seconds(opt->reloadSeconds);
+    server::TileServer server(std::move(o));
+    std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
+              << " tileset(s) on http://" << opt->host << ":" << server.port() << "/" << std::endl;
+    serveUntilSignalled(server);
+    if (!opt->quiet) std::cerr << "tinsmith serve: stopped" << std::endl;
+  });
 }
 
 }  // namespace tinsmith::cli

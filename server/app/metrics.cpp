@@ -1,0 +1,91 @@
+#include "server/app/metrics.hpp"
+
+#include <cstdio>
+
+namespace tinsmith::server {
+
+std::size_t Metrics::statusSlot(int status) {
+  for (std::size_t i = 0; i + 1 < kStatusSlots; ++i)
+    if (kStatuses[i] == status) return i;
+  return kStatusSlots - 1;
+}
+
+void Metrics::countRequest(RouteKind route, int status, std::uint64_t bytes,
+                           std::chrono::steady_clock::duration elapsed) {
+  const auto r = static_cast<std::size_t>(route);
+  requests_[r][statusSlot(status)].fetch_add(1, kRelaxed);
+  bytes_[r].fetch_add(bytes, kRelaxed);
+  const double seconds = std::chrono::duration<double>(elapsed).count();
+  std::size_t bucket = 0;
+  while (bucket < kBuckets.size() && seconds > kBuckets[bucket]) ++bucket;
+  latency_[bucket].fetch_add(1, kRelaxed);
+  latencyNanos_.fetch_add(
+      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(elapsed).count()),
+      kRelaxed);
+}
+
+std::uint64_t Metrics::requests(RouteKind route, int status) const {
+  return requests_[static_cast<std::size_t>(route)][statusSlot(status)].load(kRelaxed);
+}
+
+std::string Metrics::prometheusText() const {
+  std::string out;
+  char line[256];
+  out += "# HELP tinsmith_http_requests_total Requests answered, by route and status.\n"
+         "# TYPE tinsmith_http_requests_total counter\n";
+  for (int r = 0; r < kRouteKinds; ++r)
+    for (std::size_t s = 0; s < kStatusSlots; ++s) {
+      const auto n = requests_[static_cast<std::size_t>(r)][s].load(kRelaxed);
+      if (n == 0) continue;
+      const std::string status = s + 1 < kStatusSlots ? std::to_string(kStatuses[s]) : "other";
+      std::snprintf(line, sizeof line, "tinsmith_http_requests_total{route=\"%s\",status=\"%s\"} %llu\n",
+                    std::string(routeName(static_cast<RouteKind>(r))).c_str(), status.c_str(),
+                    static_cast<unsigned long long>(n));
+      out += line;
+    }
+  out += "# HELP tinsmith_http_response_bytes_total Bytes written (headers and bodies), by route.\n"
+         "# TYPE tinsmith_http_response_bytes_total counter\n";
+  for (int r = 0; r < kRouteKinds; ++r) {
+    std::snprintf(line, sizeof line, "tinsmith_http_response_bytes_total{route=\"%s\"} %llu\n",
+                  std::string(routeName(static_cast<RouteKind>(r))).c_str(),
+                  static_cast<unsigned long long>(bytes_[static_cast<std::size_t>(r)].load(kRelaxed)));
+    out += line;
+  }
+  out += "# HELP tinsmith_http_request_duration_seconds From the request read to its response written.\n"
+         "# TYPE tinsmith_http_request_duration_seconds histogram\n";
+  std::uint64_t cumulative = 0;
+  for (std::size_t b = 0; b <= kBuckets.size(); ++b) {
+    cumulative += latency_[b].load(kRelaxed);
+    if (b < kBuckets.size())
+      std::snprintf(line, sizeof line, "tinsmith_http_request_duration_seconds_bucket{le=\"%g\"} %llu\n",
+                    kBuckets[b], static_cast<unsigned long long>(cumulative));
+    else
+      std::snprintf(line, sizeof line, "tinsmith_http_request_duration_seconds_bucket{le=\"+Inf\"} %llu\n",
+                    static_cast<unsigned long long>(cumulative));
+    out += line;
+  }
+  std::snprintf(line, sizeof line,
+                "tinsmith_http_request_duration_seconds_sum %.9f\n"
+                "tinsmith_http_request_duration_seconds_count %llu\n",
+                static_cast<double>(latencyNanos_.load(kRelaxed)) * 1e-9,
+                static_cast<unsigned long long>(cumulative));
+  out += line;
+  char tail[768];
+  std::snprintf(tail, sizeof tail,
+                "# HELP tinsmith_tile_cache_hits_total Tiles and tileset files served from memory.\n"
+                "# TYPE tinsmith_tile_cache_hits_total counter\n"
+                "tinsmith_tile_cache_hits_total %llu\n"
+                "# HELP tinsmith_tile_cache_misses_total Tiles and tileset files read from a store.\n"
+                "# TYPE tinsmith_tile_cache_misses_total counter\n"
+                "tinsmith_tile_cache_misses_total %llu\n"
+                "# HELP tinsmith_open_connections Connections open now.\n"
+                "# TYPE tinsmith_open_connections gauge\n"
+                "tinsmith_open_connections %lld\n",
+                static_cast<unsigned long long>(cacheHits_.load(kRelaxed)),
+                static_cast<unsigned long long>(cacheMisses_.load(kRelaxed)),
+                static_cast<long long>(openConnections_.load(kRelaxed)));
+  out += tail;
+  return out;
+}
+
+}  // namespace tinsmith::server

@@ -1,0 +1,90 @@
+#include "server/app/tile_server.hpp"
+
+#include <ctime>
+#include <thread>
+
+namespace tinsmith::server {
+
+std::string accessLogLine(const Exchange& e) {
+  std::string target;
+  for (std::size_t i = 0; i < e.request.target.size() && i < 512; ++i) {
+    const auto c = static_cast<unsigned char>(e.request.target[i]);
+    if (c < 0x20 || c > 0x7e || c == '"' || c == '\\') {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", c);
+      target += hex;
+    } else {
+      target += static_cast<char>(c);
+    }
+  }
+  if (e.request.target.size() > 512) target += "…";
+  std::string method = e.request.method.substr(0, 16);
+  for (char& c : method)
+    if (c < 'A' || c > 'Z') c = '?';
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char time[32];
+  std::strftime(time, sizeof time, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  char tail[128];
+  std::snprintf(tail, sizeof tail, "\" %d %zu %.3fms%s%s", e.response.status, e.bytesWritten,
+                std::chrono::duration<double, std::milli>(e.elapsed).count(),
+                e.response.cacheHit ? " hit" : "", e.completed ? "" : " aborted");
+  return std::string(e.peer) + " " + time + " \"" + (method.empty() ? "-" : method) + " " +
+         target + tail;
+}
+
+TileServer::TileServer(TileServerOptions options)
+    : options_(std::move(options)),
+      catalog_(options_.stores),
+      service_(catalog_, metrics_, options_.service) {
+  http_ = std::make_unique<HttpServer>(
+      options_.http, [this](const Request& r) { return service_.handle(r); },
+      [this](const Exchange& e) { logExchange(e); },
+      [this](int delta) { metrics_.countConnection(delta); });
+}
+
+TileServer::~TileServer() { http_.reset(); }
+
+void TileServer::run() {
+  std::thread watcher;
+  if (options_.reloadInterval.count() > 0) {
+    watcher = std::thread([this] {
+      std::unique_lock lock(watchMutex_);
+      while (!watchChanged_.wait_for(lock, options_.reloadInterval, [this] { return stopping_; })) {
+        lock.unlock();
+        for (const auto& line : catalog_.refresh())
+          if (options_.notices) std::fprintf(options_.notices, "tinsmith serve: %s\n", line.c_str());
+        lock.lock();
+      }
+    });
+  }
+  http_->run();
+  stop();  // run() can also end by itself: the watcher stops either way
+  if (watcher.joinable()) watcher.join();
+}
+
+void TileServer::stop() {
+  {
+    std::lock_guard lock(watchMutex_);
+    stopping_ = true;
+  }
+  watchChanged_.notify_all();
+  http_->stop();
+}
+
+void TileServer::logExchange(const Exchange& e) {
+  metrics_.countRequest(e.response.route, e.response.status, e.bytesWritten, e.elapsed);
+  if (!e.response.failure.empty() && options_.notices) {  // every 5xx is logged, --quiet or not
+    const std::string line = "tinsmith serve: " + std::to_string(e.response.status) + " for " +
+                             accessLogLine(e) + ": " + e.response.failure + "\n";
+    std::lock_guard lock(logMutex_);
+    std::fwrite(line.data(), 1, line.size(), options_.notices);
+  }
+  if (!options_.log) return;
+  const std::string line = accessLogLine(e) + "\n";
+  std::lock_guard lock(logMutex_);
+  std::fwrite(line.data(), 1, line.size(), options_.log);
+}
+
+}  // namespace tinsmith::server

@@ -1,0 +1,71 @@
+// A whole tile server: the catalog of stores, the routes, the metrics, the
+// access log and the HTTP server, wired together. `tinsmith serve` runs one;
+// tests run one on an ephemeral loopback port.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "server/app/metrics.hpp"
+#include "server/app/tile_service.hpp"
+#include "server/app/tileset_catalog.hpp"
+#include "server/http/http_server.hpp"
+
+namespace tinsmith::server {
+
+struct TileServerOptions {
+  std::vector<std::filesystem::path> stores;
+  ServerOptions http;
+  ServiceOptions service;
+  /// One line per request (access log) to `log`; null: none (--quiet).
+  std::FILE* log = stderr;
+  /// How often the stores are checked for a replacement (see
+  /// TilesetCatalog::refresh); zero: never.
+  std::chrono::milliseconds reloadInterval{2000};
+  /// Where reloads and failures (5xx, with their details) are reported;
+  /// null: nowhere.
+  std::FILE* notices = stderr;
+};
+
+class TileServer {
+ public:
+  /// Opens the stores and binds. Throws usageError/inputError for stores
+  /// that cannot be served, ioError when the address cannot be bound.
+  explicit TileServer(TileServerOptions options);
+  ~TileServer();
+
+  [[nodiscard]] unsigned short port() const { return http_->port(); }
+  [[nodiscard]] const TilesetCatalog& catalog() const { return catalog_; }
+  [[nodiscard]] const Metrics& metrics() const { return metrics_; }
+  /// Serves until stop() (see HttpServer::run), checking the stores for
+  /// replacements every reloadInterval meanwhile.
+  void run();
+  /// Graceful shutdown; thread-safe.
+  void stop();
+
+ private:
+  void logExchange(const Exchange& exchange);
+
+  TileServerOptions options_;
+  TilesetCatalog catalog_;
+  Metrics metrics_;
+  TileService service_;
+  std::mutex logMutex_;
+  std::unique_ptr<HttpServer> http_;
+  std::mutex watchMutex_;  // with watchChanged_, guards stopping_
+  std::condition_variable watchChanged_;
+  bool stopping_ = false;
+};
+
+/// The access-log line of one exchange (no newline): peer, time (UTC),
+/// "METHOD target", status, bytes, milliseconds, cache; the target's bytes
+/// outside printable ASCII, '"' and '\\' escaped as \xNN, cut at 512 bytes.
+std::string accessLogLine(const Exchange& exchange);
+
+}  // namespace tinsmith::server

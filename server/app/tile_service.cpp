@@ -1,0 +1,245 @@
+#include "server/app/tile_service.hpp"
+
+#include "core/base/error.hpp"
+#include "core/tiles/tileset_json.hpp"
+#include "server/app/elevation.hpp"
+#include "server/app/index_page.hpp"
+#include "server/http/error_status.hpp"
+#include "server/http/representation.hpp"
+
+namespace tinsmith::server {
+
+namespace {
+
+constexpr const char* kJson = "application/json";
+constexpr std::size_t kGzipAtLeast = 1024;  // smaller JSON is not worth a deflate
+
+std::string allowFor(RouteKind route) {
+  return routeAllowsPost(route) ? "GET, HEAD, POST, OPTIONS" : "GET, HEAD, OPTIONS";
+}
+
+Response notFound(const std::string& message) {
+  return errorResponse(404, ErrorKind::Input, message);
+}
+
+/// A 500 whose details (store paths, library messages) go to the log only.
+Response internalFailure(ErrorKind kind, const std::string& what) {
+  Response r = errorResponse(500, kind, "the server failed to answer; its log has the details");
+  r.failure = what;
+  return r;
+}
+
+}  // namespace
+
+TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
+    : catalog_(catalog), metrics_(metrics), options_(std::move(options)), cache_(options_.cacheBytes) {}
+
+std::shared_ptr<const TileService::Listing> TileService::listing() {
+  std::lock_guard lock(listingMutex_);
+  const std::uint64_t version = catalog_.version();
+  if (listing_ && listing_->version == version) return listing_;
+  auto fresh = std::make_shared<Listing>();
+  fresh->version = version;
+  const auto tilesets = catalog_.tilesets();
+  nlohmann::ordered_json list;
+  list["tilesets"] = nlohmann::ordered_json::array();
+  for (const auto& t : tilesets) list["tilesets"].push_back(t->summary());
+  fresh->tilesets = makeContent(list.dump(2) + "\n", true);
+  fresh->index = makeContent(indexPageHtml(tilesets), true);
+  listing_ = std::move(fresh);
+  return listing_;
+}
+
+Response TileService::handle(const Request& request) {
+  Response response;
+  RouteKind kind = RouteKind::Unknown;
+  try {
+    const auto target = parseRequestTarget(request.target);
+    if (!target) {
+      response = errorResponse(400, ErrorKind::Input,
+                               "malformed request target (bad escape, '..', '\\', NUL or "
+                               "control byte, empty segment)",
+                               "target");
+    } else {
+      auto matched = matchRoute(*target);
+      if (auto* error = std::get_if<RouteError>(&matched)) {
+        response = errorResponse(400, ErrorKind::Input, error->message, error->parameter);
+      } else {
+        const Route& route = std::get<Route>(matched);
+        kind = route.kind;
+        response = dispatch(request, *target, route);
+      }
+    }
+  } catch (const ParameterError& e) {
+    response = errorResponse(400, ErrorKind::Input, e.what(), e.parameter);
+  } catch (const Error& e) {
+    const int status = httpStatusFor(e.kind());
+    response = status >= 500 ? internalFailure(e.kind(), e.what())
+                             : errorResponse(status, e.kind(), e.what());
+  } catch (const std::exception& e) {
+    response = internalFailure(ErrorKind::Internal, e.what());
+  }
+  response.route = kind;
+  response.head = request.method == "HEAD";
+  addCors(response);
+  return response;
+}
+
+void TileService::addCors(Response& response) const {
+  if (options_.cors.empty()) return;
+  response.addHeader("Access-Control-Allow-Origin", options_.cors);
+  response.addHeader("Access-Control-Expose-Headers", "ETag, Content-Length, Content-Range");
+  if (options_.cors != "*") response.addHeader("Vary", "Origin");
+}
+
+Response TileService::dispatch(const Request& request, const RequestTarget& target,
+                               const Route& route) {
+  if (route.kind == RouteKind::Unknown)
+    return notFound("no route for this path (see / for what this server holds)");
+  const std::string& method = request.method;
+  if (method == "OPTIONS") {  // CORS preflight
+    Response r;
+    r.status = 204;
+    r.addHeader("Allow", allowFor(route.kind));
+    if (!options_.cors.empty()) {
+      r.addHeader("Access-Control-Allow-Methods", allowFor(route.kind));
+      r.addHeader("Access-Control-Allow-Headers",
+                  "Accept, Accept-Encoding, Content-Type, If-None-Match, Range");
+      r.addHeader("Access-Control-Max-Age", "86400");
+    }
+    return r;
+  }
+  const bool post = method == "POST" && routeAllowsPost(route.kind);
+  if (method != "GET" && method != "HEAD" && !post) {
+    Response r = errorResponse(405, ErrorKind::Input,
+                               "method " + method.substr(0, 32) + " is not allowed here");
+    r.addHeader("Allow", allowFor(route.kind));
+    return r;
+  }
+
+  switch (route.kind) {
+    case RouteKind::Index:
+      return serveContent(request, *listing()->index, "text/html; charset=utf-8", "no-cache", false);
+    case RouteKind::Health: {
+      Response r;
+      r.addHeader("Content-Type", kJson);
+      r.addHeader("Cache-Control", "no-store");
+      r.setBody("{\"status\":\"ok\",\"tilesets\":" + std::to_string(catalog_.tilesets().size()) + "}\n");
+      return r;
+    }
+    case RouteKind::Metrics: {
+      Response r;
+      r.addHeader("Content-Type", "text/plain; version=0.0.4; charset=utf-8");
+      r.addHeader("Cache-Control", "no-store");
+      r.setBody(metrics_.prometheusText());
+      return r;
+    }
+    case RouteKind::Tilesets:
+      return serveContent(request, *listing()->tilesets, kJson, "no-cache", false);
+    default: break;
+  }
+
+  const auto tileset = catalog_.find(route.tileset);  // held for the whole request
+  if (!tileset) return notFound("no tileset '" + route.tileset + "' (see /tilesets)");
+  switch (route.kind) {
+    case RouteKind::TilesetJson: return serveStored(request, *tileset, "tileset.json", false);
+    case RouteKind::ExternalTileset:
+    case RouteKind::Tile: {
+      const bool tile = route.kind == RouteKind::Tile;
+      if (route.outsidePyramid || route.tile.z > tileset->maxZoom())
+        return notFound("the tile is outside the pyramid of '" +
+                        tileset->id() + "' (zooms 0 to " + std::to_string(tileset->maxZoom()) + ")");
+      const std::string key =
+          tile ? tiles::tileContentKey(route.tile)
+               : "tilesets/" + route.tile.name() + ".json";
+      return serveStored(request, *tileset, key, tile);
+    }
+    case RouteKind::Elevation:
+    case RouteKind::Profile:
+      if (!tileset->hasTin())
+        return notFound("tileset '" + tileset->id() + "' carries no TIN, so it has no elevations");
+      break;
+    default: break;
+  }
+  switch (route.kind) {
+    case RouteKind::Elevation: {
+      if (post) return serveJson(request, elevationBatch(*tileset, request.body).dump(), "no-store");
+      auto answer = elevationAt(*tileset, target);
+      if (answer["z"].is_null())
+        return notFound("the point is outside the TIN of '" + tileset->id() + "'");
+      return serveJson(request, answer.dump(), kTilesetCacheControl);
+    }
+    case RouteKind::Profile: {
+      const auto answer = post ? profileBatch(*tileset, request.body) : profileAlong(*tileset, target);
+      return serveJson(request, answer.dump(), post ? "no-store" : kTilesetCacheControl);
+    }
+    default: break;
+  }
+  return notFound("no route for this path");
+}
+
+Response TileService::serveStored(const Request& request, const Tileset& tileset,
+                                  const std::string& key, bool tile) {
+  const std::string cacheKey = std::to_string(tileset.generation()) + '/' + key;
+  auto content = cache_.find(cacheKey);
+  metrics_.countCache(content != nullptr);
+  const bool hit = content != nullptr;
+  if (!content) {
+    auto bytes = tileset.store().get(key);
+    if (!bytes) {
+      return notFound("tileset '" + tileset.id() + "' has no " + key +
+                      (tile ? " (the pyramid is not refined there)" : ""));
+    }
+    content = makeContent(std::move(*bytes), !tile);
+    cache_.insert(cacheKey, content);
+  }
+  Response r = serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
+                            tile ? kTileCacheControl : kTilesetCacheControl, tile);
+  r.cacheHit = hit;
+  return r;
+}
+
+Response TileService::serveJson(const Request& request, const std::string& json,
+                                const char* cacheControl) const {
+  const bool compress = json.size() >= kGzipAtLeast && acceptsGzip(request.acceptEncoding);
+  return serveContent(request, *makeContent(json + "\n", compress), kJson, cacheControl, false);
+}
+
+Response TileService::serveContent(const Request& request, const Content& content,
+                                   const char* contentType, const char* cacheControl,
+                                   bool ranges) const {
+  Response r;
+  const bool gzip = content.gzip && acceptsGzip(request.acceptEncoding);
+  const std::string& etag = gzip ? content.gzipEtag : content.etag;
+  r.addHeader("Content-Type", contentType);
+  r.addHeader("ETag", etag);
+  r.addHeader("Cache-Control", cacheControl);
+  if (content.gzip) r.addHeader("Vary", "Accept-Encoding");
+  if (ranges) r.addHeader("Accept-Ranges", "bytes");
+  if (!request.ifNoneMatch.empty() && ifNoneMatchMatches(request.ifNoneMatch, etag)) {
+    r.status = 304;
+    return r;
+  }
+  if (gzip) r.addHeader("Content-Encoding", "gzip");
+  r.body = gzip ? content.gzip : content.bytes;
+  if (ranges && !request.range.empty() && (request.ifRange.empty() || request.ifRange == etag)) {
+    const auto range = parseRange(request.range, r.body->size());
+    const std::string size = std::to_string(r.body->size());
+    if (range.kind == RangeRequest::Kind::Unsatisfiable) {
+      Response e = errorResponse(416, ErrorKind::Input, "the range is outside the " + size + " bytes",
+                                 "Range");
+      e.addHeader("Content-Range", "bytes */" + size);
+      return e;
+    }
+    if (range.kind == RangeRequest::Kind::Partial) {
+      r.status = 206;
+      r.offset = range.first;
+      r.length = range.last - range.first + 1;
+      r.addHeader("Content-Range", "bytes " + std::to_string(range.first) + "-" +
+                                       std::to_string(range.last) + "/" + size);
+    }
+  }
+  return r;
+}
+
+}  // namespace tinsmith::server

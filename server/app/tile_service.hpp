@@ -1,0 +1,61 @@
+// The routes' answers (DESIGN.md "Server"), over a TilesetCatalog: the
+// handler the HTTP server calls for every request. HTTP semantics live here
+// once for every route: Content-Type, strong ETag and If-None-Match → 304,
+// Cache-Control, CORS, gzip for JSON, HEAD, byte ranges for tiles, 405 with
+// Allow, JSON error bodies. handle() never throws: a failure is a response
+// (500 for anything unexpected).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "server/app/content_cache.hpp"
+#include "server/app/metrics.hpp"
+#include "server/app/tileset_catalog.hpp"
+#include "server/http/message.hpp"
+
+namespace tinsmith::server {
+
+struct ServiceOptions {
+  std::string cors = "*";  ///< Access-Control-Allow-Origin; empty: no CORS headers
+  std::size_t cacheBytes = 256u << 20;
+};
+
+/// Cache-Control values: tiles change only when their store is rebuilt;
+/// tileset files and the list may change with it, so they are short.
+inline constexpr const char* kTileCacheControl = "public, max-age=86400";
+inline constexpr const char* kTilesetCacheControl = "public, max-age=60, must-revalidate";
+
+class TileService {
+ public:
+  TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options);
+  [[nodiscard]] Response handle(const Request& request);
+
+ private:
+  /// The /tilesets body and the index page, rebuilt when the catalog swapped
+  /// a store in.
+  struct Listing {
+    std::uint64_t version = 0;
+    std::shared_ptr<const Content> tilesets, index;
+  };
+  std::shared_ptr<const Listing> listing();
+
+  Response dispatch(const Request& request, const RequestTarget& target, const Route& route);
+  Response serveStored(const Request& request, const Tileset& tileset, const std::string& key,
+                       bool tile);
+  Response serveContent(const Request& request, const Content& content, const char* contentType,
+                        const char* cacheControl, bool ranges) const;
+  Response serveJson(const Request& request, const std::string& json, const char* cacheControl) const;
+  void addCors(Response& response) const;
+
+  const TilesetCatalog& catalog_;
+  Metrics& metrics_;
+  ServiceOptions options_;
+  ContentCache cache_;
+  std::mutex listingMutex_;
+  std::shared_ptr<const Listing> listing_;
+};
+
+}  // namespace tinsmith::server

@@ -1,0 +1,279 @@
+#include "server/app/tileset_catalog.hpp"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <numbers>
+
+#include "core/base/error.hpp"
+#include "ingest/tinfile/tin_file.hpp"
+#include "server/http/route.hpp"
+
+namespace tinsmith::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kBuildKey = "tinsmith/build.json";
+constexpr const char* kTinKey = "tinsmith/terrain.tin";
+
+nlohmann::json parseStoredJson(const store::TileStore& s, const std::string& key) {
+  const auto text = s.get(key);
+  if (!text) return nlohmann::json();
+  auto j = nlohmann::json::parse(*text, nullptr, false);
+  return j.is_discarded() ? nlohmann::json() : j;
+}
+
+bool isStoreDirectory(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_directory(p, ec) && fs::is_regular_file(p / "tileset.json", ec);
+}
+
+bool isArchive(const fs::path& p) {
+  std::error_code ec;
+  return store::storeKindFor(p) == store::StoreKind::Archive && fs::is_regular_file(p, ec);
+}
+
+std::string idFor(const fs::path& p) {
+  std::string name = p.filename().string();
+  if (name.empty()) name = p.parent_path().filename().string();
+  if (store::storeKindFor(p) == store::StoreKind::Archive) name = p.stem().string();
+  for (char& c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+          c == '.'))
+      c = '-';
+  if (name.size() > 64) name.resize(64);
+  if (name.empty() || name.front() == '.') name.insert(name.begin(), 't');
+  return name;
+}
+
+/// What identifies a version of a store on disk: its archive file, or a
+/// directory store's tileset.json (written last).
+struct FileStamp {
+  dev_t device = 0;
+  ino_t inode = 0;
+  off_t size = 0;
+  std::int64_t mtimeNanos = 0;
+  friend bool operator==(const FileStamp&, const FileStamp&) = default;
+};
+
+FileStamp stampOf(const fs::path& store) {
+  const fs::path file = isArchive(store) ? store : store / "tileset.json";
+  struct stat st {};
+  if (::stat(file.c_str(), &st) != 0) return {};
+  return {st.st_dev, st.st_ino, st.st_size,
+          static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
+}
+
+std::atomic<std::uint64_t> nextGeneration{1};
+
+/// The stores directly in `folder`, sorted (staging archives left out).
+std::vector<fs::path> storesIn(const fs::path& folder) {
+  std::vector<fs::path> found;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec))
+    if (!entry.path().filename().string().ends_with(".partial.3dtiles") &&  // a run's staging
+        (isArchive(entry.path()) || isStoreDirectory(entry.path())))
+      found.push_back(entry.path());
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+}  // namespace
+
+struct TilesetCatalog::Entry {
+  std::string id;
+  fs::path path;
+  FileStamp stamp;
+  std::atomic<std::shared_ptr<const Tileset>> current;
+};
+
+Tileset::Tileset(std::string id, const fs::path& path)
+    : id_(std::move(id)), generation_(nextGeneration++), store_(store::openStoreForReading(path)) {
+  const auto tileset = parseStoredJson(*store_, "tileset.json");
+  if (!tileset.is_object())
+    throw inputError("has no readable tileset.json", {path.string(), {}, {}, {}},
+                     "serve a finished store (tinsmith tile writes tileset.json last)");
+  const auto build = parseStoredJson(*store_, kBuildKey);
+
+  int minZoom = -1, maxStoredZoom = -1;
+  std::size_t tiles = 0;
+  for (const auto& key : store_->keys()) {
+    int z = 0;
+    if (!key.starts_with("tiles/") || std::sscanf(key.c_str(), "tiles/%d/", &z) != 1) continue;
+    ++tiles;
+    minZoom = minZoom < 0 ? z : std::min(minZoom, z);
+    maxStoredZoom = std::max(maxStoredZoom, z);
+  }
+  // Stores are files from outside: every field is looked up, never assumed.
+  const auto number = [](const nlohmann::json& j, const char* pointer) -> std::optional<double> {
+    const nlohmann::json::json_pointer at(pointer);
+    if (!j.is_object() || !j.contains(at) || !j.at(at).is_number()) return std::nullopt;
+    return j.at(at).get<double>();
+  };
+  const nlohmann::json::json_pointer crsAt("/tin/crs");
+  if (build.is_object() && build.contains(crsAt) && build.at(crsAt).is_string())
+    crs_ = build.at(crsAt).get<std::string>();
+  maxZoom_ = static_cast<int>(std::clamp(number(build, "/options/maxZoom").value_or(kMaxZoom), 0.0,
+                                         static_cast<double>(kMaxZoom)));
+
+  summary_["id"] = id_;
+  summary_["name"] = path.filename().string();
+  summary_["crs"] = crs_;
+  nlohmann::ordered_json bounds;
+  const double deg = 180.0 / std::numbers::pi;
+  std::array<std::optional<double>, 6> region;
+  for (int i = 0; i < 6; ++i)
+    region[static_cast<std::size_t>(i)] =
+        number(tileset, ("/root/boundingVolume/region/" + std::to_string(i)).c_str());
+  if (std::all_of(region.begin(), region.end(), [](const auto& v) { return v.has_value(); })) {
+    bounds["lonlat"] = {*region[0] * deg, *region[1] * deg, *region[2] * deg, *region[3] * deg};
+    summary_["heights"] = {*region[4], *region[5]};
+  }
+  const auto x0 = number(build, "/pyramid/origin/0"), y0 = number(build, "/pyramid/origin/1");
+  const auto size = number(build, "/pyramid/size");
+  if (x0 && y0 && size) bounds["project"] = {*x0, *y0, *x0 + *size, *y0 + *size};
+  summary_["bounds"] = bounds;
+  summary_["zooms"] = {{"min", std::max(minZoom, 0)}, {"max", std::max(maxStoredZoom, 0)},
+                       {"pyramidMax", maxZoom_}};
+  summary_["tileCount"] = tiles;
+  if (const auto tolerance = number(build, "/options/tolerance")) summary_["tolerance"] = *tolerance;
+  hasTin_ = store_->contains(kTinKey);
+  summary_["elevation"] = hasTin_;
+  summary_["links"] = {{"tileset", "/tilesets/" + id_ + "/tileset.json"},
+                       {"elevation", "/tilesets/" + id_ + "/elevation"},
+                       {"profile", "/tilesets/" + id_ + "/profile"}};
+}
+
+Tileset::~Tileset() = default;
+
+const Surface& Tileset::surface() const {
+  std::call_once(surfaceOnce_, [this] {
+    const auto bytes = store_->get(kTinKey);
+    if (!bytes)
+      throw inputError("tileset '" + id_ + "' carries no TIN, so it has no elevations", {},
+                       "rebuild it with tinsmith tile, which stores the TIN");
+    try {
+      surface_ = std::make_unique<Surface>(ingest::decodeTin(*bytes, id_ + ":" + kTinKey));
+    } catch (const Error& e) {
+      throw ioError("the TIN in tileset '" + id_ + "' cannot be read: " + e.what(), {},
+                    "rebuild the store with tinsmith tile");
+    }
+  });
+  return *surface_;
+}
+
+Point2 Tileset::fromLonLat(double lon, double lat) const {
+  Point3 p{lon, lat, 0};
+  std::lock_guard lock(transformMutex_);
+  if (!fromLonLat_)
+    fromLonLat_ = std::make_unique<ingest::CrsTransform>("EPSG:4326", crs_,
+                                                         SourceLocation{id_, {}, {}, {}});
+  if (fromLonLat_->transform(&p, 1) >= 0 || !std::isfinite(p.x) || !std::isfinite(p.y))
+    throw inputError("lon, lat cannot be transformed into " + crs_, {}, "check lon and lat");
+  return {p.x, p.y};
+}
+
+TilesetCatalog::TilesetCatalog(const std::vector<fs::path>& paths) {
+  std::vector<fs::path> stores;
+  for (const auto& path : paths) {
+    if (isArchive(path) || isStoreDirectory(path)) {
+      stores.push_back(path);
+      continue;
+    }
+    std::error_code ec;
+    if (!fs::is_directory(path, ec))
+      throw usageError("'" + path.string() + "' is neither a tile store nor a folder of them",
+                       "give .3dtiles files, store directories or folders holding them");
+    folders_.push_back(path);
+    const auto found = storesIn(path);
+    stores.insert(stores.end(), found.begin(), found.end());
+  }
+  auto entries = std::make_shared<Entries>();
+  for (const auto& path : stores) {
+    auto entry = makeEntry(path, *entries);
+    if (!entry)
+      throw usageError("two stores would be served as '" + idFor(path) + "' (" + path.string() + ")",
+                       "rename one of them");
+    entries->push_back(std::move(entry));
+  }
+  entries_ = std::move(entries);
+}
+
+std::shared_ptr<TilesetCatalog::Entry> TilesetCatalog::makeEntry(const fs::path& path,
+                                                                 const Entries& existing) {
+  auto entry = std::make_shared<Entry>();
+  entry->id = idFor(path);
+  entry->path = path;
+  for (const auto& e : existing)
+    if (e->id == entry->id) return nullptr;
+  entry->stamp = stampOf(path);
+  entry->current = std::make_shared<const Tileset>(entry->id, path);
+  return entry;
+}
+
+TilesetCatalog::~TilesetCatalog() = default;
+
+std::shared_ptr<const Tileset> TilesetCatalog::find(std::string_view id) const {
+  for (const auto& e : *entries_.load())
+    if (e->id == id) return e->current.load();
+  return nullptr;
+}
+
+std::vector<std::shared_ptr<const Tileset>> TilesetCatalog::tilesets() const {
+  std::vector<std::shared_ptr<const Tileset>> out;
+  for (const auto& e : *entries_.load()) out.push_back(e->current.load());
+  return out;
+}
+
+std::vector<std::string> TilesetCatalog::refresh() {
+  std::vector<std::string> log;
+  const auto entries = entries_.load();
+  for (const auto& e : *entries) {
+    const FileStamp now = stampOf(e->path);
+    if (now == e->stamp || now == FileStamp{}) continue;  // unchanged, or gone for the moment
+    try {
+      e->current = std::make_shared<const Tileset>(e->id, e->path);
+      e->stamp = now;
+      ++version_;
+      log.push_back("reloaded " + e->path.string() + " as '" + e->id + "'");
+    } catch (const std::exception& ex) {
+      e->stamp = now;  // not retried until it changes again
+      log.push_back("kept the old '" + e->id + "': " + ex.what());
+    }
+  }
+  // Stores new in the folders served: added under a new list, swapped in.
+  auto grown = std::make_shared<Entries>(*entries);
+  for (const auto& folder : folders_) {
+    for (const auto& path : storesIn(folder)) {
+      if (refused_.contains(path.string())) continue;
+      bool known = false;
+      for (const auto& e : *grown) known = known || e->path == path;
+      if (known) continue;
+      try {
+        auto entry = makeEntry(path, *grown);
+        if (!entry) {
+          refused_.insert(path.string());
+          log.push_back("not serving " + path.string() + ": its id '" + idFor(path) + "' is taken");
+          continue;
+        }
+        log.push_back("added " + path.string() + " as '" + entry->id + "'");
+        grown->push_back(std::move(entry));
+      } catch (const std::exception& ex) {  // half-copied, say: tried again next time
+        log.push_back("cannot serve " + path.string() + " yet: " + ex.what());
+      }
+    }
+  }
+  if (grown->size() != entries->size()) {
+    entries_ = std::move(grown);
+    ++version_;
+  }
+  return log;
+}
+
+}  // namespace tinsmith::server

@@ -1,0 +1,115 @@
+// The tilesets a server holds: each store opened read-only, described once
+// (the /tilesets entry, from tinsmith/build.json and tileset.json), and its
+// TIN loaded on the first elevation query. Ids come from file names and are
+// looked up, never joined into a path.
+//
+// A store replaced on disk (a new archive renamed over the old one, as
+// `tinsmith tile` writes it; or a directory store's tileset.json rewritten)
+// is picked up by refresh(): the new store is opened beside the old one and
+// swapped in whole. A request holds the Tileset it started with, whose open
+// SQLite connections keep reading the old file, so no response mixes the two
+// (no torn read); the old one is closed when its last request ends.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/base/point.hpp"
+#include "core/surface/surface.hpp"
+#include "ingest/filters/reproject.hpp"
+#include "ingest/store/tile_store.hpp"
+
+namespace tinsmith::server {
+
+class Tileset {
+ public:
+  /// Opens the store at `path` read-only and describes it. Throws inputError
+  /// naming the path when it is not a store or has no tileset.json.
+  Tileset(std::string id, const std::filesystem::path& path);
+  ~Tileset();
+
+  [[nodiscard]] const std::string& id() const { return id_; }
+  /// Unique per opened store in this process: a reloaded store gets a new
+  /// one, so what was cached of the old one is never served for it.
+  [[nodiscard]] std::uint64_t generation() const { return generation_; }
+  [[nodiscard]] const store::TileStore& store() const { return *store_; }
+  /// The /tilesets entry: id, name, crs, bounds (lon/lat degrees from the
+  /// root's region; the pyramid's square in the project CRS), heights,
+  /// zooms, tile count, tolerance, links.
+  [[nodiscard]] const nlohmann::ordered_json& summary() const { return summary_; }
+  /// The deepest zoom of the pyramid (the build's maxZoom).
+  [[nodiscard]] int maxZoom() const { return maxZoom_; }
+  [[nodiscard]] const std::string& crs() const { return crs_; }
+
+  /// Whether the store carries its TIN (tinsmith/terrain.tin).
+  [[nodiscard]] bool hasTin() const { return hasTin_; }
+  /// The TIN's surface, loaded from tinsmith/terrain.tin on first use
+  /// (thread-safe). Throws inputError when the store carries no TIN, ioError
+  /// when it cannot be decoded (the store is damaged: a server-side fault).
+  [[nodiscard]] const Surface& surface() const;
+  /// Longitude, latitude (WGS84 degrees) into the project CRS. Thread-safe.
+  /// Throws inputError when PROJ cannot transform the point.
+  [[nodiscard]] Point2 fromLonLat(double lon, double lat) const;
+
+ private:
+  std::string id_;
+  std::uint64_t generation_;
+  std::unique_ptr<store::TileStore> store_;
+  nlohmann::ordered_json summary_;
+  int maxZoom_ = 0;
+  bool hasTin_ = false;
+  std::string crs_;
+  mutable std::once_flag surfaceOnce_;
+  mutable std::unique_ptr<Surface> surface_;
+  mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
+  mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;
+};
+
+class TilesetCatalog {
+ public:
+  /// Each path is a store (a .3dtiles file, or a directory with a
+  /// tileset.json) or a folder of stores (every *.3dtiles file and store
+  /// directory directly in it). The id is the file name without
+  /// ".3dtiles" (characters other than [A-Za-z0-9_.-] become '-'). Throws
+  /// usageError for a path that is neither or two stores with one id, and
+  /// what Tileset throws for a store that cannot be served.
+  explicit TilesetCatalog(const std::vector<std::filesystem::path>& paths);
+  ~TilesetCatalog();
+
+  /// The tileset with this id, or null. Thread-safe.
+  [[nodiscard]] std::shared_ptr<const Tileset> find(std::string_view id) const;
+  /// Every tileset, in the order given. Thread-safe.
+  [[nodiscard]] std::vector<std::shared_ptr<const Tileset>> tilesets() const;
+  /// Counts swaps: changes whenever refresh() swapped a store in.
+  [[nodiscard]] std::uint64_t version() const { return version_.load(); }
+
+  /// Reopens every store whose file (an archive) or tileset.json (a
+  /// directory) changed since it was opened (inode, size or mtime), and
+  /// adds the stores that appeared in the folders served. A store that
+  /// cannot be opened now keeps serving its old version (a new one is tried
+  /// again next time); a new store whose id is taken is not served. Returns
+  /// one line per store reloaded, added or refused, for the log. Thread-safe
+  /// with the readers; one refresh at a time.
+  std::vector<std::string> refresh();
+
+ private:
+  struct Entry;
+  using Entries = std::vector<std::shared_ptr<Entry>>;
+  /// Null when `path`'s id is taken in `existing`; throws what Tileset throws.
+  static std::shared_ptr<Entry> makeEntry(const std::filesystem::path& path, const Entries& existing);
+
+  std::vector<std::filesystem::path> folders_;
+  std::set<std::string> refused_;  // new stores not served for their id (refresh only)
+  std::atomic<std::shared_ptr<const Entries>> entries_;
+  std::atomic<std::uint64_t> version_{0};
+};
+
+}  // namespace tinsmith::server

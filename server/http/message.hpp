@@ -1,0 +1,61 @@
+// What the HTTP server hands a handler and takes back: plain values, no
+// Boost types, so routes are tested and fuzzed without sockets.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "server/http/route.hpp"
+
+namespace tinsmith::server {
+
+/// A parsed request: the method as sent, the raw target, the request headers
+/// the routes read (empty when absent) and the body.
+struct Request {
+  std::string method;  ///< "GET", "HEAD", … (case-sensitive, RFC 9110 9.1)
+  std::string target;
+  std::string ifNoneMatch, range, ifRange, acceptEncoding, origin, contentType;
+  std::string body;
+};
+
+/// A response. `body` is shared so cached content is sent without a copy;
+/// [offset, offset + length) of it goes out (a 206's range), all of it when
+/// length is npos. `head` sends the headers with the body's Content-Length
+/// and no body. `route` labels the metrics and the access log.
+struct Response {
+  int status = 200;
+  std::vector<std::pair<std::string, std::string>> headers;
+  std::shared_ptr<const std::string> body;
+  std::size_t offset = 0, length = std::string::npos;
+  bool head = false;
+  RouteKind route = RouteKind::Unknown;
+  bool cacheHit = false;  ///< the tile came from the memory cache
+  /// For a 5xx: what went wrong, for the server's log (the client gets a
+  /// generic message, without paths or internals).
+  std::string failure;
+
+  [[nodiscard]] std::size_t bodyLength() const {
+    if (!body) return 0;
+    return length == std::string::npos ? body->size() - offset : length;
+  }
+  void setBody(std::string bytes) { body = std::make_shared<const std::string>(std::move(bytes)); }
+  void addHeader(std::string name, std::string value) {
+    headers.emplace_back(std::move(name), std::move(value));
+  }
+};
+
+/// What happened to one request, after its response was written (or failed).
+struct Exchange {
+  const Request& request;
+  const Response& response;
+  std::string_view peer;        ///< "127.0.0.1:53122"
+  std::size_t bytesWritten = 0;  ///< headers and body
+  std::chrono::steady_clock::duration elapsed{};
+  bool completed = false;  ///< false: the client went away or the write timed out
+};
+
+}  // namespace tinsmith::server

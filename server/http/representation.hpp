@@ -1,0 +1,40 @@
+// HTTP representation rules the routes share: strong ETags from content,
+// If-None-Match matching (RFC 9110 13.1.2), single byte ranges (RFC 9110 14),
+// Accept-Encoding for gzip, and gzip itself (zlib).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace tinsmith::server {
+
+/// A strong ETag of `bytes`: a quoted 64-bit FNV-1a hash and the length, in
+/// hex ("\"9f3c…-2a1\""). Equal bytes give equal tags on every machine.
+std::string strongEtag(std::string_view bytes);
+
+/// Whether an If-None-Match value matches `etag` ("*", or one of a comma
+/// list; weak comparison, so W/"x" matches "x").
+bool ifNoneMatchMatches(std::string_view ifNoneMatch, std::string_view etag);
+
+/// The outcome of a Range header against a representation of `size` bytes.
+struct RangeRequest {
+  enum class Kind { Full, Partial, Unsatisfiable } kind = Kind::Full;
+  std::size_t first = 0, last = 0;  ///< inclusive, for Partial
+};
+
+/// A single "bytes=a-b", "bytes=a-" or "bytes=-n" range. A missing,
+/// malformed or multi-range header gives Full (RFC 9110 lets a server ignore
+/// Range); a range that starts at or past `size` (or a zero suffix) gives
+/// Unsatisfiable; `last` is clamped to size - 1.
+RangeRequest parseRange(std::string_view header, std::size_t size);
+
+/// Whether Accept-Encoding accepts gzip (listed, or "*", with q > 0).
+bool acceptsGzip(std::string_view acceptEncoding);
+
+/// `bytes` compressed as gzip (RFC 1952) at zlib's default level. Throws
+/// internalError when zlib fails.
+std::string gzipCompress(std::string_view bytes);
+
+}  // namespace tinsmith::server
