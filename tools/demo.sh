@@ -1,9 +1,20 @@
 #!/usr/bin/env bash
 # README command 1: install, build, and run the whole pipeline on the bundled
-# Red Butte sample (../shared/data/red-butte), then serve it. Each stage that
-# is not built yet is named plainly; nothing is faked.
+# Red Butte sample (../shared/data/red-butte), then serve it until Ctrl-C.
+#   bash tools/demo.sh              # … and serve http://127.0.0.1:8080/
+#   bash tools/demo.sh --no-serve   # stop after the tiles (CI, scripts)
+#   PORT=9000 bash tools/demo.sh    # serve on another port
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+serve=1
+for arg in "$@"; do
+  case "$arg" in
+    --no-serve) serve=0 ;;
+    *) echo "demo: unknown option '$arg' (use --no-serve or nothing)" >&2; exit 2 ;;
+  esac
+done
+port=${PORT:-8080}
 
 bash tools/setup.sh
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
@@ -14,7 +25,6 @@ data=../shared/data/red-butte
 mkdir -p out
 "$tinsmith" --version
 
-missing=()
 echo
 echo "== 1. ingest + TIN: $data → out/red-butte.tin"
 "$tinsmith" tin config/red-butte.toml -o out/red-butte.tin --report out/red-butte.report.json
@@ -47,9 +57,11 @@ echo
 echo "== 3. the whole job: config/red-butte.toml → out/red-butte.3dtiles (+ out/red-butte.tin, as in 1)"
 "$tinsmith" build config/red-butte.toml
 "$tinsmith" info out/red-butte.3dtiles
-echo "== 4. server: http://127.0.0.1:8080/"
-missing+=("server (tinsmith serve)")
 
 echo
-echo "Not built yet, so not run:"
-printf '  - %s\n' "${missing[@]}"
+if [ "$serve" -eq 0 ]; then
+  echo "== 4. server: skipped (--no-serve); run: $tinsmith serve out/red-butte.3dtiles"
+  exit 0
+fi
+echo "== 4. server: open http://127.0.0.1:$port/ (tilesets: /tilesets; Ctrl-C stops it)"
+exec "$tinsmith" serve out/red-butte.3dtiles --port "$port"
