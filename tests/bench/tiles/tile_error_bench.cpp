@@ -11,14 +11,15 @@
 //     For every tile of the store, the DEM-TIN sampled at the nodes of a
 //     (2^k + 1)² grid over the tile's square, 2^k the least power of two whose
 //     spacing is at most RESOLUTION (m): the DEM resampled for martini. Nodes
-//     outside the TIN take the value of the nearest node inside (breadth-first
-//     over the grid) and are flagged. TOLERANCES is "z:t,z:t,…", the zoom
+//     outside the TIN take the TIN's z at the nearest point of its boundary
+//     (a continuous extension) and are flagged. TOLERANCES is "z:t,z:t,…", the zoom
 //     tolerances of tinsmith's summary, stored with each tile.
 //   tile_error_bench error SITE.tin MESHES.bin [THREADS]
 //     The exact max vertical difference (tiles::maxVerticalDifference, the
 //     largest of tiles::triangleDifferences) between every tile mesh of
-//     MESHES.bin and the DEM-TIN, per zoom, where it is reached, and the
-//     largest difference at a TIN vertex (a DEM cell). JSON lines.
+//     MESHES.bin and the DEM-TIN, per zoom, where it is reached, the max over
+//     the triangles wholly inside the TIN, and the largest difference at a
+//     TIN vertex (a DEM cell). JSON lines.
 //
 // The pyramid's square is computed as the tiler computes it
 // (core/tiles/tiler.cpp): origin the TIN's min corner, size the larger side.
@@ -42,6 +43,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <unordered_set>
 #include <vector>
 
 #include "core/tiles/pyramid.hpp"
@@ -95,10 +97,8 @@ std::size_t binaryChunkBytes(const std::string& glb) {
 struct ZoomRow {
   std::size_t tiles = 0, triangles = 0, bytes = 0, payload = 0;
   double maxError = 0.0;
-  double maxAtVertex = 0.0;  ///< the largest difference at a TIN vertex (a DEM cell)
   double boundMin = HUGE_VAL, boundMax = 0.0;  ///< Draco position error bounds (m)
   TileId worst;
-  SurfaceDifference at;  ///< where the worst difference is
 };
 
 int storeCommand(const std::string& path) {
@@ -148,12 +148,55 @@ void put(std::ofstream& out, const T& v) {
   out.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 
+// The TIN's boundary edges (those of one triangle), for the grid nodes outside
+// it. A linear scan per query: the boundary of a DEM-TIN is its convex hull,
+// a few hundred edges.
+class TinBoundary {
+ public:
+  explicit TinBoundary(const TinData& tin) : tin_(tin) {
+    std::unordered_set<std::uint64_t> directed;
+    auto key = [](std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; };
+    for (const auto& t : tin.triangles) {
+      for (int i = 0; i < 3; ++i) directed.insert(key(t[i], t[(i + 1) % 3]));
+    }
+    for (const auto& t : tin.triangles) {
+      for (int i = 0; i < 3; ++i) {
+        if (!directed.contains(key(t[(i + 1) % 3], t[i]))) edges_.push_back({t[i], t[(i + 1) % 3]});
+      }
+    }
+  }
+  [[nodiscard]] std::size_t size() const { return edges_.size(); }
+  /// z of the boundary point nearest p, interpolated along its edge.
+  [[nodiscard]] double nearestZ(Point2 p) const {
+    double best = HUGE_VAL, bestZ = 0.0;
+    for (const auto& [ia, ib] : edges_) {
+      const Point3& a = tin_.vertices[ia];
+      const Point3& b = tin_.vertices[ib];
+      const double dx = b.x - a.x, dy = b.y - a.y;
+      const double t =
+          std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+      const double ex = a.x + t * dx - p.x, ey = a.y + t * dy - p.y;
+      const double d = ex * ex + ey * ey;
+      if (d < best) {
+        best = d;
+        bestZ = a.z + t * (b.z - a.z);
+      }
+    }
+    return bestZ;
+  }
+
+ private:
+  const TinData& tin_;
+  std::vector<std::array<std::uint32_t, 2>> edges_;
+};
+
 int gridsCommand(const std::string& tinPath, const std::string& storePath, double resolution,
                  const std::string& tolerances, const std::string& outPath) {
   const auto t0 = std::chrono::steady_clock::now();
   const TinData tin = ingest::readTinFile(tinPath);
   const TinIndex index(tin);
   const PyramidGeometry pyramid = pyramidOf(tin);
+  const TinBoundary boundary(tin);
   const auto s = store::openStoreForReading(storePath);
   const std::map<int, double> zoomTolerance = parseTolerances(tolerances);
   std::ofstream out(outPath, std::ios::binary);
@@ -169,36 +212,27 @@ int gridsCommand(const std::string& tinPath, const std::string& storePath, doubl
     const double step = b.width() / cells;
     std::vector<double> z(static_cast<std::size_t>(n) * n, 0.0);
     std::vector<std::uint8_t> inside(z.size(), 0);
-    std::vector<std::uint32_t> queue;
+    std::size_t queue = 0;  // nodes inside
+    auto nodeAt = [&](std::size_t k) {
+      const int i = static_cast<int>(k % n), j = static_cast<int>(k / n);
+      // The last node lands on the tile's side exactly, as tinsmith's does.
+      return Point2{i == cells ? b.x1 : b.x0 + i * step, j == cells ? b.y1 : b.y0 + j * step};
+    };
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
-        // The last node lands on the tile's side exactly, as tinsmith's does.
-        const double x = i == cells ? b.x1 : b.x0 + i * step;
-        const double y = j == cells ? b.y1 : b.y0 + j * step;
         const std::size_t k = static_cast<std::size_t>(j) * n + i;
-        if (const auto h = index.z({x, y})) {
+        if (const auto h = index.z(nodeAt(k))) {
           z[k] = *h;
           inside[k] = 1;
-          queue.push_back(static_cast<std::uint32_t>(k));
+          ++queue;
         }
       }
     }
-    if (queue.empty()) fail("tile " + id.name() + " holds no TIN point on its grid");
-    // Nearest-inside fill, breadth first from every inside node.
-    std::vector<std::uint8_t> done = inside;
-    for (std::size_t q = 0; q < queue.size(); ++q) {
-      const std::uint32_t k = queue[q];
-      const int i = static_cast<int>(k % n), j = static_cast<int>(k / n);
-      const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
-      for (int d = 0; d < 4; ++d) {
-        const int a = i + di[d], c = j + dj[d];
-        if (a < 0 || c < 0 || a >= n || c >= n) continue;
-        const std::uint32_t m = static_cast<std::uint32_t>(c) * n + a;
-        if (done[m]) continue;
-        done[m] = 1;
-        z[m] = z[k];
-        queue.push_back(m);
-      }
+    if (queue == 0) fail("tile " + id.name() + " holds no TIN point on its grid");
+    // Outside the TIN: the TIN's z at the nearest point of its boundary, a
+    // continuous extension (martini needs a value at every node).
+    for (std::size_t k = 0; k < z.size(); ++k) {
+      if (!inside[k]) z[k] = boundary.nearestZ(nodeAt(k));
     }
     put(out, id.z);
     put(out, static_cast<std::int32_t>(id.x));
@@ -254,27 +288,48 @@ std::vector<MeshTile> readMeshes(const std::string& path) {
   return tiles;
 }
 
+// One tile's errors against the TIN: the exact max over the whole mesh, the
+// largest at a TIN vertex (a DEM cell), and the max over the triangles whose
+// three corners lie in the TIN (a DEM-TIN's domain is convex, so these lie
+// wholly inside it: what is left when the triangles across its boundary, where
+// a square grid meets the convex hull, are set aside).
+struct TileError {
+  SurfaceDifference worst;
+  double atVertex = 0.0;
+  Point2 vertex;
+  double inside = 0.0;
+};
+
+TileError measureTile(const MeshTile& tile, const TinIndex& index) {
+  std::vector<std::uint8_t> inTin(tile.vertices.size());
+  for (std::size_t v = 0; v < inTin.size(); ++v) inTin[v] = index.z(tile.vertices[v].xy()).has_value();
+  const std::vector<SurfaceDifference> diffs = triangleDifferences(tile.vertices, tile.triangles, index);
+  TileError e;
+  for (std::size_t t = 0; t < diffs.size(); ++t) {
+    const SurfaceDifference& d = diffs[t];
+    if (d.maxAbs > e.worst.maxAbs) e.worst = d;
+    if (d.vertexAbs > e.atVertex) {
+      e.atVertex = d.vertexAbs;
+      e.vertex = d.vertex;
+    }
+    const auto& c = tile.triangles[t];
+    if (inTin[c[0]] && inTin[c[1]] && inTin[c[2]]) e.inside = std::max(e.inside, d.maxAbs);
+  }
+  return e;
+}
+
 int errorCommand(const std::string& tinPath, const std::string& meshPath, int threads) {
   const auto t0 = std::chrono::steady_clock::now();
   const TinData tin = ingest::readTinFile(tinPath);
   const TinIndex index(tin);
   const std::vector<MeshTile> tiles = readMeshes(meshPath);
-  std::vector<SurfaceDifference> errors(tiles.size());
+  std::vector<TileError> errors(tiles.size());
   std::atomic<std::size_t> next{0};
   std::exception_ptr failure;
   std::mutex failureLock;
   auto work = [&] {
     try {
-      for (std::size_t i; (i = next++) < tiles.size();) {
-        // maxVerticalDifference is the largest of these; the largest at a
-        // TIN vertex (a DEM cell) is kept beside it.
-        for (const SurfaceDifference& d :
-             triangleDifferences(tiles[i].vertices, tiles[i].triangles, index)) {
-          const double atVertex = std::max(errors[i].vertexAbs, d.vertexAbs);
-          if (d.maxAbs > errors[i].maxAbs) errors[i] = d;
-          errors[i].vertexAbs = atVertex;
-        }
-      }
+      for (std::size_t i; (i = next++) < tiles.size();) errors[i] = measureTile(tiles[i], index);
     } catch (...) {
       const std::lock_guard lock(failureLock);
       failure = std::current_exception();
@@ -285,24 +340,35 @@ int errorCommand(const std::string& tinPath, const std::string& meshPath, int th
   work();
   for (auto& t : pool) t.join();
   if (failure) std::rethrow_exception(failure);
-  std::map<int, ZoomRow> rows;
+  struct Row {
+    std::size_t tiles = 0, triangles = 0;
+    TileId worstTile;
+    TileError worst;  // the largest of each measure over the zoom's tiles
+  };
+  std::map<int, Row> rows;
   for (std::size_t i = 0; i < tiles.size(); ++i) {
-    ZoomRow& r = rows[tiles[i].id.z];
+    Row& r = rows[tiles[i].id.z];
+    const TileError& e = errors[i];
     ++r.tiles;
     r.triangles += tiles[i].triangles.size();
-    r.maxAtVertex = std::max(r.maxAtVertex, errors[i].vertexAbs);
-    if (errors[i].maxAbs >= r.maxError) {
-      r.maxError = errors[i].maxAbs;
-      r.worst = tiles[i].id;
-      r.at = errors[i];
+    if (e.worst.maxAbs >= r.worst.worst.maxAbs) {
+      r.worst.worst = e.worst;
+      r.worstTile = tiles[i].id;
     }
+    if (e.atVertex >= r.worst.atVertex) {
+      r.worst.atVertex = e.atVertex;
+      r.worst.vertex = e.vertex;
+    }
+    r.worst.inside = std::max(r.worst.inside, e.inside);
   }
   for (const auto& [z, r] : rows) {
+    const TileError& w = r.worst;
     std::printf(
-        "{\"zoom\":%d,\"tiles\":%zu,\"surfaceTriangles\":%zu,\"maxError\":%.6f,\"maxAtDemPoints\":%.6f,\"worst\":\"%s\","
+        "{\"zoom\":%d,\"tiles\":%zu,\"surfaceTriangles\":%zu,\"maxError\":%.6f,"
+        "\"maxInside\":%.6f,\"maxAtDemPoints\":%.6f,\"atDemPoint\":[%.3f,%.3f],\"worst\":\"%s\","
         "\"at\":[%.3f,%.3f],\"meshZ\":%.3f,\"tinZ\":%.3f}\n",
-        z, r.tiles, r.triangles, r.maxError, r.maxAtVertex, r.worst.name().c_str(), r.at.at.x, r.at.at.y, r.at.meshZ,
-        r.at.tinZ);
+        z, r.tiles, r.triangles, w.worst.maxAbs, w.inside, w.atVertex, w.vertex.x, w.vertex.y,
+        r.worstTile.name().c_str(), w.worst.at.x, w.worst.at.y, w.worst.meshZ, w.worst.tinZ);
   }
   std::printf("{\"seconds\":%.3f}\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
