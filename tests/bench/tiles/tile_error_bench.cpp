@@ -7,10 +7,11 @@
 //     triangles (with skirts), .glb bytes, Draco payload bytes (the .glb's
 //     binary chunk), measured max error, the range of the Draco position
 //     error bounds. JSON lines.
-//   tile_error_bench grids SITE.tin SITE.3dtiles RESOLUTION TOLERANCES OUT.grids
+//   tile_error_bench grids SITE.tin SITE.3dtiles SPACING TOLERANCES OUT.grids
 //     For every tile of the store, the DEM-TIN sampled at the nodes of a
 //     (2^k + 1)² grid over the tile's square, 2^k the least power of two whose
-//     spacing is at most RESOLUTION (m): the DEM resampled for martini. Nodes
+//     spacing is at most SPACING (m), or the same n = 2^k + 1 for every tile
+//     when SPACING is "n=257" (say): the DEM resampled for martini. Nodes
 //     outside the TIN take the TIN's z at the nearest point of its boundary
 //     (a continuous extension) and are flagged. TOLERANCES is "z:t,z:t,…", the zoom
 //     tolerances of tinsmith's summary, stored with each tile.
@@ -190,13 +191,22 @@ class TinBoundary {
   std::vector<std::array<std::uint32_t, 2>> edges_;
 };
 
-int gridsCommand(const std::string& tinPath, const std::string& storePath, double resolution,
+int gridsCommand(const std::string& tinPath, const std::string& storePath, const std::string& spacing,
                  const std::string& tolerances, const std::string& outPath) {
   const auto t0 = std::chrono::steady_clock::now();
   const TinData tin = ingest::readTinFile(tinPath);
   const TinIndex index(tin);
   const PyramidGeometry pyramid = pyramidOf(tin);
   const TinBoundary boundary(tin);
+  int fixedCells = 0;
+  double resolution = 0.0;
+  if (spacing.starts_with("n=")) {
+    fixedCells = std::stoi(spacing.substr(2)) - 1;
+    if (fixedCells < 1 || (fixedCells & (fixedCells - 1)) != 0) fail("a grid of n=2^k+1 nodes, not " + spacing);
+  } else {
+    resolution = std::stod(spacing);
+    if (!(resolution > 0)) fail("the grid spacing must be positive, not " + spacing);
+  }
   const auto s = store::openStoreForReading(storePath);
   const std::map<int, double> zoomTolerance = parseTolerances(tolerances);
   std::ofstream out(outPath, std::ios::binary);
@@ -207,7 +217,11 @@ int gridsCommand(const std::string& tinPath, const std::string& storePath, doubl
     if (tol == zoomTolerance.end()) fail("no tolerance given for zoom " + std::to_string(id.z));
     const Rect b = pyramid.bounds(id);
     int cells = 1;
-    while (b.width() / cells > resolution && cells < 4096) cells *= 2;
+    if (fixedCells > 0) {
+      cells = fixedCells;
+    } else {
+      while (b.width() / cells > resolution && cells < 4096) cells *= 2;
+    }
     const int n = cells + 1;
     const double step = b.width() / cells;
     std::vector<double> z(static_cast<std::size_t>(n) * n, 0.0);
@@ -381,7 +395,7 @@ int main(int argc, char** argv) {
   try {
     const std::vector<std::string> a(argv + 1, argv + argc);
     if (a.size() == 2 && a[0] == "store") return storeCommand(a[1]);
-    if (a.size() == 6 && a[0] == "grids") return gridsCommand(a[1], a[2], std::stod(a[3]), a[4], a[5]);
+    if (a.size() == 6 && a[0] == "grids") return gridsCommand(a[1], a[2], a[3], a[4], a[5]);
     if ((a.size() == 3 || a.size() == 4) && a[0] == "error")
       return errorCommand(a[1], a[2], a.size() == 4 ? std::stoi(a[3]) : 1);
   } catch (const std::exception& e) {
@@ -389,7 +403,7 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr,
                "usage: tile_error_bench store SITE.3dtiles\n"
-               "       tile_error_bench grids SITE.tin SITE.3dtiles RESOLUTION Z:TOL,... OUT.grids\n"
+               "       tile_error_bench grids SITE.tin SITE.3dtiles SPACING|n=NODES Z:TOL,... OUT.grids\n"
                "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n");
   return 2;
 }

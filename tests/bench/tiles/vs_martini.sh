@@ -13,7 +13,7 @@
 # Needs gdal-bin, node and npm (martini and draco3d go into a scratch
 # directory, not the repository), jq, /usr/bin/time. KEEP=DIR keeps the files
 # there; MARTINI_SPACING=M sets the largest spacing of martini's grids (m;
-# default the DEM's).
+# default the DEM's), MARTINI_GRID=N (2^k + 1) one grid size for every tile.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 die() { echo "vs_martini.sh: $*" >&2; exit 2; }
@@ -59,8 +59,9 @@ fi
 # at least this fine (MARTINI_SPACING=M overrides it).
 resolution=$(awk 'NR == 1 {x = $1; y = $2} NR == 2 {printf "%.6f\n", sqrt(($1 - x)^2 + ($2 - y)^2); exit}' projected.xyz)
 resolution="${MARTINI_SPACING:-$resolution}"
+[ -n "${MARTINI_GRID:-}" ] && resolution="n=$MARTINI_GRID"
 awk '$3 !~ /nan/ && $3 > -1000' projected.xyz > points.xyz
-echo "DEM $dem_name: $(wc -l < points.xyz) valid cells of $(wc -l < projected.xyz), $crs; martini grids at most $resolution m apart"
+echo "DEM $dem_name: $(wc -l < points.xyz) valid cells of $(wc -l < projected.xyz), $crs; martini grids: $resolution (m apart at most, or n= nodes a side)"
 /usr/bin/time -f '%e %M' -o tin.time "$tinsmith" tin --points points.xyz --crs "$crs" -o dem.tin -q
 echo "tinsmith tin: $(cut -d' ' -f1 tin.time) s, $(( $(cut -d' ' -f2 tin.time) / 1024 )) MB peak"
 
