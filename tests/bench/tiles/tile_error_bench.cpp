@@ -150,8 +150,7 @@ void put(std::ofstream& out, const T& v) {
 }
 
 // The TIN's boundary edges (those of one triangle), for the grid nodes outside
-// it. A linear scan per query: the boundary of a DEM-TIN is its convex hull,
-// a few hundred edges.
+// it: the TIN's z at the nearest boundary point.
 class TinBoundary {
  public:
   explicit TinBoundary(const TinData& tin) : tin_(tin) {
@@ -166,27 +165,56 @@ class TinBoundary {
       }
     }
   }
-  [[nodiscard]] std::size_t size() const { return edges_.size(); }
-  /// z of the boundary point nearest p, interpolated along its edge.
-  [[nodiscard]] double nearestZ(Point2 p) const {
+
+  /// The edges that can hold the nearest boundary point of a point in `r`:
+  /// those whose bounding box is no farther from `r` than the smallest, over
+  /// the edges, of the farthest distance from `r` to the edge (taken at a
+  /// corner of `r`: the distance to a segment is convex).
+  [[nodiscard]] std::vector<std::uint32_t> candidates(const Rect& r) const {
+    double bound = HUGE_VAL;
+    for (const auto& e : edges_) {
+      double farthest = 0.0;
+      for (const Point2 c : {Point2{r.x0, r.y0}, Point2{r.x1, r.y0}, Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
+        farthest = std::max(farthest, nearestOnEdge(e, c).first);
+      bound = std::min(bound, farthest);
+    }
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+      const Point3& a = tin_.vertices[edges_[i][0]];
+      const Point3& b = tin_.vertices[edges_[i][1]];
+      const double gx = std::max({0.0, std::min(a.x, b.x) - r.x1, r.x0 - std::max(a.x, b.x)});
+      const double gy = std::max({0.0, std::min(a.y, b.y) - r.y1, r.y0 - std::max(a.y, b.y)});
+      if (gx * gx + gy * gy <= bound) out.push_back(i);
+    }
+    return out;
+  }
+
+  /// z of the boundary point nearest p, interpolated along its edge, over
+  /// `candidates` (of a rectangle holding p).
+  [[nodiscard]] double nearestZ(Point2 p, const std::vector<std::uint32_t>& candidates) const {
     double best = HUGE_VAL, bestZ = 0.0;
-    for (const auto& [ia, ib] : edges_) {
-      const Point3& a = tin_.vertices[ia];
-      const Point3& b = tin_.vertices[ib];
-      const double dx = b.x - a.x, dy = b.y - a.y;
-      const double t =
-          std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
-      const double ex = a.x + t * dx - p.x, ey = a.y + t * dy - p.y;
-      const double d = ex * ex + ey * ey;
+    for (const std::uint32_t i : candidates) {
+      const auto [d, z] = nearestOnEdge(edges_[i], p);
       if (d < best) {
         best = d;
-        bestZ = a.z + t * (b.z - a.z);
+        bestZ = z;
       }
     }
     return bestZ;
   }
 
  private:
+  // Squared distance from p to the edge, and the edge's z at its point nearest p.
+  [[nodiscard]] std::pair<double, double> nearestOnEdge(const std::array<std::uint32_t, 2>& e,
+                                                        Point2 p) const {
+    const Point3& a = tin_.vertices[e[0]];
+    const Point3& b = tin_.vertices[e[1]];
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    const double t = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+    const double ex = a.x + t * dx - p.x, ey = a.y + t * dy - p.y;
+    return {ex * ex + ey * ey, a.z + t * (b.z - a.z)};
+  }
+
   const TinData& tin_;
   std::vector<std::array<std::uint32_t, 2>> edges_;
 };
@@ -226,7 +254,7 @@ int gridsCommand(const std::string& tinPath, const std::string& storePath, const
     const double step = b.width() / cells;
     std::vector<double> z(static_cast<std::size_t>(n) * n, 0.0);
     std::vector<std::uint8_t> inside(z.size(), 0);
-    std::size_t queue = 0;  // nodes inside
+    std::size_t insideCount = 0;
     auto nodeAt = [&](std::size_t k) {
       const int i = static_cast<int>(k % n), j = static_cast<int>(k / n);
       // The last node lands on the tile's side exactly, as tinsmith's does.
@@ -238,15 +266,18 @@ int gridsCommand(const std::string& tinPath, const std::string& storePath, const
         if (const auto h = index.z(nodeAt(k))) {
           z[k] = *h;
           inside[k] = 1;
-          ++queue;
+          ++insideCount;
         }
       }
     }
-    if (queue == 0) fail("tile " + id.name() + " holds no TIN point on its grid");
+    if (insideCount == 0) fail("tile " + id.name() + " holds no TIN point on its grid");
     // Outside the TIN: the TIN's z at the nearest point of its boundary, a
     // continuous extension (martini needs a value at every node).
-    for (std::size_t k = 0; k < z.size(); ++k) {
-      if (!inside[k]) z[k] = boundary.nearestZ(nodeAt(k));
+    if (insideCount < z.size()) {
+      const std::vector<std::uint32_t> near = boundary.candidates(b);
+      for (std::size_t k = 0; k < z.size(); ++k) {
+        if (!inside[k]) z[k] = boundary.nearestZ(nodeAt(k), near);
+      }
     }
     put(out, id.z);
     put(out, static_cast<std::int32_t>(id.x));
