@@ -62,19 +62,19 @@ resolution="${MARTINI_SPACING:-$resolution}"
 [ -n "${MARTINI_GRID:-}" ] && resolution="n=$MARTINI_GRID"
 awk '$3 !~ /nan/ && $3 > -1000' projected.xyz > points.xyz
 echo "DEM $dem_name: $(wc -l < points.xyz) valid cells of $(wc -l < projected.xyz), $crs; martini grids: $resolution (m apart at most, or n= nodes a side)"
-/usr/bin/time -f '%e %M' -o tin.time "$tinsmith" tin --points points.xyz --crs "$crs" -o dem.tin -q
+/usr/bin/time -f '%e %M %U %S' -o tin.time "$tinsmith" tin --points points.xyz --crs "$crs" -o dem.tin -q
 echo "tinsmith tin: $(cut -d' ' -f1 tin.time) s, $(( $(cut -d' ' -f2 tin.time) / 1024 )) MB peak"
 
 # tinsmith's pyramid, one thread.
-/usr/bin/time -f '%e %M' -o tile.time \
+/usr/bin/time -f '%e %M %U %S' -o tile.time \
   "$tinsmith" tile dem.tin -o dem.3dtiles --tolerance "$tolerance" --json --threads 1 > tinsmith.json
 "$bench" store dem.3dtiles > tinsmith_store.jsonl
 tolerances=$(jq -r '[.zooms[] | "\(.zoom):\(.tolerance)"] | join(",")' tinsmith.json)
 
 # martini's pyramid over the same tile squares, one thread (node).
-/usr/bin/time -f '%e %M' -o grids.time \
+/usr/bin/time -f '%e %M %U %S' -o grids.time \
   "$bench" grids dem.tin dem.3dtiles "$resolution" "$tolerances" dem.grids > grids.json
-/usr/bin/time -f '%e %M' -o martini.time node martini_tiles.mjs dem.grids martini.meshes > martini.jsonl
+/usr/bin/time -f '%e %M %U %S' -o martini.time node martini_tiles.mjs dem.grids martini.meshes > martini.jsonl
 "$bench" error dem.tin martini.meshes 2 > martini_error.jsonl
 
 echo "commit $(git -C "$here" describe --always --dirty), $(uptime | sed 's/.*load average/load average/')"

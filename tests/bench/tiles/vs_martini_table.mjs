@@ -1,14 +1,15 @@
 // The table of vs_martini.sh, from the files it wrote: tinsmith's summary and
 // store records, martini's per-zoom sums, both measured errors, the timings
-// (/usr/bin/time -f '%e %M': wall seconds, peak RSS in KB).
+// (/usr/bin/time -f '%e %M %U %S': wall seconds, peak RSS in KB, user and
+// system CPU seconds).
 import fs from 'node:fs';
 
 const [tinsmithJson, storeJsonl, tileTime, gridsJson, gridsTime, martiniJsonl, martiniTime, errorJsonl] =
   process.argv.slice(2);
 const lines = (path) => fs.readFileSync(path, 'utf8').trim().split('\n').map((l) => JSON.parse(l));
 const time = (path) => {
-  const [wall, kb] = fs.readFileSync(path, 'utf8').trim().split('\n').pop().split(' ').map(Number);
-  return { wall, mb: kb / 1024 };
+  const [wall, kb, user, sys] = fs.readFileSync(path, 'utf8').trim().split('\n').pop().split(' ').map(Number);
+  return { wall, mb: kb / 1024, cpu: user + sys };
 };
 const summary = JSON.parse(fs.readFileSync(tinsmithJson, 'utf8'));
 const store = new Map(lines(storeJsonl).map((r) => [r.zoom, r]));
@@ -53,14 +54,17 @@ out.push(`- Draco payload bytes (the .glb's binary chunk): tinsmith ${n(total.p)
          `(${(total.p / total.t).toFixed(2)} B/triangle), martini ${n(total.mp)} ` +
          `(${(total.mp / total.mt).toFixed(2)} B/triangle); triangles include skirts on both.`);
 out.push(`- tinsmith tile, 1 thread, whole process (read .tin, fits, meshes, Draco, archive): ` +
-         `${tile.wall.toFixed(2)} s wall, ${tile.mb.toFixed(0)} MB peak.`);
+         `${tile.wall.toFixed(2)} s wall (${tile.cpu.toFixed(2)} s CPU), ${tile.mb.toFixed(0)} MB peak.`);
 out.push(`- martini + draco3d, node (1 thread): meshing, skirts, normals and Draco ${martiniWork.toFixed(2)} s; ` +
-         `whole node process ${martiniT.wall.toFixed(2)} s wall, ${martiniT.mb.toFixed(0)} MB peak; ` +
+         `whole node process ${martiniT.wall.toFixed(2)} s wall (${martiniT.cpu.toFixed(2)} s CPU), ` +
+         `${martiniT.mb.toFixed(0)} MB peak; ` +
          `plus the DEM-TIN resampled onto its ${n(grids.nodes)} grid nodes (C++, ${n(grids.outside)} outside the TIN) ` +
-         `${gridT.wall.toFixed(2)} s.`);
-const martiniTotal = martiniT.wall + gridT.wall;
-out.push(`- time ratio tinsmith / martini: ${(tile.wall / martiniTotal).toFixed(2)} against node + resampling ` +
-         `(${martiniTotal.toFixed(2)} s), ${(tile.wall / martiniWork).toFixed(2)} against martini's work alone.`);
+         `${gridT.wall.toFixed(2)} s wall (${gridT.cpu.toFixed(2)} s CPU).`);
+const martiniTotal = martiniT.wall + gridT.wall, martiniCpu = martiniT.cpu + gridT.cpu;
+out.push(`- time ratio tinsmith / martini: ${(tile.wall / martiniTotal).toFixed(2)} wall ` +
+         `(${(tile.cpu / martiniCpu).toFixed(2)} CPU) against node + resampling ` +
+         `(${martiniTotal.toFixed(2)} s wall, ${martiniCpu.toFixed(2)} s CPU), ` +
+         `${(tile.wall / martiniWork).toFixed(2)} wall against martini's work alone.`);
 out.push(`- martini's error measured in ${errorSeconds.toFixed(2)} s (2 threads); its worst point per zoom: ` +
          errorRows.map((r) => `z${r.zoom} ${r.worst} at (${r.at[0].toFixed(0)}, ${r.at[1].toFixed(0)}): ` +
                               `mesh ${r.meshZ.toFixed(1)}, TIN ${r.tinZ.toFixed(1)}`).join('; ') + '.');
