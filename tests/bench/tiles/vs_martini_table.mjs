@@ -55,7 +55,7 @@ out.push(`- Draco payload bytes (the .glb's binary chunk): tinsmith ${n(total.p)
          `(${(total.mp / total.mt).toFixed(2)} B/triangle); triangles include skirts on both.`);
 out.push(`- tinsmith tile, 1 thread, whole process (read .tin, fits, meshes, Draco, archive): ` +
          `${tile.wall.toFixed(2)} s wall (${tile.cpu.toFixed(2)} s CPU), ${tile.mb.toFixed(0)} MB peak.`);
-out.push(`- martini + draco3d, node (1 thread): meshing, skirts, normals and Draco ${martiniWork.toFixed(2)} s; ` +
+out.push(`- martini + draco3d, node (1 thread): meshing, skirts, normals and Draco ${martiniWork.toFixed(2)} s wall; ` +
          `whole node process ${martiniT.wall.toFixed(2)} s wall (${martiniT.cpu.toFixed(2)} s CPU), ` +
          `${martiniT.mb.toFixed(0)} MB peak; ` +
          `plus the DEM-TIN resampled onto its ${n(grids.nodes)} grid nodes (C++, ${n(grids.outside)} outside the TIN) ` +
