@@ -125,8 +125,8 @@ int storeCommand(const std::string& path) {
     std::printf(
         "{\"zoom\":%d,\"tiles\":%zu,\"triangles\":%zu,\"bytes\":%zu,\"payload\":%zu,"
         "\"maxError\":%.6f,\"worst\":\"%s\",\"quantMin\":%.4f,\"quantMax\":%.4f}\n",
-        z, r.tiles, r.triangles, r.bytes, r.payload, r.maxError, r.worst.name().c_str(),
-        r.boundMin, r.boundMax);
+        z, r.tiles, r.triangles, r.bytes, r.payload, r.maxError, r.worst.name().c_str(), r.boundMin,
+        r.boundMax);
   }
   return 0;
 }
@@ -174,7 +174,8 @@ class TinBoundary {
     double bound = HUGE_VAL;
     for (const auto& e : edges_) {
       double farthest = 0.0;
-      for (const Point2 c : {Point2{r.x0, r.y0}, Point2{r.x1, r.y0}, Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
+      for (const Point2 c :
+           {Point2{r.x0, r.y0}, Point2{r.x1, r.y0}, Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
         farthest = std::max(farthest, nearestOnEdge(e, c).first);
       bound = std::min(bound, farthest);
     }
@@ -210,7 +211,8 @@ class TinBoundary {
     const Point3& a = tin_.vertices[e[0]];
     const Point3& b = tin_.vertices[e[1]];
     const double dx = b.x - a.x, dy = b.y - a.y;
-    const double t = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+    const double t =
+        std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
     const double ex = a.x + t * dx - p.x, ey = a.y + t * dy - p.y;
     return {ex * ex + ey * ey, a.z + t * (b.z - a.z)};
   }
@@ -219,8 +221,9 @@ class TinBoundary {
   std::vector<std::array<std::uint32_t, 2>> edges_;
 };
 
-int gridsCommand(const std::string& tinPath, const std::string& storePath, const std::string& spacing,
-                 const std::string& tolerances, const std::string& outPath) {
+int gridsCommand(const std::string& tinPath, const std::string& storePath,
+                 const std::string& spacing, const std::string& tolerances,
+                 const std::string& outPath) {
   const auto t0 = std::chrono::steady_clock::now();
   const TinData tin = ingest::readTinFile(tinPath);
   const TinIndex index(tin);
@@ -230,7 +233,8 @@ int gridsCommand(const std::string& tinPath, const std::string& storePath, const
   double resolution = 0.0;
   if (spacing.starts_with("n=")) {
     fixedCells = std::stoi(spacing.substr(2)) - 1;
-    if (fixedCells < 1 || (fixedCells & (fixedCells - 1)) != 0) fail("a grid of n=2^k+1 nodes, not " + spacing);
+    if (fixedCells < 1 || (fixedCells & (fixedCells - 1)) != 0)
+      fail("a grid of n=2^k+1 nodes, not " + spacing);
   } else {
     resolution = std::stod(spacing);
     if (!(resolution > 0)) fail("the grid spacing must be positive, not " + spacing);
@@ -285,7 +289,8 @@ int gridsCommand(const std::string& tinPath, const std::string& storePath, const
     put(out, static_cast<std::int32_t>(n));
     for (double v : {b.x0, b.y0, b.x1, b.y1, tol->second}) put(out, v);
     out.write(reinterpret_cast<const char*>(z.data()), static_cast<std::streamsize>(z.size() * 8));
-    out.write(reinterpret_cast<const char*>(inside.data()), static_cast<std::streamsize>(inside.size()));
+    out.write(reinterpret_cast<const char*>(inside.data()),
+              static_cast<std::streamsize>(inside.size()));
     nodes += z.size();
     outside += z.size() - static_cast<std::size_t>(std::count(inside.begin(), inside.end(), 1));
     ++tiles;
@@ -319,8 +324,10 @@ std::vector<MeshTile> readMeshes(const std::string& path) {
     if (!in.read(reinterpret_cast<char*>(counts), sizeof counts)) fail("truncated " + path);
     t.vertices.resize(counts[0]);
     t.triangles.resize(counts[1]);
-    in.read(reinterpret_cast<char*>(t.vertices.data()), static_cast<std::streamsize>(counts[0] * 24));
-    in.read(reinterpret_cast<char*>(t.triangles.data()), static_cast<std::streamsize>(counts[1] * 12));
+    in.read(reinterpret_cast<char*>(t.vertices.data()),
+            static_cast<std::streamsize>(counts[0] * 24));
+    in.read(reinterpret_cast<char*>(t.triangles.data()),
+            static_cast<std::streamsize>(counts[1] * 12));
     if (!in) fail("truncated " + path + " in tile " + t.id.name());
     for (const auto& tri : t.triangles) {
       for (auto v : tri) {
@@ -347,8 +354,10 @@ struct TileError {
 
 TileError measureTile(const MeshTile& tile, const TinIndex& index) {
   std::vector<std::uint8_t> inTin(tile.vertices.size());
-  for (std::size_t v = 0; v < inTin.size(); ++v) inTin[v] = index.z(tile.vertices[v].xy()).has_value();
-  const std::vector<SurfaceDifference> diffs = triangleDifferences(tile.vertices, tile.triangles, index);
+  for (std::size_t v = 0; v < inTin.size(); ++v)
+    inTin[v] = index.z(tile.vertices[v].xy()).has_value();
+  const std::vector<SurfaceDifference> diffs =
+      triangleDifferences(tile.vertices, tile.triangles, index);
   TileError e;
   for (std::size_t t = 0; t < diffs.size(); ++t) {
     const SurfaceDifference& d = diffs[t];
@@ -432,9 +441,10 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     fail(e.what());
   }
-  std::fprintf(stderr,
-               "usage: tile_error_bench store SITE.3dtiles\n"
-               "       tile_error_bench grids SITE.tin SITE.3dtiles SPACING|n=NODES Z:TOL,... OUT.grids\n"
-               "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n");
+  std::fprintf(
+      stderr,
+      "usage: tile_error_bench store SITE.3dtiles\n"
+      "       tile_error_bench grids SITE.tin SITE.3dtiles SPACING|n=NODES Z:TOL,... OUT.grids\n"
+      "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n");
   return 2;
 }
