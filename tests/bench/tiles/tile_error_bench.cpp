@@ -1,0 +1,450 @@
+// Helper of the martini comparison (vs_martini.sh): the parts of that benchmark
+// that need the DEM-TIN, so that both pyramids are sampled and measured by the
+// same code.
+//
+//   tile_error_bench store SITE.3dtiles
+//     tinsmith's tiles per zoom from their records (asset.extras): tiles,
+//     triangles (with skirts), .glb bytes, Draco payload bytes (the .glb's
+//     binary chunk), measured max error, the range of the Draco position
+//     error bounds. JSON lines.
+//   tile_error_bench grids SITE.tin SITE.3dtiles SPACING TOLERANCES OUT.grids
+//     For every tile of the store, the DEM-TIN sampled at the nodes of a
+//     (2^k + 1)² grid over the tile's square, 2^k the least power of two whose
+//     spacing is at most SPACING (m), or the same n = 2^k + 1 for every tile
+//     when SPACING is "n=257" (say): the DEM resampled for martini. Nodes
+//     outside the TIN take the TIN's z at the nearest point of its boundary
+//     (a continuous extension) and are flagged. TOLERANCES is "z:t,z:t,…", the zoom
+//     tolerances of tinsmith's summary, stored with each tile.
+//   tile_error_bench error SITE.tin MESHES.bin [THREADS]
+//     The exact max vertical difference (tiles::maxVerticalDifference, the
+//     largest of tiles::triangleDifferences) between every tile mesh of
+//     MESHES.bin and the DEM-TIN, per zoom, where it is reached, the max over
+//     the triangles wholly inside the TIN, and the largest difference at a
+//     TIN vertex (a DEM cell). JSON lines.
+//
+// The pyramid's square is computed as the tiler computes it
+// (core/tiles/tiler.cpp): origin the TIN's min corner, size the larger side.
+//
+// Formats (little-endian). OUT.grids, per tile: int32 z, x, y, n (nodes a
+// side); float64 x0, y0, x1, y1, zoom tolerance; n·n float64 heights and n·n
+// uint8 inside-flags, row j (y = y0 + j·step, south to north) after row j − 1.
+// MESHES.bin, per tile: int32 z, x, y; uint32 vertex count, triangle count;
+// float64 x, y, z per vertex (project CRS); uint32 a, b, c per triangle (CCW).
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <unordered_set>
+#include <vector>
+
+#include "core/tiles/pyramid.hpp"
+#include "core/tiles/surface_difference.hpp"
+#include "core/tiles/tile_content.hpp"
+#include "ingest/store/tile_store.hpp"
+#include "ingest/tinfile/tin_file.hpp"
+
+using namespace tinsmith;
+using namespace tinsmith::tiles;
+
+namespace {
+
+[[noreturn]] void fail(const std::string& message) {
+  std::fprintf(stderr, "tile_error_bench: %s\n", message.c_str());
+  std::exit(2);
+}
+
+PyramidGeometry pyramidOf(const TinData& tin) {
+  const Rect extent = boundsOf(tin.vertices);
+  return PyramidGeometry({extent.x0, extent.y0}, std::max(extent.width(), extent.height()));
+}
+
+// The tiles of a store: "tiles/z/x/y.glb" keys, in the pyramid's order.
+std::vector<TileId> storeTiles(const store::TileStore& s) {
+  std::vector<TileId> ids;
+  for (const std::string& key : s.keys()) {
+    TileId id;
+    if (std::sscanf(key.c_str(), "tiles/%d/%u/%u.glb", &id.z, &id.x, &id.y) == 3) ids.push_back(id);
+  }
+  std::sort(ids.begin(), ids.end(), rowMajorLess);
+  if (ids.empty()) fail("no tiles/z/x/y.glb in " + s.path().string());
+  return ids;
+}
+
+std::uint32_t readU32(const std::string& b, std::size_t at) {
+  if (at + 4 > b.size()) fail("truncated .glb");
+  std::uint32_t v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+
+// glb: 12-byte header, then chunks (length, type, data); the second chunk is
+// the binary one, which holds the Draco payload (or the raw buffers).
+std::size_t binaryChunkBytes(const std::string& glb) {
+  const std::uint32_t jsonLength = readU32(glb, 12);
+  const std::size_t bin = 20 + jsonLength;
+  return bin + 8 <= glb.size() ? readU32(glb, bin) : 0;
+}
+
+struct ZoomRow {
+  std::size_t tiles = 0, triangles = 0, bytes = 0, payload = 0;
+  double maxError = 0.0;
+  double boundMin = HUGE_VAL, boundMax = 0.0;  ///< Draco position error bounds (m)
+  TileId worst;
+};
+
+int storeCommand(const std::string& path) {
+  const auto s = store::openStoreForReading(path);
+  std::map<int, ZoomRow> rows;
+  for (const TileId& id : storeTiles(*s)) {
+    const std::string glb = *s->get("tiles/" + id.name() + ".glb");
+    const auto record = recordFromGlb(glb);
+    if (!record) fail("tile " + id.name() + " has no record");
+    ZoomRow& r = rows[id.z];
+    ++r.tiles;
+    r.triangles += record->triangles;
+    r.bytes += glb.size();
+    r.payload += binaryChunkBytes(glb);
+    if (record->error >= r.maxError) {
+      r.maxError = record->error;
+      r.worst = id;
+    }
+    r.boundMin = std::min(r.boundMin, record->positionErrorBound);
+    r.boundMax = std::max(r.boundMax, record->positionErrorBound);
+  }
+  for (const auto& [z, r] : rows) {
+    std::printf(
+        "{\"zoom\":%d,\"tiles\":%zu,\"triangles\":%zu,\"bytes\":%zu,\"payload\":%zu,"
+        "\"maxError\":%.6f,\"worst\":\"%s\",\"quantMin\":%.4f,\"quantMax\":%.4f}\n",
+        z, r.tiles, r.triangles, r.bytes, r.payload, r.maxError, r.worst.name().c_str(), r.boundMin,
+        r.boundMax);
+  }
+  return 0;
+}
+
+std::map<int, double> parseTolerances(const std::string& text) {
+  std::map<int, double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    int z = 0;
+    double t = 0;
+    if (std::sscanf(item.c_str(), "%d:%lf", &z, &t) != 2) fail("bad tolerance item '" + item + "'");
+    out[z] = t;
+  }
+  return out;
+}
+
+template <typename T>
+void put(std::ofstream& out, const T& v) {
+  out.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+// The TIN's boundary edges (those of one triangle), for the grid nodes outside
+// it: the TIN's z at the nearest boundary point.
+class TinBoundary {
+ public:
+  explicit TinBoundary(const TinData& tin) : tin_(tin) {
+    std::unordered_set<std::uint64_t> directed;
+    auto key = [](std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; };
+    for (const auto& t : tin.triangles) {
+      for (int i = 0; i < 3; ++i) directed.insert(key(t[i], t[(i + 1) % 3]));
+    }
+    for (const auto& t : tin.triangles) {
+      for (int i = 0; i < 3; ++i) {
+        if (!directed.contains(key(t[(i + 1) % 3], t[i]))) edges_.push_back({t[i], t[(i + 1) % 3]});
+      }
+    }
+  }
+
+  /// The edges that can hold the nearest boundary point of a point in `r`:
+  /// those whose bounding box is no farther from `r` than the smallest, over
+  /// the edges, of the farthest distance from `r` to the edge (taken at a
+  /// corner of `r`: the distance to a segment is convex).
+  [[nodiscard]] std::vector<std::uint32_t> candidates(const Rect& r) const {
+    double bound = HUGE_VAL;
+    for (const auto& e : edges_) {
+      double farthest = 0.0;
+      for (const Point2 c :
+           {Point2{r.x0, r.y0}, Point2{r.x1, r.y0}, Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
+        farthest = std::max(farthest, nearestOnEdge(e, c).first);
+      bound = std::min(bound, farthest);
+    }
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+      const Point3& a = tin_.vertices[edges_[i][0]];
+      const Point3& b = tin_.vertices[edges_[i][1]];
+      const double gx = std::max({0.0, std::min(a.x, b.x) - r.x1, r.x0 - std::max(a.x, b.x)});
+      const double gy = std::max({0.0, std::min(a.y, b.y) - r.y1, r.y0 - std::max(a.y, b.y)});
+      if (gx * gx + gy * gy <= bound) out.push_back(i);
+    }
+    return out;
+  }
+
+  /// z of the boundary point nearest p, interpolated along its edge, over
+  /// `candidates` (of a rectangle holding p).
+  [[nodiscard]] double nearestZ(Point2 p, const std::vector<std::uint32_t>& candidates) const {
+    double best = HUGE_VAL, bestZ = 0.0;
+    for (const std::uint32_t i : candidates) {
+      const auto [d, z] = nearestOnEdge(edges_[i], p);
+      if (d < best) {
+        best = d;
+        bestZ = z;
+      }
+    }
+    return bestZ;
+  }
+
+ private:
+  // Squared distance from p to the edge, and the edge's z at its point nearest p.
+  [[nodiscard]] std::pair<double, double> nearestOnEdge(const std::array<std::uint32_t, 2>& e,
+                                                        Point2 p) const {
+    const Point3& a = tin_.vertices[e[0]];
+    const Point3& b = tin_.vertices[e[1]];
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    const double t =
+        std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+    const double ex = a.x + t * dx - p.x, ey = a.y + t * dy - p.y;
+    return {ex * ex + ey * ey, a.z + t * (b.z - a.z)};
+  }
+
+  const TinData& tin_;
+  std::vector<std::array<std::uint32_t, 2>> edges_;
+};
+
+int gridsCommand(const std::string& tinPath, const std::string& storePath,
+                 const std::string& spacing, const std::string& tolerances,
+                 const std::string& outPath) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const TinData tin = ingest::readTinFile(tinPath);
+  const TinIndex index(tin);
+  const PyramidGeometry pyramid = pyramidOf(tin);
+  const TinBoundary boundary(tin);
+  int fixedCells = 0;
+  double resolution = 0.0;
+  if (spacing.starts_with("n=")) {
+    fixedCells = std::stoi(spacing.substr(2)) - 1;
+    if (fixedCells < 1 || (fixedCells & (fixedCells - 1)) != 0)
+      fail("a grid of n=2^k+1 nodes, not " + spacing);
+  } else {
+    resolution = std::stod(spacing);
+    if (!(resolution > 0)) fail("the grid spacing must be positive, not " + spacing);
+  }
+  const auto s = store::openStoreForReading(storePath);
+  const std::map<int, double> zoomTolerance = parseTolerances(tolerances);
+  std::ofstream out(outPath, std::ios::binary);
+  if (!out) fail("cannot write " + outPath);
+  std::size_t nodes = 0, outside = 0, tiles = 0;
+  for (const TileId& id : storeTiles(*s)) {
+    const auto tol = zoomTolerance.find(id.z);
+    if (tol == zoomTolerance.end()) fail("no tolerance given for zoom " + std::to_string(id.z));
+    const Rect b = pyramid.bounds(id);
+    int cells = 1;
+    if (fixedCells > 0) {
+      cells = fixedCells;
+    } else {
+      while (b.width() / cells > resolution && cells < 4096) cells *= 2;
+    }
+    const int n = cells + 1;
+    const double step = b.width() / cells;
+    std::vector<double> z(static_cast<std::size_t>(n) * n, 0.0);
+    std::vector<std::uint8_t> inside(z.size(), 0);
+    std::size_t insideCount = 0;
+    auto nodeAt = [&](std::size_t k) {
+      const int i = static_cast<int>(k % n), j = static_cast<int>(k / n);
+      // The last node lands on the tile's side exactly, as tinsmith's does.
+      return Point2{i == cells ? b.x1 : b.x0 + i * step, j == cells ? b.y1 : b.y0 + j * step};
+    };
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const std::size_t k = static_cast<std::size_t>(j) * n + i;
+        if (const auto h = index.z(nodeAt(k))) {
+          z[k] = *h;
+          inside[k] = 1;
+          ++insideCount;
+        }
+      }
+    }
+    if (insideCount == 0) fail("tile " + id.name() + " holds no TIN point on its grid");
+    // Outside the TIN: the TIN's z at the nearest point of its boundary, a
+    // continuous extension (martini needs a value at every node).
+    if (insideCount < z.size()) {
+      const std::vector<std::uint32_t> near = boundary.candidates(b);
+      for (std::size_t k = 0; k < z.size(); ++k) {
+        if (!inside[k]) z[k] = boundary.nearestZ(nodeAt(k), near);
+      }
+    }
+    put(out, id.z);
+    put(out, static_cast<std::int32_t>(id.x));
+    put(out, static_cast<std::int32_t>(id.y));
+    put(out, static_cast<std::int32_t>(n));
+    for (double v : {b.x0, b.y0, b.x1, b.y1, tol->second}) put(out, v);
+    out.write(reinterpret_cast<const char*>(z.data()), static_cast<std::streamsize>(z.size() * 8));
+    out.write(reinterpret_cast<const char*>(inside.data()),
+              static_cast<std::streamsize>(inside.size()));
+    nodes += z.size();
+    outside += z.size() - static_cast<std::size_t>(std::count(inside.begin(), inside.end(), 1));
+    ++tiles;
+  }
+  if (!out.flush()) fail("cannot write " + outPath);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf(
+      "{\"tiles\":%zu,\"nodes\":%zu,\"outside\":%zu,\"seconds\":%.3f,\"x0\":%.6f,\"y0\":%.6f,"
+      "\"size\":%.6f}\n",
+      tiles, nodes, outside, seconds, pyramid.origin().x, pyramid.origin().y, pyramid.size());
+  return 0;
+}
+
+struct MeshTile {
+  TileId id;
+  std::vector<Point3> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+std::vector<MeshTile> readMeshes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail("cannot read " + path);
+  std::vector<MeshTile> tiles;
+  for (;;) {
+    std::int32_t head[3];
+    if (!in.read(reinterpret_cast<char*>(head), sizeof head)) break;
+    std::uint32_t counts[2];
+    MeshTile t;
+    t.id = {head[0], static_cast<std::uint32_t>(head[1]), static_cast<std::uint32_t>(head[2])};
+    if (!in.read(reinterpret_cast<char*>(counts), sizeof counts)) fail("truncated " + path);
+    t.vertices.resize(counts[0]);
+    t.triangles.resize(counts[1]);
+    in.read(reinterpret_cast<char*>(t.vertices.data()),
+            static_cast<std::streamsize>(counts[0] * 24));
+    in.read(reinterpret_cast<char*>(t.triangles.data()),
+            static_cast<std::streamsize>(counts[1] * 12));
+    if (!in) fail("truncated " + path + " in tile " + t.id.name());
+    for (const auto& tri : t.triangles) {
+      for (auto v : tri) {
+        if (v >= counts[0]) fail("tile " + t.id.name() + ": vertex index out of range");
+      }
+    }
+    tiles.push_back(std::move(t));
+  }
+  if (tiles.empty()) fail("no tiles in " + path);
+  return tiles;
+}
+
+// One tile's errors against the TIN: the exact max over the whole mesh, the
+// largest at a TIN vertex (a DEM cell), and the max over the triangles whose
+// three corners lie in the TIN (a DEM-TIN's domain is convex, so these lie
+// wholly inside it: what is left when the triangles across its boundary, where
+// a square grid meets the convex hull, are set aside).
+struct TileError {
+  SurfaceDifference worst;
+  double atVertex = 0.0;
+  Point2 vertex;
+  double inside = 0.0;
+};
+
+TileError measureTile(const MeshTile& tile, const TinIndex& index) {
+  std::vector<std::uint8_t> inTin(tile.vertices.size());
+  for (std::size_t v = 0; v < inTin.size(); ++v)
+    inTin[v] = index.z(tile.vertices[v].xy()).has_value();
+  const std::vector<SurfaceDifference> diffs =
+      triangleDifferences(tile.vertices, tile.triangles, index);
+  TileError e;
+  for (std::size_t t = 0; t < diffs.size(); ++t) {
+    const SurfaceDifference& d = diffs[t];
+    if (d.maxAbs > e.worst.maxAbs) e.worst = d;
+    if (d.vertexAbs > e.atVertex) {
+      e.atVertex = d.vertexAbs;
+      e.vertex = d.vertex;
+    }
+    const auto& c = tile.triangles[t];
+    if (inTin[c[0]] && inTin[c[1]] && inTin[c[2]]) e.inside = std::max(e.inside, d.maxAbs);
+  }
+  return e;
+}
+
+int errorCommand(const std::string& tinPath, const std::string& meshPath, int threads) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const TinData tin = ingest::readTinFile(tinPath);
+  const TinIndex index(tin);
+  const std::vector<MeshTile> tiles = readMeshes(meshPath);
+  std::vector<TileError> errors(tiles.size());
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failureLock;
+  auto work = [&] {
+    try {
+      for (std::size_t i; (i = next++) < tiles.size();) errors[i] = measureTile(tiles[i], index);
+    } catch (...) {
+      const std::lock_guard lock(failureLock);
+      failure = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  struct Row {
+    std::size_t tiles = 0, triangles = 0;
+    TileId worstTile;
+    TileError worst;  // the largest of each measure over the zoom's tiles
+  };
+  std::map<int, Row> rows;
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
+    Row& r = rows[tiles[i].id.z];
+    const TileError& e = errors[i];
+    ++r.tiles;
+    r.triangles += tiles[i].triangles.size();
+    if (e.worst.maxAbs >= r.worst.worst.maxAbs) {
+      r.worst.worst = e.worst;
+      r.worstTile = tiles[i].id;
+    }
+    if (e.atVertex >= r.worst.atVertex) {
+      r.worst.atVertex = e.atVertex;
+      r.worst.vertex = e.vertex;
+    }
+    r.worst.inside = std::max(r.worst.inside, e.inside);
+  }
+  for (const auto& [z, r] : rows) {
+    const TileError& w = r.worst;
+    std::printf(
+        "{\"zoom\":%d,\"tiles\":%zu,\"surfaceTriangles\":%zu,\"maxError\":%.6f,"
+        "\"maxInside\":%.6f,\"maxAtDemPoints\":%.6f,\"atDemPoint\":[%.3f,%.3f],\"worst\":\"%s\","
+        "\"at\":[%.3f,%.3f],\"meshZ\":%.3f,\"tinZ\":%.3f}\n",
+        z, r.tiles, r.triangles, w.worst.maxAbs, w.inside, w.atVertex, w.vertex.x, w.vertex.y,
+        r.worstTile.name().c_str(), w.worst.at.x, w.worst.at.y, w.worst.meshZ, w.worst.tinZ);
+  }
+  std::printf("{\"seconds\":%.3f}\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const std::vector<std::string> a(argv + 1, argv + argc);
+    if (a.size() == 2 && a[0] == "store") return storeCommand(a[1]);
+    if (a.size() == 6 && a[0] == "grids") return gridsCommand(a[1], a[2], a[3], a[4], a[5]);
+    if ((a.size() == 3 || a.size() == 4) && a[0] == "error")
+      return errorCommand(a[1], a[2], a.size() == 4 ? std::stoi(a[3]) : 1);
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+  std::fprintf(
+      stderr,
+      "usage: tile_error_bench store SITE.3dtiles\n"
+      "       tile_error_bench grids SITE.tin SITE.3dtiles SPACING|n=NODES Z:TOL,... OUT.grids\n"
+      "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n");
+  return 2;
+}
