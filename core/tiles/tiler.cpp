@@ -23,9 +23,9 @@ struct Tiler::Zoom {
 
 /// What a tile's constrained triangulation is made of.
 struct Tiler::TileInput {
-  std::vector<Point3> ring;               // the tile's sides, CCW
-  std::vector<ClippedPiece> lines;        // break lines and rings in the tile (held)
-  std::vector<Point3> interior;           // binary vertices inside the tile (free)
+  std::vector<Point3> ring;         // the tile's sides, CCW
+  std::vector<ClippedPiece> lines;  // break lines and rings in the tile (held)
+  std::vector<Point3> interior;     // binary vertices inside the tile (free)
 };
 
 namespace {
@@ -89,8 +89,7 @@ FitData fitData(const TinData& tin) {
     const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
     // About one sample per spacing² of area (a barycentric grid of n steps
     // has n²/2 points): a long sliver on the hull gets a few, not thousands.
-    const double area =
-        0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+    const double area = 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
     const int n = static_cast<int>(std::min(64.0, std::ceil(std::sqrt(2 * area) / spacing)));
     for (int i = 1; i < n; ++i) {
       for (int j = 1; i + j < n; ++j) {
@@ -150,8 +149,8 @@ struct SidePoint {
 /// Douglas–Peucker in the vertical: the points of `section` (sorted by
 /// `along`, NaN z skipped) farther than `tolerance` from the chord between
 /// `from` and `to`, appended to `kept` in order.
-void simplifySection(std::span<const std::pair<double, double>> section, std::pair<double, double> from,
-                     std::pair<double, double> to, double tolerance,
+void simplifySection(std::span<const std::pair<double, double>> section,
+                     std::pair<double, double> from, std::pair<double, double> to, double tolerance,
                      std::vector<std::pair<double, double>>& kept) {
   std::size_t worst = section.size();
   double worstDistance = tolerance;
@@ -254,8 +253,31 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
     }
     return worst;
   };
+  // A line vertex within rounding of one of the zoom's tile sides goes onto
+  // it exactly: a raster's boundary runs along the same rows and columns as
+  // the tile sides (both are whole cells from its corner), and a vertex an
+  // ulp off a side made a sliver with it in one tile and a different crossing
+  // in its neighbour. Both tiles see the snapped vertex on their side.
+  const double n = std::ldexp(1.0, z), near = 1e-9 * geometry_.size();
+  auto snap = [&](double v, double origin, auto&& line) {
+    const double i = std::clamp(std::round((v - origin) / geometry_.size() * n), 0.0, n);
+    const double g = line(z, static_cast<std::uint64_t>(i));
+    return std::abs(v - g) <= near ? g : v;
+  };
   for (const auto& line : lines_) {
     TerrainLine simplified = simplify(line, kEdgeShare * zd->tolerance, offTin);
+    auto& pts = simplified.points;
+    for (auto& p : pts) {
+      p.x = snap(p.x, geometry_.origin().x,
+                 [&](int zz, std::uint64_t i) { return geometry_.lineX(zz, i); });
+      p.y = snap(p.y, geometry_.origin().y,
+                 [&](int zz, std::uint64_t j) { return geometry_.lineY(zz, j); });
+    }
+    pts.erase(
+        std::unique(pts.begin(), pts.end(),
+                    [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; }),
+        pts.end());
+    if (pts.size() < (simplified.closed ? 3U : 2U)) continue;
     zd->lineBoxes.push_back(boundsOf(simplified.points));
     zd->lines.push_back(std::move(simplified));
   }
@@ -392,8 +414,12 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       if (!must.empty() && must.back().along == sp.along) continue;
       must.push_back(sp);
       if (!sp.onLine) {
-        const auto z = tinZ(sp.along);
-        must.back().p.z = z ? *z : fit.evaluate(sp.p.xy());  // the fit only off the TIN
+        // The section, else the TIN at the point (a corner on the TIN's
+        // boundary is where a section may start just after it), else — off
+        // the TIN — the fit.
+        auto z = tinZ(sp.along);
+        if (!z) z = index_.z(sp.p.xy());
+        must.back().p.z = z ? *z : fit.evaluate(sp.p.xy());
       }
     }
     auto& out = sideLines[k];
@@ -406,8 +432,8 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       auto last = first;
       while (last != along.end() && last->first < ub - gap) ++last;
       kept.clear();
-      simplifySection({&*first, static_cast<std::size_t>(last - first)},
-                      {ua, must[m - 1].p.z}, {ub, must[m].p.z}, kEdgeShare * zd.tolerance, kept);
+      simplifySection({&*first, static_cast<std::size_t>(last - first)}, {ua, must[m - 1].p.z},
+                      {ub, must[m].p.z}, kEdgeShare * zd.tolerance, kept);
       for (const auto& [u, z] : kept) {
         const Point2 q = at(u);
         out.push_back({q.x, q.y, z});
@@ -450,7 +476,8 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
   for (std::size_t i = 0; i < input.lines.size(); ++i) {
     cdt.insertConstraint(input.lines[i].points, lineFeature[i], input.lines[i].closed);
   }
-  cdt.insertPoints(input.interior, binaryFeature);
+  const VertexId firstBinary =
+      input.interior.empty() ? VertexId() : cdt.insertPoints(input.interior, binaryFeature);
   cdt.finalize();
   const Mesh& cm = cdt.mesh();
   std::vector<Point3> points = cm.points();
@@ -472,6 +499,15 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
     if (!hasKind(HalfedgeId(h), [](FeatureKind k) { return k != FeatureKind::Raster; })) continue;
     flags[cm.origin(HalfedgeId(h)).value] |= kHeld;
     flags[cm.target(HalfedgeId(h)).value] |= kHeld;
+  }
+  // A binary vertex that a line or ring runs through exactly (a raster's
+  // boundary along the grid's rows) is held as part of it: with the TIN's z,
+  // not the fit's (a vertex merged into a line's already has the line's).
+  for (std::size_t k = 0; k < input.interior.size(); ++k) {
+    const VertexId v = cdt.meshVertex(VertexId(firstBinary.value + static_cast<std::uint32_t>(k)));
+    if (!v.valid() || !(flags[v.value] & kHeld) || points[v.value].z != input.interior[k].z)
+      continue;
+    if (const auto z = index_.z(points[v.value].xy())) points[v.value].z = *z;
   }
   for (std::size_t v = 0; v < nv; ++v) {
     const Point3& p = points[v];

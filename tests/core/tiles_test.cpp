@@ -17,6 +17,7 @@
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/terrain_lines.hpp"
 #include "core/tiles/tiler.hpp"
+#include "core/tin/hull_trim.hpp"
 
 namespace tinsmith::tiles {
 namespace {
@@ -201,9 +202,9 @@ TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
         const TileSurface t = tiler.buildTile({z, x, y});
         if (t.empty()) continue;
         ++built;
-        EXPECT_LE(t.error, tolerance) << "tile " << t.id.name() << " at tolerance " << tolerance
-                                      << ": " << t.heldPoints << " TIN points held, "
-                                      << t.triangles.size() << " triangles";
+        EXPECT_LE(t.error, tolerance)
+            << "tile " << t.id.name() << " at tolerance " << tolerance << ": " << t.heldPoints
+            << " TIN points held, " << t.triangles.size() << " triangles";
         // A side vertex is the TIN's point there, or a road crossing within
         // the road's simplification (which stays within 0.4 of the tolerance).
         for (std::size_t v = 0; v < t.vertices.size(); ++v) {
@@ -219,6 +220,51 @@ TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
     EXPECT_GE(built, 1u);
     EXPECT_GE(exact * 10, sides * 9) << exact << " of " << sides << " side vertices exact";
   }
+}
+
+// Regression: a DEM with nodata, its TIN's hull trimmed, so the domain's
+// boundary runs along the raster's rows and columns — as the tile sides do,
+// within rounding (both are whole cells from its corner; the cell 26.477 m
+// is not a binary fraction). A ring vertex an ulp off a side made a sliver
+// along the side measured 212 m off on Red Butte's DEM, and a tile corner on
+// the TIN's boundary took the fit's z instead of the TIN's (11 m off).
+TEST(Tiles, ARastersBoundaryAlongTheTileSidesMeetsTheTolerance) {
+  Cdt cdt;
+  const FeatureId cells = cdt.addFeature(FeatureKind::SpotHeight, "dem");
+  const double x0 = 430580.446, y0 = 4512454.755, cell = 26.477018;
+  std::vector<Point3> points;
+  for (int j = 0; j <= 40; ++j) {
+    for (int i = 0; i <= 40; ++i) {
+      if (i > 20 && j > 20) continue;  // nodata: an L-shaped footprint
+      const double x = i * cell, y = j * cell;
+      points.push_back({x0 + x, y0 + y, 1800 + 0.2 * x + 40 * std::sin(x / 90) * std::cos(y / 70)});
+    }
+  }
+  cdt.insertPoints(points, cells);
+  cdt.finalize();
+  TinData tin = cdt.toTinData();
+  ASSERT_GT(trimHull(tin, 3 * cell), 0u);
+  TilerOptions options;
+  options.tolerance = 1.0;
+  options.maxTriangles = 4096;
+  options.maxZoom = 2;
+  const Tiler tiler(tin, options);
+  std::size_t built = 0;
+  for (int z = 0; z <= 2; ++z) {
+    const std::uint32_t n = 1u << z;
+    for (std::uint32_t y = 0; y < n; ++y) {
+      for (std::uint32_t x = 0; x < n; ++x) {
+        const TileSurface t = tiler.buildTile({z, x, y});
+        if (t.empty()) continue;
+        ++built;
+        if (t.triangles.size() >= options.maxTriangles) continue;  // stopped by the budget
+        EXPECT_LE(t.error, tiler.zoomTolerance(z))
+            << "tile " << t.id.name() << " at (" << t.errorAt.x - x0 << ", " << t.errorAt.y - y0
+            << ")";
+      }
+    }
+  }
+  EXPECT_GE(built, 4u);
 }
 
 TEST(Tiles, NeighboursShareTheirSideVerticesBitForBit) {

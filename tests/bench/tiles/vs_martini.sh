@@ -13,7 +13,10 @@
 # Needs gdal-bin, node and npm (martini and draco3d go into a scratch
 # directory, not the repository), jq, /usr/bin/time. KEEP=DIR keeps the files
 # there; MARTINI_SPACING=M sets the largest spacing of martini's grids (m;
-# default the DEM's), MARTINI_GRID=N (2^k + 1) one grid size for every tile.
+# default the DEM's), MARTINI_GRID=N (2^k + 1) one grid size for every tile;
+# TRIM_HULL=M trims the DEM-TIN's hull slivers (tinsmith tin --trim-hull M;
+# default 3 cells: a DEM with nodata or a projected DEM is not convex, and its
+# hull's slivers are walls no tiler should follow; 0 keeps them).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 die() { echo "vs_martini.sh: $*" >&2; exit 2; }
@@ -62,7 +65,11 @@ resolution="${MARTINI_SPACING:-$resolution}"
 [ -n "${MARTINI_GRID:-}" ] && resolution="n=$MARTINI_GRID"
 awk '$3 !~ /nan/ && $3 > -1000' projected.xyz > points.xyz
 echo "DEM $dem_name: $(wc -l < points.xyz) valid cells of $(wc -l < projected.xyz), $crs; martini grids: $resolution (m apart at most, or n= nodes a side)"
-/usr/bin/time -f '%e %M %U %S' -o tin.time "$tinsmith" tin --points points.xyz --crs "$crs" -o dem.tin -q
+trim=${TRIM_HULL:-$(awk -v r="$(awk 'NR == 1 {x = $1; y = $2} NR == 2 {printf "%.6f", sqrt(($1 - x)^2 + ($2 - y)^2); exit}' projected.xyz)" 'BEGIN {printf "%.3f", 3 * r}')}
+trim_flag=()
+awk -v t="$trim" 'BEGIN {exit !(t > 0)}' && trim_flag=(--trim-hull "$trim")
+/usr/bin/time -f '%e %M %U %S' -o tin.time "$tinsmith" tin --points points.xyz --crs "$crs" "${trim_flag[@]}" -o dem.tin -q
+echo "hull: ${trim_flag[*]:-not trimmed}"
 echo "tinsmith tin: $(cut -d' ' -f1 tin.time) s, $(( $(cut -d' ' -f2 tin.time) / 1024 )) MB peak"
 
 # tinsmith's pyramid, one thread.
