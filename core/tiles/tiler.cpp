@@ -432,8 +432,8 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       auto last = first;
       while (last != along.end() && last->first < ub - gap) ++last;
       kept.clear();
-      simplifySection({&*first, static_cast<std::size_t>(last - first)}, {ua, must[m - 1].p.z},
-                      {ub, must[m].p.z}, kEdgeShare * zd.tolerance, kept);
+      simplifySection(std::span<const std::pair<double, double>>(first, last),
+                      {ua, must[m - 1].p.z}, {ub, must[m].p.z}, kEdgeShare * zd.tolerance, kept);
       for (const auto& [u, z] : kept) {
         const Point2 q = at(u);
         out.push_back({q.x, q.y, z});
