@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "core/base/error.hpp"
 
@@ -9,7 +10,9 @@ namespace tinsmith::ingest {
 
 namespace {
 
-double dist2d(const Point3& a, const Point3& b) { return std::hypot(b.x - a.x, b.y - a.y); }
+double dist2d(const Point3& a, const Point3& b) {
+  return std::hypot(b.x - a.x, b.y - a.y);
+}
 
 std::vector<double> arcLength(const std::vector<Point3>& line) {
   std::vector<double> s(line.size(), 0.0);
@@ -50,8 +53,8 @@ DrapeResult drape(std::vector<Point3>& line, const ZLookup& surface, const std::
   }
   result.outside = line.size() - result.draped;
   if (result.draped == 0 && !line.empty())
-    throw geometryError(what + " lies entirely outside the surface built from the other layers",
-                        {}, "give it 3D coordinates or a 'z' attribute, or check its CRS");
+    throw geometryError(what + " lies entirely outside the surface built from the other layers", {},
+                        "give it 3D coordinates or a 'z' attribute, or check its CRS");
   if (result.outside == 0) return result;
   const auto s = arcLength(line);
   std::size_t prev = line.size();  // last known index before i
@@ -73,6 +76,40 @@ DrapeResult drape(std::vector<Point3>& line, const ZLookup& surface, const std::
     }
   }
   return result;
+}
+
+std::size_t reconcileConfluences(std::vector<std::vector<Point3>*> rivers,
+                                 const std::vector<bool>& reversed) {
+  std::size_t lowered = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    // The lowest z of the river ends at each x, y.
+    std::map<std::pair<double, double>, double> lowest;
+    for (const auto* line : rivers) {
+      if (line->empty()) continue;
+      for (const Point3* p : {&line->front(), &line->back()}) {
+        auto [it, fresh] = lowest.try_emplace({p->x, p->y}, p->z);
+        if (!fresh) it->second = std::min(it->second, p->z);
+      }
+    }
+    for (std::size_t i = 0; i < rivers.size(); ++i) {
+      auto& line = *rivers[i];
+      const std::size_t n = line.size();
+      if (n == 0) continue;
+      auto at = [&](std::size_t k) -> Point3& { return reversed[i] ? line[n - 1 - k] : line[k]; };
+      for (std::size_t k = 0; k < n; ++k) {
+        double target = at(k).z;
+        if (k > 0) target = std::min(target, at(k - 1).z);
+        if (k == 0 || k == n - 1) target = std::min(target, lowest.at({at(k).x, at(k).y}));
+        if (target < at(k).z) {
+          at(k).z = target;
+          ++lowered;
+          changed = true;
+        }
+      }
+    }
+  }
+  return lowered;
 }
 
 DescentResult enforceDescent(std::vector<Point3>& line) {

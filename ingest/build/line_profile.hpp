@@ -33,9 +33,9 @@ void densify(std::vector<Point3>& line, double maxSpacing);
 DrapeResult drape(std::vector<Point3>& line, const ZLookup& surface, const std::string& what);
 
 struct DescentResult {
-  bool reversed = false;          ///< flow runs against the digitised order
-  std::size_t adjusted = 0;       ///< vertices whose z changed
-  double maxAdjustment = 0.0;     ///< largest |Δz|, metres
+  bool reversed = false;       ///< flow runs against the digitised order
+  std::size_t adjusted = 0;    ///< vertices whose z changed
+  double maxAdjustment = 0.0;  ///< largest |Δz|, metres
 };
 
 /// Makes z non-increasing downstream, in place, without changing x, y or the
@@ -47,6 +47,19 @@ struct DescentResult {
 /// violators): dams are lowered and pits raised by the least total amount,
 /// rather than carving everything down to the lowest point.
 DescentResult enforceDescent(std::vector<Point3>& line);
+
+/// Rivers that meet end to end (a confluence: inflows end where an outflow
+/// starts, all at one x, y) each descend on their own after enforceDescent,
+/// but the shared point is one vertex in the TIN, where the first river's z
+/// wins: an outflow whose own start was higher then rises from it. This
+/// lowers, at every x, y where river ends meet, every end there to the
+/// lowest of them, and carves each river's vertices downstream of a lowered
+/// start down to it (z[k] = min(z[k], z[k − 1]) in flow order), until nothing
+/// changes (only lowering, so it ends). `rivers` are descending in their
+/// digitised order when `reversed[i]` is false, else from last to first.
+/// Returns the number of vertices lowered.
+std::size_t reconcileConfluences(std::vector<std::vector<Point3>*> rivers,
+                                 const std::vector<bool>& reversed);
 
 /// True when z never increases in the direction of flow (as enforceDescent
 /// decides it), within `tolerance` metres.

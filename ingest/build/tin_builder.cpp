@@ -248,6 +248,8 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
 
   // 2–4. Lakes, rivers, roads, domain rings.
   tick("break lines", 2, kSteps);
+  std::vector<std::vector<Point3>*> rivers;  // made to descend, for their confluences
+  std::vector<bool> riverReversed;
   for (std::size_t i = 0; i < later.size(); ++i) {
     PendingLine& line = later[i];
     const std::string& source = cdt.features()[line.feature].source;
@@ -277,6 +279,8 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
         }
         if (options.riverDescent) {
           const auto d = enforceDescent(line.vertices);
+          rivers.push_back(&line.vertices);
+          riverReversed.push_back(d.reversed);
           report.riversReversed += d.reversed ? 1 : 0;
           report.riverVerticesAdjusted += d.adjusted;
           report.riverMaxAdjustment = std::max(report.riverMaxAdjustment, d.maxAdjustment);
@@ -299,6 +303,9 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
         break;
     }
   }
+  // Where rivers meet end to end, one vertex: every river keeps descending
+  // through it.
+  report.riverVerticesAdjusted += reconcileConfluences(rivers, riverReversed);
   surface.reset();  // free the copy before the big triangulation
   for (auto& line : later) {
     report.inputLineVertices += line.vertices.size();

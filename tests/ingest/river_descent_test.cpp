@@ -55,7 +55,8 @@ TEST(RiverDescent, RiverDigitisedUpstreamIsDetectedAndDescendsTowardsItsFirstVer
   EXPECT_DOUBLE_EQ(river[4].z, 34.0);
   EXPECT_EQ(r.adjusted, 4u);
   // x, y and the vertex order are never touched.
-  for (std::size_t i = 0; i < river.size(); ++i) EXPECT_EQ(river[i].x, 10.0 * static_cast<double>(i));
+  for (std::size_t i = 0; i < river.size(); ++i)
+    EXPECT_EQ(river[i].x, 10.0 * static_cast<double>(i));
 }
 
 TEST(RiverDescent, WeightsFollowLengthNotVertexCount) {
@@ -104,7 +105,8 @@ TEST(Drape, TakesZFromTheSurfaceAndInterpolatesOutside) {
 TEST(Drape, ALineEntirelyOffTheSurfaceIsAGeometryErrorNamingIt) {
   std::vector<Point3> l{{0, 0, 0}, {1, 1, 0}};
   try {
-    drape(l, [](double, double) { return std::optional<double>{}; }, "streams.geojson, feature 4");
+    drape(
+        l, [](double, double) { return std::optional<double>{}; }, "streams.geojson, feature 4");
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::Geometry);
@@ -138,6 +140,33 @@ TEST(RoadSmoothing, SpikesGoAndTheProfileStaysNearTheTerrain) {
   EXPECT_EQ(road.back().z, 1620.0);
   // No step between neighbours is larger than the grade allows.
   for (std::size_t i = 1; i < road.size(); ++i) EXPECT_LT(std::abs(road[i].z - road[i - 1].z), 1.0);
+}
+
+// Regression: Red Butte's stream 8 starts where streams 6 and 7 end; each
+// descended on its own, the confluence took stream 6's end (1999.487 m) and
+// stream 8 rose from it to its own 1999.757 m before descending.
+TEST(RiverDescent, AnOutflowDescendsFromTheConfluenceItsInflowsEndAt) {
+  std::vector<Point3> inflow{{0, 0, 10}, {10, 0, 5}};
+  std::vector<Point3> other{{10, 10, 9}, {10, 0, 5.5}};
+  std::vector<Point3> outflow{{10, 0, 6}, {15, 0, 5.8}, {18, 0, 5.9}, {20, 0, 3}};
+  for (auto* line : {&inflow, &other, &outflow}) enforceDescent(*line);
+  const double before = outflow[1].z;
+  ASSERT_GT(before, inflow.back().z)
+      << "the outflow does not rise from the confluence: nothing to test";
+  std::vector<Point3> reversedOutflow(outflow.rbegin(), outflow.rend());  // digitised upstream
+  std::vector<Point3> inflow2 = inflow, other2 = other;
+  EXPECT_GT(reconcileConfluences({&inflow, &other, &outflow}, {false, false, false}), 0u);
+  EXPECT_GT(reconcileConfluences({&inflow2, &other2, &reversedOutflow}, {false, false, true}), 0u);
+  for (const auto* line : {&inflow, &other, &outflow}) EXPECT_TRUE(descends(*line));
+  // Every end at the confluence has the lowest z there, and the outflow
+  // never rises from it.
+  EXPECT_EQ(inflow.back().z, 5);
+  EXPECT_EQ(other.back().z, 5);
+  EXPECT_EQ(outflow.front().z, 5);
+  for (std::size_t k = 1; k < outflow.size(); ++k) EXPECT_LE(outflow[k].z, outflow[k - 1].z);
+  EXPECT_EQ(outflow.back().z, 3);
+  std::vector<Point3> back(reversedOutflow.rbegin(), reversedOutflow.rend());
+  EXPECT_EQ(back, outflow);
 }
 
 }  // namespace
