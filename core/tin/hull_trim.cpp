@@ -6,54 +6,38 @@
 #include <cstdint>
 #include <deque>
 #include <limits>
-#include <set>
 #include <vector>
+
+#include "core/mesh/mesh.hpp"
 
 namespace tinsmith {
 
 std::size_t trimHull(TinData& tin, double maxEdge) {
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  // The mesh's twins and constraint flags; half-edge 3t + i runs from corner
+  // i to corner i + 1 of triangle t, as in TinData. An edge is on the
+  // boundary when it has no twin or its twin's triangle was removed.
+  const Mesh mesh = Mesh::fromTinData(tin);
   const std::size_t nt = tin.triangles.size();
-  // Directed edges sorted, so each finds its reverse: half-edge h = 3t + i
-  // runs from corner i to corner i + 1 of triangle t.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
-  edges.reserve(3 * nt);
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint64_t a = tin.triangles[t][i], b = tin.triangles[t][(i + 1) % 3];
-      edges.push_back({(a << 32) | b, 3 * t + i});
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  std::vector<std::uint32_t> twin(3 * nt, kNone);
-  for (const auto& [key, h] : edges) {
-    const std::uint64_t reverse = (key << 32) | (key >> 32);
-    const auto it = std::lower_bound(edges.begin(), edges.end(), std::make_pair(reverse, 0U));
-    if (it != edges.end() && it->first == reverse) twin[h] = it->second;
-  }
-  std::set<std::pair<std::uint32_t, std::uint32_t>> constrained;
-  for (const auto& e : tin.constrainedEdges)
-    constrained.insert({std::min(e.a, e.b), std::max(e.a, e.b)});
+  std::vector<char> removed(nt, 0);
+  auto onBoundary = [&](std::uint32_t h) {
+    const HalfedgeId g = mesh.twin(HalfedgeId(h));
+    return !g.valid() || removed[Mesh::triangle(g).value];
+  };
   auto ends = [&](std::uint32_t h) {
     const auto& t = tin.triangles[h / 3];
     return std::array{t[h % 3], t[(h % 3 + 1) % 3]};
-  };
-  auto isConstrained = [&](std::uint32_t h) {
-    const auto [a, b] = ends(h);
-    return constrained.count({std::min(a, b), std::max(a, b)}) > 0;
   };
   auto length = [&](std::uint32_t h) {
     const auto [a, b] = ends(h);
     return std::hypot(tin.vertices[b].x - tin.vertices[a].x, tin.vertices[b].y - tin.vertices[a].y);
   };
-  std::vector<char> removed(nt, 0);
   std::vector<std::uint32_t> boundaryEdges(tin.vertices.size(), 0);  // per vertex
   std::vector<std::uint32_t> triangles(tin.vertices.size(), 0);      // per vertex
   std::deque<std::uint32_t> queue;
   for (std::uint32_t t = 0; t < nt; ++t) {
     for (std::uint32_t i = 0; i < 3; ++i) {
       ++triangles[tin.triangles[t][i]];
-      if (twin[3 * t + i] == kNone) {
+      if (onBoundary(3 * t + i)) {
         ++boundaryEdges[tin.triangles[t][i]];
         queue.push_back(t);
       }
@@ -64,18 +48,19 @@ std::size_t trimHull(TinData& tin, double maxEdge) {
     const std::uint32_t t = queue.front();
     queue.pop_front();
     if (removed[t]) continue;
-    int onBoundary = 0;
-    std::uint32_t outer = kNone;
+    int boundaryCount = 0;
+    std::uint32_t outer = 0;
     for (std::uint32_t i = 0; i < 3; ++i) {
-      if (twin[3 * t + i] == kNone) {
-        ++onBoundary;
+      if (onBoundary(3 * t + i)) {
+        ++boundaryCount;
         outer = 3 * t + i;
       }
     }
-    if (onBoundary != 1 || isConstrained(outer) || !(length(outer) > maxEdge)) continue;
+    if (boundaryCount != 1 || mesh.isConstrained(HalfedgeId(outer)) || !(length(outer) > maxEdge))
+      continue;
     const std::uint32_t apex = tin.triangles[t][(outer % 3 + 2) % 3];
     if (boundaryEdges[apex] > 0 || triangles[apex] < 2) continue;
-    removed[t] = 1;
+    removed[t] = 1;  // before its inner edges are asked: they are on the boundary now
     ++count;
     const auto [a, b] = ends(outer);
     --boundaryEdges[a];
@@ -83,8 +68,7 @@ std::size_t trimHull(TinData& tin, double maxEdge) {
     for (std::uint32_t v : tin.triangles[t]) --triangles[v];
     // Its two inner edges are now on the boundary.
     for (std::uint32_t h : {3 * t + (outer % 3 + 1) % 3, 3 * t + (outer % 3 + 2) % 3}) {
-      const std::uint32_t g = twin[h];
-      twin[g] = kNone;
+      const std::uint32_t g = mesh.twin(HalfedgeId(h)).value;
       const auto [u, w] = ends(g);
       ++boundaryEdges[u];
       ++boundaryEdges[w];
@@ -102,7 +86,7 @@ std::size_t trimHull(TinData& tin, double maxEdge) {
     if (removed[t]) continue;
     kept.push_back(tin.triangles[t]);
     for (std::uint32_t i = 0; i < 3; ++i) {
-      if (twin[3 * t + i] != kNone) continue;
+      if (!onBoundary(3 * t + i)) continue;
       const auto [a, b] = ends(3 * t + i);
       added.push_back({std::min(a, b), std::max(a, b), feature});
     }
