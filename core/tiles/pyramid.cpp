@@ -1,5 +1,6 @@
 #include "core/tiles/pyramid.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -44,6 +45,15 @@ double PyramidGeometry::lineX(int z, std::uint64_t i) const {
 
 double PyramidGeometry::lineY(int z, std::uint64_t j) const {
   return origin_.y + std::ldexp(static_cast<double>(j), -z) * size_;
+}
+
+Point2 PyramidGeometry::snapToLines(int z, Point2 p, double near) const {
+  const double n = std::ldexp(1.0, z);
+  auto nearest = [&](double v, double origin) {
+    return static_cast<std::uint64_t>(std::clamp(std::round((v - origin) / size_ * n), 0.0, n));
+  };
+  const double gx = lineX(z, nearest(p.x, origin_.x)), gy = lineY(z, nearest(p.y, origin_.y));
+  return {std::abs(p.x - gx) <= near ? gx : p.x, std::abs(p.y - gy) <= near ? gy : p.y};
 }
 
 }  // namespace tinsmith::tiles

@@ -88,6 +88,9 @@ class PyramidGeometry {
   /// same double.
   [[nodiscard]] double lineX(int z, std::uint64_t i) const;
   [[nodiscard]] double lineY(int z, std::uint64_t j) const;
+  /// p with each coordinate put exactly on the nearest grid line of zoom z
+  /// (lineX / lineY) when it lies within `near` metres of it.
+  [[nodiscard]] Point2 snapToLines(int z, Point2 p, double near) const;
   [[nodiscard]] Rect bounds(const TileId& t) const {
     return {lineX(t.z, t.x), lineY(t.z, t.y), lineX(t.z, t.x + 1ULL), lineY(t.z, t.y + 1ULL)};
   }

@@ -258,20 +258,14 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
   // the tile sides (both are whole cells from its corner), and a vertex an
   // ulp off a side made a sliver with it in one tile and a different crossing
   // in its neighbour. Both tiles see the snapped vertex on their side.
-  const double n = std::ldexp(1.0, z), near = 1e-9 * geometry_.size();
-  auto snap = [&](double v, double origin, auto&& line) {
-    const double i = std::clamp(std::round((v - origin) / geometry_.size() * n), 0.0, n);
-    const double g = line(z, static_cast<std::uint64_t>(i));
-    return std::abs(v - g) <= near ? g : v;
-  };
+  const double near = 1e-9 * geometry_.size();
   for (const auto& line : lines_) {
     TerrainLine simplified = simplify(line, kEdgeShare * zd->tolerance, offTin);
     auto& pts = simplified.points;
     for (auto& p : pts) {
-      p.x = snap(p.x, geometry_.origin().x,
-                 [&](int zz, std::uint64_t i) { return geometry_.lineX(zz, i); });
-      p.y = snap(p.y, geometry_.origin().y,
-                 [&](int zz, std::uint64_t j) { return geometry_.lineY(zz, j); });
+      const Point2 q = geometry_.snapToLines(z, p.xy(), near);
+      p.x = q.x;
+      p.y = q.y;
     }
     pts.erase(
         std::unique(pts.begin(), pts.end(),
