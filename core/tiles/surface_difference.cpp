@@ -205,7 +205,6 @@ std::vector<SurfaceDifference> triangleDifferences(
     SurfaceDifference& r = result[i];
     auto consider = [&](Point2 p, double zm, double zt) {
       const double d = std::abs(zm - zt);
-      ++r.pieces;
       if (d > r.maxAbs) {
         r.maxAbs = d;
         r.at = p;
@@ -220,12 +219,7 @@ std::vector<SurfaceDifference> triangleDifferences(
     for (int e = 0; e < 3; ++e) {
       const EdgeDifference d = edge(m[e], m[(e + 1) % 3]);
       r.pieces += d.points;
-      if (d.maxAbs > r.maxAbs) {
-        r.maxAbs = d.maxAbs;
-        r.at = d.at;
-        r.meshZ = d.meshZ;
-        r.tinZ = d.tinZ;
-      }
+      consider(d.at, d.meshZ, d.tinZ);
     }
     // The TIN vertices inside, against the triangle's plane (relative to its
     // first corner: UTM-sized coordinates lose less).
@@ -237,6 +231,7 @@ std::vector<SurfaceDifference> triangleDifferences(
     for (std::uint32_t v : inside) {
       const P2 p = local(tin.vertices[v]);
       if (sideOf(a, b, p) < 0 || sideOf(b, c, p) < 0 || sideOf(c, a, p) < 0) continue;
+      ++r.pieces;
       const double d = consider(tin.vertices[v].xy(), plane.at(p), tin.vertices[v].z);
       if (d > r.vertexAbs) {
         r.vertexAbs = d;
