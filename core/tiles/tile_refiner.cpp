@@ -7,6 +7,7 @@
 #include <queue>
 
 #include "core/geometry/predicates.hpp"
+#include "core/mesh/mesh.hpp"
 
 namespace tinsmith::tiles {
 
@@ -38,21 +39,16 @@ class Refiner {
     kind_.assign(3 * nt, EdgeKind::Free);
     version_.assign(nt, 0);
     vout_.assign(tile_.vertices.size(), kNone);
-    // Twins: each directed edge finds its reverse among the sorted edges.
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
-    edges.reserve(3 * nt);
-    for (std::uint32_t t = 0; t < nt; ++t) {
-      for (int i = 0; i < 3; ++i) {
-        const std::uint64_t a = tri_[t][i], b = tri_[t][(i + 1) % 3];
-        edges.push_back({(a << 32) | b, 3 * t + static_cast<std::uint32_t>(i)});
-        vout_[a] = 3 * t + static_cast<std::uint32_t>(i);
-      }
-    }
-    std::sort(edges.begin(), edges.end());
-    for (const auto& [key, h] : edges) {
-      const std::uint64_t reverse = (key << 32) | (key >> 32);
-      const auto it = std::lower_bound(edges.begin(), edges.end(), std::make_pair(reverse, 0U));
-      if (it != edges.end() && it->first == reverse) twin_[h] = it->second;
+    // The twins from the project's mesh (half-edge 3t + i runs from corner i
+    // to corner i + 1 there too); from here on the refiner keeps them.
+    TinData shape;
+    shape.vertices = tile_.vertices;
+    shape.triangles.assign(tri_.begin(), tri_.end());
+    const Mesh mesh = Mesh::fromTinData(shape);
+    for (std::uint32_t h = 0; h < 3 * nt; ++h) {
+      const HalfedgeId g = mesh.twin(HalfedgeId(h));
+      if (g.valid()) twin_[h] = g.value;
+      vout_[tri_[h / 3][h % 3]] = h;
     }
     for (std::uint32_t h = 0; h < 3 * nt; ++h) {
       const std::uint32_t t = h / 3, i = h % 3;
