@@ -35,7 +35,7 @@ std::string ValidationReport::summary() const {
   std::ostringstream s;
   s << (ok ? "ok" : "FAILED") << ": " << vertices << " vertices, " << triangles << " triangles, "
     << edges << " edges (" << boundaryEdges << " on the boundary in " << boundaryLoops
-    << " loops), " << constrainedEdges << " constrained";
+    << (boundaryLoops == 1 ? " loop), " : " loops), ") << constrainedEdges << " constrained edges";
   if (!ok) {
     s << "; " << problemCount << " problems";
     for (const auto& p : problems) s << "\n  " << p;
