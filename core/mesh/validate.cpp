@@ -121,7 +121,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     for (std::size_t steps = 0; !seen[h.value]; ++steps) {
       seen[h.value] = true;
       const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
-      area += (a.x - o.x) * (b.y - o.y) - (b.x - o.x) * (a.y - o.y);
+      area += geometry::orient2dInexact(o, a, b);
       // Next boundary half-edge leaving target(h): rotate clockwise from next(h).
       HalfedgeId g = Mesh::next(h);
       std::size_t guard = 0;
