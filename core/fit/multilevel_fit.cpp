@@ -14,10 +14,10 @@
 #include <cstdio>
 #include <limits>
 #include <numeric>
-#include <thread>
 #include <utility>
 
 #include "core/base/error.hpp"
+#include "core/base/parallel.hpp"
 #include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
@@ -50,24 +50,10 @@ std::uint64_t compactBits(std::uint64_t v) {
 constexpr int kParts = 2;
 
 /// Runs f(begin, end, part) for the kParts parts of [0, n), on up to `threads`
-/// threads.
+/// threads (small inputs on the calling thread).
 template <class F>
-void forEachPart(std::size_t n, int threads, F&& f) {
-  const std::size_t chunk = (n + kParts - 1) / kParts;
-  auto range = [&](int part) {
-    const std::size_t b = std::min(n, chunk * static_cast<std::size_t>(part));
-    return std::pair{b, std::min(n, b + chunk)};
-  };
-  if (threads <= 1 || n < 16384) {
-    for (int part = 0; part < kParts; ++part) f(range(part).first, range(part).second, part);
-    return;
-  }
-  std::vector<std::thread> pool;
-  for (int part = 1; part < kParts; ++part) {
-    pool.emplace_back([&f, r = range(part), part] { f(r.first, r.second, part); });
-  }
-  f(range(0).first, range(0).second, 0);
-  for (auto& th : pool) th.join();
+void forEachPart(std::size_t n, unsigned threads, F&& f) {
+  parallelParts(n, kParts, threads, std::forward<F>(f), 16384);
 }
 
 /// Sorts (code, index) pairs by code with a stable LSD radix sort over the
@@ -196,8 +182,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     throw inputError("there are " + std::to_string(options.weights.size()) + " weights for " +
                      std::to_string(input.size()) + " points", {}, "give one weight per point or none");
   }
-  const int threads = options.threads > 0 ? options.threads
-                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const unsigned threads = resolveThreads(options.threads);
   // Extent and validity, per part (workers never throw: the first bad point
   // is reported after they are done).
   struct Extent {
