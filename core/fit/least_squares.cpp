@@ -142,8 +142,8 @@ NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle
   return eq;
 }
 
-NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const Triangle> triangles,
-                                        std::span<const Sample> samples) {
+std::vector<TriangleMoments> triangleMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
+                                             std::span<const Sample> samples) {
   checkTriangles(vertexCount, triangles);
   std::vector<TriangleMoments> moments(triangles.size());
   for (std::size_t k = 0; k < samples.size(); ++k) {
@@ -155,7 +155,12 @@ NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const
     }
     moments[s.triangle].add(s.barycentric, s.z, s.weight);
   }
-  return scatterMoments(vertexCount, triangles, moments);
+  return moments;
+}
+
+NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const Triangle> triangles,
+                                        std::span<const Sample> samples) {
+  return scatterMoments(vertexCount, triangles, triangleMoments(vertexCount, triangles, samples));
 }
 
 PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
@@ -494,19 +499,27 @@ SolveReport solveSystem(const SparseMatrix& a, const Vector& b, Vector& c, Solve
 LeastSquaresResult fitLeastSquares(std::span<const Point2> vertices, std::span<const Triangle> triangles,
                                    std::span<const Sample> samples, const LeastSquaresOptions& options,
                                    const Vector& initial) {
-  NormalEquations eq = assembleNormalEquations(vertices.size(), triangles, samples);
+  // The multilevel fit's assembly: per-triangle moments, scattered into the
+  // smoothing matrix's pattern (or alone without smoothing).
+  const std::vector<TriangleMoments> moments = triangleMoments(vertices.size(), triangles, samples);
   LeastSquaresResult result;
-  SparseMatrix a = eq.btb;
+  SparseMatrix a;
+  Vector b;
   if (options.smoothing != Smoothing::None) {
-    const SparseMatrix energy = smoothingMatrix(options.smoothing, vertices, triangles);
-    result.lambdaDefault = defaultLambda(eq.btb, energy);
-    result.lambda = options.lambdaAbsolute ? *options.lambdaAbsolute : options.lambdaFactor * result.lambdaDefault;
-    a = eq.btb + result.lambda * energy;
-    a.makeCompressed();
+    PenalizedSystem sys = assemblePenalized(triangles, moments, smoothingMatrix(options.smoothing, vertices, triangles),
+                                            options.lambdaFactor, options.lambdaAbsolute);
+    result.lambdaDefault = sys.lambdaDefault;
+    result.lambda = sys.lambda;
+    a = std::move(sys.a);
+    b = std::move(sys.b);
+  } else {
+    NormalEquations eq = scatterMoments(vertices.size(), triangles, moments);
+    a = std::move(eq.btb);
+    b = std::move(eq.btz);
   }
-  applyFixedVertices(a, eq.btz, options.fixed);
-  result.coefficients = initial.size() == eq.btz.size() ? initial : Vector::Zero(eq.btz.size());
-  result.report = solveSystem(a, eq.btz, result.coefficients, options.solver, options.control);
+  applyFixedVertices(a, b, options.fixed);
+  result.coefficients = initial.size() == b.size() ? initial : Vector::Zero(b.size());
+  result.report = solveSystem(a, b, result.coefficients, options.solver, options.control);
   return result;
 }
 
