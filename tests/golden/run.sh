@@ -9,10 +9,11 @@
 #   (or: TINSMITH_UPDATE_GOLDEN=1 ctest -R Golden)
 #
 # A case line is `tinsmith ARGS…` or `sha256 FILE` (the bytes of an output,
-# so a format change shows in review); `#` starts a comment. In ARGS, {in} is
-# the inputs folder and {out} a fresh empty folder for the case. Transcripts
-# are made comparable across machines: the two folders print as {in} and
-# {out}, durations ("0.012 s", "time …": numbers) as #, peak memory as #.
+# so a format change shows in review); `#` starts a comment. Each case runs in
+# a fresh scratch folder holding a copy of the inputs as `in/` and an empty
+# `out/`; in a case line {in} and {out} stand for those two relative paths,
+# so no absolute path reaches an output (a .tin records its inputs' paths).
+# Durations ("0.012 s", "…seconds": numbers) and peak memory print as #.
 set -euo pipefail
 
 if [ $# -lt 2 ]; then
@@ -27,7 +28,6 @@ update="${TINSMITH_UPDATE_GOLDEN:-0}"
 
 normalize() {
   sed -E \
-    -e "s#${inputs}#{in}#g" -e "s#${out}#{out}#g" \
     -e 's#[0-9]+\.[0-9]+ s\b#\# s#g' \
     -e 's#("[a-z_]*(seconds|_s)": )[0-9.eE+-]+#\1\##g' \
     -e 's#[0-9]+(\.[0-9]+)? (MB|MiB) peak#\# \2 peak#g'
@@ -38,12 +38,14 @@ for case_file in "$@"; do
   name="$(basename "$case_file" .case)"
   expected="${case_file%.case}.expected"
   out="$(mktemp -d "${TMPDIR:-/tmp}/golden-$name.XXXXXX")"
+  cp -r "$inputs" "$out/in"
+  mkdir "$out/out"
   transcript="$out.transcript"
   : >"$transcript"
   while IFS= read -r line || [ -n "$line" ]; do
     case "$line" in '' | '#'*) continue ;; esac
-    cmd="${line//\{in\}/$inputs}"
-    cmd="${cmd//\{out\}/$out}"
+    cmd="${line//\{in\}/in}"
+    cmd="${cmd//\{out\}/out}"
     read -r -a words <<<"$cmd"
     echo "\$ $line" >>"$transcript"
     case "${words[0]}" in
@@ -58,8 +60,8 @@ for case_file in "$@"; do
         echo "[exit $rc]" >>"$transcript"
         ;;
       sha256)
-        if [ -f "${words[1]}" ]; then
-          sha256sum "${words[1]}" | cut -d' ' -f1 >>"$transcript"
+        if [ -f "$out/${words[1]}" ]; then
+          sha256sum "$out/${words[1]}" | cut -d' ' -f1 >>"$transcript"
         else
           echo "(no file)" >>"$transcript"
         fi
