@@ -336,4 +336,23 @@ std::vector<std::uint64_t> BinaryTriangulation::triangleStrip() const {
   return s;
 }
 
+std::int32_t NestedLocator::add(const BinaryTriangulation& mesh, const KeyIndexMap& leafIndex,
+                               const BinaryTriangle& t) {
+  if (!mesh.isSplit(t)) {
+    const std::uint32_t id = leafIndex.find(t.path);
+    if (id == KeyIndexMap::kNone) throw internalError("nested location: a leaf triangle is not in the triangulation");
+    return -1 - static_cast<std::int32_t>(id);
+  }
+  const std::uint64_t j = (t.l + t.r) / 2;
+  const Point2 pl = mesh.gridPosition(t.l), pa = mesh.gridPosition(t.a), pr = mesh.gridPosition(t.r);
+  const Point2 pj{0.5 * (pl.x + pr.x), 0.5 * (pl.y + pr.y)};
+  const auto index = static_cast<std::int32_t>(nodes_.size());
+  nodes_.push_back({pa, pj, geometry::orient2dInexact(pa, pj, pl), {0, 0}});
+  const std::int32_t first = add(mesh, leafIndex, BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1});
+  const std::int32_t second = add(mesh, leafIndex, BinaryTriangle{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1});
+  nodes_[static_cast<std::size_t>(index)].child[0] = first;
+  nodes_[static_cast<std::size_t>(index)].child[1] = second;
+  return index;
+}
+
 }  // namespace tinsmith::fit
