@@ -212,6 +212,10 @@ std::size_t CdtTestAccess::deepestReroute(const Cdt& cdt) {
   return cdt.impl_->deepestReroute;
 }
 
+std::size_t CdtTestAccess::crossingsPlacedBy(const Cdt& cdt, cdt::CrossingStep step) {
+  return cdt.impl_->crossingSteps[static_cast<std::size_t>(step)];
+}
+
 ValidationReport CdtTestAccess::validate(const Cdt& cdt, std::size_t& chainSteps,
                                          const ValidationOptions& options) {
   chainSteps = 0;
