@@ -48,10 +48,11 @@ class Triangulation : public TriangleStore {
 
   std::uint32_t lastTriangle = 0;  // where the next walk starts
   std::uint32_t rng = 2463534242u;
-  // Scratch of nearVertex(): triangles to visit, and those visited (marked
-  // meanwhile by bit 1 of cons[3t], which nearVertex() clears again).
+  // Scratch of nearVertex(): triangles to visit, those visited, and a mark
+  // per triangle (grown with the triangles; set only while nearVertex() runs,
+  // which clears it again).
   std::vector<std::uint32_t> nearTodo, nearSeen;
-  static constexpr std::uint8_t kSeen = 2;
+  std::vector<std::uint8_t> nearMark;
 
   Triangulation() = default;
   explicit Triangulation(CdtOptions opts) : options(std::move(opts)) {}
@@ -165,13 +166,16 @@ class Triangulation : public TriangleStore {
     nearTodo.assign({loc.t});
     if (loc.kind == LocKind::OnEdge) nearTodo.push_back(opp[loc.h] / 3);
     nearSeen.clear();
+    if (nearMark.size() < triCount()) {
+      nearMark.resize(std::max<std::size_t>(triCount(), 2 * nearMark.size()), 0);
+    }
     std::uint32_t best = kNone;
     double bestD = tol * tol;
     while (!nearTodo.empty() && nearSeen.size() < 4096) {
       const std::uint32_t t = nearTodo.back();
       nearTodo.pop_back();
-      if (cons[3 * t] & kSeen) continue;
-      cons[3 * t] |= kSeen;
+      if (nearMark[t]) continue;
+      nearMark[t] = 1;
       nearSeen.push_back(t);
       for (std::uint32_t i = 0; i < 3; ++i) {
         const std::uint32_t v = tv[3 * t + i];
@@ -183,10 +187,10 @@ class Triangulation : public TriangleStore {
           bestD = d;
         }
         const std::uint32_t n = opp[3 * t + i] / 3;
-        if (!(cons[3 * n] & kSeen) && inConflict(n, p)) nearTodo.push_back(n);
+        if (!nearMark[n] && inConflict(n, p)) nearTodo.push_back(n);
       }
     }
-    for (const std::uint32_t t : nearSeen) cons[3 * t] &= ~kSeen;
+    for (const std::uint32_t t : nearSeen) nearMark[t] = 0;
     return best;
   }
 
