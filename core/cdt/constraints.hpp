@@ -61,11 +61,14 @@ inline constexpr std::size_t kCrossingSteps = 8;
 /// Where crossing resolution puts a crossing (placeCrossing's answer).
 struct CrossingPlacement {
   CrossingStep step = CrossingStep::SplitEdge;
-  std::uint32_t vertex =
-      kNone;  // an existing vertex (SegmentEnd, NearVertex, SliverApex, NearestVertex)
-  std::uint32_t triangle = kNone;  // where the new vertex goes (BesideEdge, Nudged, BeyondSliver)
-  Point2 at;                       // the new vertex (SplitEdge, BesideEdge, Nudged, BeyondSliver)
-  double bendBy = 0;               // SliverApex: how far the crossed constraint bends
+  // The existing vertex used (SegmentEnd, NearVertex, SliverApex, NearestVertex).
+  std::uint32_t vertex = kNone;
+  // The triangle the new vertex goes into (BesideEdge, Nudged, BeyondSliver).
+  std::uint32_t triangle = kNone;
+  // The new vertex (SplitEdge, BesideEdge, Nudged, BeyondSliver).
+  Point2 at;
+  // SliverApex: how far the crossed constraint bends.
+  double bendBy = 0;
 };
 
 /// One crossing under resolution: the segment cur→tgt being inserted meets
@@ -108,9 +111,10 @@ class ConstrainedTriangulation : public Triangulation {
 
   // ---------------------------------------------------- pending input
   /// Inserts the pending points: a first bulk of at least
-  /// options.splitMinPoints as two halves (two_halves.hpp) when they split
-  /// well, else in insertionOrder().
+  /// options.splitMinPoints as two halves (insertAsTwoHalves) when they
+  /// split well, else in insertionOrder().
   void insertPendingPoints();
+  /// Inserts the segments not inserted yet (insertSegments).
   void insertPendingSegments();
 
   /// Inserts segments[k] for every k in `which` (ascending), in runs of up to
@@ -145,9 +149,9 @@ class ConstrainedTriangulation : public Triangulation {
   /// inserts them in one go).
   bool insertAsTwoHalves(std::vector<std::uint32_t>& order);
 
-  /// Replaces this triangulation's triangles (the left half, global ids) by the union
-  /// of the safe triangles of both halves and the triangles of DT(S) that
-  /// fill the hole between them. `right` has the right half in local ids
+  /// Replaces this triangulation's triangles (the left half, global ids) by
+  /// the union of the safe triangles of both halves and the triangles of
+  /// DT(S) that fill the hole between them. `right` has the right half in local ids
   /// (rightGlobal maps them); unsafeLeft/unsafeRight flag each half's
   /// triangles (unsafeTriangles()). Frees right's triangle arrays as it
   /// copies them.
@@ -156,6 +160,8 @@ class ConstrainedTriangulation : public Triangulation {
                    const std::vector<std::uint8_t>& unsafeRight);
 
   // --------------------------------------------- constraint insertion
+  /// Marks the edge p–q constrained, carrying f; throws internalError when
+  /// p–q is no edge.
   void addEdgeFeature(std::uint32_t p, std::uint32_t q, FeatureId f);
 
   /// Is c on the ray from a through b (c collinear with a, b assumed)?
@@ -178,6 +184,8 @@ class ConstrainedTriangulation : public Triangulation {
                        FeatureId f);
 
   // ---------------------------------------------- crossing resolution
+  /// z of the segment u→w (linear in its vertices' z) at the point of it
+  /// nearest to p.
   double zAlong(std::uint32_t u, std::uint32_t w, const Point2& p) const;
 
   /// Does feature f win a crossing or an edge against g? Higher
@@ -214,8 +222,9 @@ class ConstrainedTriangulation : public Triangulation {
   /// Where crossing x goes: the first step, in CrossingStep's order, that
   /// applies. Changes nothing.
   [[nodiscard]] CrossingPlacement placeCrossing(const Crossing& x) const;
-  // The steps of placeCrossing, each changing nothing; each assumes that the
-  // steps before it did not apply.
+  // The steps of placeCrossing, one per CrossingStep (documented there),
+  // each changing nothing; each assumes that the steps before it did not
+  // apply. nullopt: the step does not apply.
   [[nodiscard]] std::optional<CrossingPlacement> atSegmentEnd(const Crossing& x) const;
   [[nodiscard]] std::optional<CrossingPlacement> atNearVertex(const Crossing& x) const;
   [[nodiscard]] std::optional<CrossingPlacement> splittingEdge(const Crossing& x) const;
