@@ -158,7 +158,7 @@ void addServeCommand(CLI::App& app) {
       std::cerr << "tinsmith serve: the viewer is not installed (run tools/setup.sh, or give --viewer DIR); "
                    "/ lists the stores"
                 << std::endl;
-    else if (!opt->quiet)
+    else
       std::cerr << "tinsmith serve: viewer from " << viewer->root().string() << " (" << viewer->size()
                 << " files)" << std::endl;
     serveUntilSignalled(server);
