@@ -73,7 +73,7 @@ function startServer(args) {
     child.stderr.on('data', (chunk) => {
       text += chunk;
       const m = /on (http:\/\/127\.0\.0\.1:\d+)/.exec(text);
-      if (m && /viewer from|viewer is not installed/.test(text)) {
+      if (m && /(viewer from|viewer is not installed)[^\n]*\n/.test(text)) {
         clearTimeout(timer);
         resolve({ child, origin: m[1], log: () => text });
       }
