@@ -79,9 +79,9 @@ ViewerAssets::ViewerAssets(fs::path root) : root_(std::move(root)) {
     if (!type) return;
     table_.emplace(std::move(url), Asset{file, type->contentType, type->text, library});
   };
-  // The pages: files directly in the root only.
+  // The pages: files directly in the root only, not its npm manifests.
   for (const auto& entry : fs::directory_iterator(root_, ec))
-    if (!hidden(entry.path()) && entry.is_regular_file(ec))
+    if (!hidden(entry.path()) && entry.is_regular_file(ec) && entry.path().extension() != ".json")
       add(entry.path(), "viewer/" + entry.path().filename().string(), false);
   for (const auto& mount : kLibraries) {
     const fs::path folder = root_ / mount.folder;
