@@ -64,6 +64,7 @@ fi
 # locked; again only when node_modules is missing or older than the lock.
 root="$(cd "$(dirname "$0")/.." && pwd)"
 for dir in tests/js server/viewer; do
+  [ -f "$root/$dir/package-lock.json" ] || continue  # not copied (the Docker builder's first step)
   if [ ! -d "$root/$dir/node_modules" ] || [ "$root/$dir/node_modules/.package-lock.json" -ot "$root/$dir/package-lock.json" ]; then
     npm ci --prefix "$root/$dir" --no-audit --no-fund --loglevel=error >/dev/null
     did+=("ran npm ci in $dir")
