@@ -77,7 +77,7 @@ function load(id) {
   });
   tiles.addEventListener('tiles-load-end', () => {
     if (!framed) return;
-    status(`${id}: ${api.loadedModels} tiles loaded. Drag to orbit, right-drag to pan, wheel to zoom.`);
+    status(`${id}: ${api.loadedModels} tile${api.loadedModels === 1 ? "" : "s"} loaded. Drag to orbit, right-drag to pan, wheel to zoom.`);
     // Two more frames so the last tiles are drawn before anyone looks.
     requestAnimationFrame(() => requestAnimationFrame(() => resolveReady(api)));
   });

@@ -17,6 +17,7 @@
   const SKY = [12, 14, 20];        // background (space) colour
   const GLOBE = [38, 58, 92];      // the plain globe colour: no lit terrain is this blue
   const TERRAIN = '#d9c7a3';       // the tiles' colour, shaded by the fixed light
+  const PROFILE_COLOUR = '#ff5ad2';
   const LINE_COLOURS = {
     road: '#ff7a1a', river: '#1f8fff', lake: '#2fd0ff', boundary: '#f2f2f2',
     hole: '#f2f2f2', contour: '#7a5a3a', other: '#ffe14d',
@@ -313,7 +314,7 @@
     ctx.fill();
     ctx.beginPath();
     samples.forEach((s, i) => (i ? ctx.lineTo(sx(s.distance), sy(s.z)) : ctx.moveTo(sx(s.distance), sy(s.z))));
-    ctx.strokeStyle = '#f0b040';
+    ctx.strokeStyle = PROFILE_COLOUR;
     ctx.lineWidth = 2;
     ctx.stroke();
     ctx.fillStyle = '#c8d0da';
@@ -353,7 +354,7 @@
     }
     if (flat.length >= 6)
       profileLine.add({ positions: Cesium.Cartesian3.fromDegreesArrayHeights(flat), width: 3,
-        material: Cesium.Material.fromType('Color', { color: Cesium.Color.fromCssColorString('#f0b040') }) });
+        material: Cesium.Material.fromType('Color', { color: Cesium.Color.fromCssColorString(PROFILE_COLOUR) }) });
     scene.requestRender();
     api.lastProfile = { samples: answer.samples.length, inside: inside.length, length: answer.length, drawn };
     return api.lastProfile;

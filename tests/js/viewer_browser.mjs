@@ -23,8 +23,8 @@
 //     and the chart canvas is drawn (≥ MIN_CHART_SHARE of it not background);
 //   - the break lines (lines.geojson) and the Draco decoder (on /three) are
 //     fetched from the server.
-// Screenshots go to OUT_DIR (viewer.png, viewer-tiles.png, three.png,
-// prefix-viewer.png, prefix-three.png). Exit 0 on success, 1 on a failure.
+// Screenshots go to OUT_DIR (viewer.png, viewer-profile.png,
+// viewer-tiles.png, three.png, prefix-viewer.png, prefix-three.png). Exit 0 on success, 1 on a failure.
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -181,7 +181,11 @@ async function checkCesium(browser, origin, base, label, full) {
   if (!(profile.inside >= 2 && chart >= MIN_CHART_SHARE)) fail(`${label}: the profile chart is blank`);
   if (!requests.some((r) => r.url.endsWith('/lines.geojson') && r.status === 200)) fail(`${label}: lines.geojson was not loaded`);
 
-  // The tile wireframe, boxes and labels, for the README's second picture.
+  // The README's pictures: the cursor panel and the profile, then the tile
+  // wireframe, boxes and labels.
+  await page.waitForTimeout(500);
+  await page.screenshot({ path: path.join(outDir, 'viewer-profile.png'), timeout: 30_000 });
+
   await page.evaluate(() => {
     for (const id of ['show-wireframe', 'show-tiles']) document.getElementById(id).click();
   });
