@@ -11,6 +11,7 @@
 //   probe(x, y)           what the panel shows for the screen point (CSS px)
 //   profileScreen(ax, ay, bx, by)  a profile between two screen points
 //   colours               the page's flat colours (sky, globe), to measure renders
+//   viewer                the Cesium.Viewer
 (() => {
   'use strict';
 
@@ -32,7 +33,7 @@
   const api = window.tinsmithViewer = {
     ready: new Promise((resolve, reject) => { resolveReady = resolve; rejectReady = reject; }),
     colours: { sky: SKY, globe: GLOBE, terrain: TERRAIN },
-    tileset: null, id: null, summary: null, lastProbe: null, lastProfile: null,
+    tileset: null, id: null, summary: null, lastProbe: null, lastProfile: null, profiles: 0,
   };
   api.ready.catch(() => {});
 
@@ -75,6 +76,7 @@
     requestRenderMode: true, maximumRenderTimeChange: Infinity,
   });
   const scene = viewer.scene;
+  api.viewer = viewer;
   scene.backgroundColor = Cesium.Color.fromBytes(...SKY, 255);
   scene.globe.baseColor = Cesium.Color.fromBytes(...GLOBE, 255);
   scene.globe.showGroundAtmosphere = false;
@@ -222,7 +224,8 @@
       enableDebugWireframe: true, maximumScreenSpaceError: Number($('sse').value),
     });
     if (id !== api.id) { tileset.destroy(); return; }
-    tileset.style = new Cesium.Cesium3DTileStyle({ color: `color('${TERRAIN}')` });
+    // Sandy tiles on their own; the imagery's own colours when there is one.
+    tileset.style = new Cesium.Cesium3DTileStyle({ color: `color('${imageryProvider ? '#ffffff' : TERRAIN}')` });
     tileset.tileFailed.addEventListener((e) => status(`A tile failed to load: ${e.url}: ${e.message}`, true));
     if (imageryProvider && tileset.imageryLayers) tileset.imageryLayers.addImageryProvider(imageryProvider);
     watchTiles(tileset);
@@ -357,6 +360,7 @@
         material: Cesium.Material.fromType('Color', { color: Cesium.Color.fromCssColorString(PROFILE_COLOUR) }) });
     scene.requestRender();
     api.lastProfile = { samples: answer.samples.length, inside: inside.length, length: answer.length, drawn };
+    api.profiles += 1;
     return api.lastProfile;
   }
 

@@ -21,6 +21,8 @@
 //     the route's ellipsoidalHeight;
 //   - a profile between two screen points: the profile request answers 200
 //     and the chart canvas is drawn (≥ MIN_CHART_SHARE of it not background);
+//   - real input: the panel follows the mouse, a drag in profile mode draws
+//     a profile;
 //   - the break lines (lines.geojson) and the Draco decoder (on /three) are
 //     fetched from the server.
 // Screenshots go to OUT_DIR (viewer.png, viewer-profile.png,
@@ -166,7 +168,7 @@ async function checkCesium(browser, origin, base, label, full) {
   if (!(pickDiff <= tolerance)) fail(`${label}: the rendered mesh is ${pickDiff.toFixed(2)} m from the TIN there`);
 
   const profile = await page.evaluate(([ax, ay, bx, by]) => window.tinsmithViewer.profileScreen(ax, ay, bx, by),
-    [VIEWPORT.width * 0.3, VIEWPORT.height * 0.4, VIEWPORT.width * 0.55, VIEWPORT.height * 0.65]);
+    [VIEWPORT.width * 0.36, VIEWPORT.height * 0.45, VIEWPORT.width * 0.5, VIEWPORT.height * 0.68]);
   const chart = await page.evaluate(() => {
     const c = document.getElementById('chart');
     const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
@@ -180,6 +182,25 @@ async function checkCesium(browser, origin, base, label, full) {
   if (!profileOk) fail(`${label}: no profile request answered 200`);
   if (!(profile.inside >= 2 && chart >= MIN_CHART_SHARE)) fail(`${label}: the profile chart is blank`);
   if (!requests.some((r) => r.url.endsWith('/lines.geojson') && r.status === 200)) fail(`${label}: lines.geojson was not loaded`);
+
+  // Real input: the panel follows the mouse; a drag in profile mode draws a profile.
+  await page.mouse.move(480, 440, { steps: 3 });
+  try {
+    await page.waitForFunction(() => { const p = window.tinsmithViewer.lastProbe; return p && p.screen[0] === 480 && p.screen[1] === 440; },
+      null, { timeout: 20_000 });
+    note(`${label}: the mouse at (480,440): panel height ${await page.evaluate(() => document.getElementById('c-z').textContent)}`);
+  } catch { fail(`${label}: the cursor panel did not follow the mouse`); }
+  const profiles = await page.evaluate(() => window.tinsmithViewer.profiles);
+  await page.click('#profile-mode');
+  await page.mouse.move(470, 420);
+  await page.mouse.down();
+  await page.mouse.move(610, 520, { steps: 4 });
+  await page.mouse.up();
+  try {
+    await page.waitForFunction((n) => window.tinsmithViewer.profiles > n, profiles, { timeout: 20_000 });
+    const dragged = await page.evaluate(() => window.tinsmithViewer.lastProfile);
+    note(`${label}: dragged profile: ${dragged.samples} samples over ${dragged.length.toFixed(0)} m`);
+  } catch { fail(`${label}: a drag in profile mode drew no profile`); }
 
   // The README's pictures: the cursor panel and the profile, then the tile
   // wireframe, boxes and labels.
