@@ -26,7 +26,9 @@ std::vector<Chain> chainEdges(const std::vector<std::pair<std::uint32_t, std::ui
   }
   for (auto& [v, list] : around) std::sort(list.begin(), list.end());
   std::map<std::pair<std::uint32_t, std::uint32_t>, bool> used;
-  const auto key = [](std::uint32_t a, std::uint32_t b) { return std::pair(std::min(a, b), std::max(a, b)); };
+  const auto key = [](std::uint32_t a, std::uint32_t b) {
+    return std::pair(std::min(a, b), std::max(a, b));
+  };
   const auto unusedFrom = [&](std::uint32_t v) -> std::optional<std::uint32_t> {
     for (const auto w : around[v])
       if (!used[key(v, w)]) return w;
@@ -55,7 +57,9 @@ std::vector<Chain> chainEdges(const std::vector<std::pair<std::uint32_t, std::ui
   return chains;
 }
 
-double rounded(double v, double scale) { return std::round(v * scale) / scale; }
+double rounded(double v, double scale) {
+  return std::round(v * scale) / scale;
+}
 
 }  // namespace
 

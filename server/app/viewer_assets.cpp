@@ -59,7 +59,9 @@ constexpr std::array<Mount, 4> kLibraries{{
     {"node_modules/3d-tiles-renderer/build", "viewer/lib/3d-tiles-renderer/build"},
 }};
 
-bool hidden(const fs::path& p) { return p.filename().string().starts_with('.'); }
+bool hidden(const fs::path& p) {
+  return p.filename().string().starts_with('.');
+}
 
 }  // namespace
 
@@ -71,9 +73,10 @@ const char* viewerContentType(std::string_view fileName) {
 ViewerAssets::ViewerAssets(fs::path root) : root_(std::move(root)) {
   std::error_code ec;
   if (!fs::is_regular_file(root_ / "index.html", ec))
-    throw usageError("'" + root_.string() + "' is not a viewer folder (it has no index.html)",
-                     "give --viewer the folder server/viewer of the source tree (after tools/setup.sh) "
-                     "or /usr/share/tinsmith/viewer");
+    throw usageError(
+        "'" + root_.string() + "' is not a viewer folder (it has no index.html)",
+        "give --viewer the folder server/viewer of the source tree (after tools/setup.sh) "
+        "or /usr/share/tinsmith/viewer");
   const auto add = [&](const fs::path& file, std::string url, bool library) {
     const auto* type = typeFor(file.filename().string());
     if (!type) return;
@@ -93,7 +96,8 @@ ViewerAssets::ViewerAssets(fs::path root) : root_(std::move(root)) {
         continue;
       }
       if (!it->is_regular_file(ec)) continue;
-      add(it->path(), std::string(mount.url) + "/" + it->path().lexically_relative(folder).generic_string(),
+      add(it->path(),
+          std::string(mount.url) + "/" + it->path().lexically_relative(folder).generic_string(),
           true);
     }
   }
@@ -118,7 +122,9 @@ std::shared_ptr<const Content> ViewerAssets::content(const Asset& asset) const {
   return loaded_.try_emplace(&asset, std::move(content)).first->second;  // the first one read wins
 }
 
-bool ViewerAssets::hasCesium() const { return find("viewer/lib/cesium/Cesium.js") != nullptr; }
+bool ViewerAssets::hasCesium() const {
+  return find("viewer/lib/cesium/Cesium.js") != nullptr;
+}
 
 bool ViewerAssets::hasThree() const {
   return find("viewer/lib/three/build/three.module.js") != nullptr &&

@@ -7,9 +7,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <numbers>
-
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 #include "server/app/tile_service.hpp"
 #include "tests/server/server_test_support.hpp"
@@ -22,7 +21,9 @@ namespace fs = std::filesystem;
 
 constexpr double kX0 = 430000, kY0 = 4515000;
 /// The plane every vertex of the test TIN lies on: ∂z/∂x = 0.1, ∂z/∂y = 0.2.
-double planeZ(double x, double y) { return 1000 + 0.1 * (x - kX0) + 0.2 * (y - kY0); }
+double planeZ(double x, double y) {
+  return 1000 + 0.1 * (x - kX0) + 0.2 * (y - kY0);
+}
 
 /// A 600 m square on the plane with a road (3 vertices) and a river
 /// (4 vertices) as constraints, tiled into "plane.3dtiles" (no geoid, so
@@ -36,9 +37,12 @@ fs::path planeStore() {
     const FeatureId river = cdt.addFeature(FeatureKind::River, "streams.geojson, feature 0");
     std::vector<Point3> points;
     for (int j = 0; j <= 12; ++j)
-      for (int i = 0; i <= 12; ++i) points.push_back({kX0 + i * 50.0, kY0 + j * 50.0, planeZ(kX0 + i * 50.0, kY0 + j * 50.0)});
+      for (int i = 0; i <= 12; ++i)
+        points.push_back({kX0 + i * 50.0, kY0 + j * 50.0, planeZ(kX0 + i * 50.0, kY0 + j * 50.0)});
     cdt.insertPoints(points, spots);
-    const auto on = [](double x, double y) { return Point3{kX0 + x, kY0 + y, planeZ(kX0 + x, kY0 + y)}; };
+    const auto on = [](double x, double y) {
+      return Point3{kX0 + x, kY0 + y, planeZ(kX0 + x, kY0 + y)};
+    };
     const std::vector<Point3> roadLine{on(60, 110), on(300, 140), on(540, 130)};
     const std::vector<Point3> riverLine{on(110, 520), on(230, 410), on(330, 330), on(480, 260)};
     cdt.insertConstraint(roadLine, road);
@@ -73,12 +77,14 @@ fs::path fakeViewer() {
     write(r / ".secret.js", "hidden");
     write(r / "package.json", "{}");
     write(r / "notes.md", "no type");
-    write(r / "node_modules/cesium/Build/Cesium/Cesium.js", "var Cesium = {};" + std::string(3000, ';'));
+    write(r / "node_modules/cesium/Build/Cesium/Cesium.js",
+          "var Cesium = {};" + std::string(3000, ';'));
     write(r / "node_modules/cesium/Build/Cesium/Workers/createGeometry.js", "self.x = 1;");
     write(r / "node_modules/cesium/Build/Cesium/.cache/x.js", "hidden");
     write(r / "node_modules/cesium/package.json", "{\"name\": \"cesium\"}");
     write(r / "node_modules/three/build/three.module.js", "export const REVISION = '0';");
-    write(r / "node_modules/three/examples/jsm/libs/draco/gltf/draco_decoder.wasm", std::string("\0asm", 4));
+    write(r / "node_modules/three/examples/jsm/libs/draco/gltf/draco_decoder.wasm",
+          std::string("\0asm", 4));
     write(r / "node_modules/3d-tiles-renderer/build/index.three.js", "export {};");
     write(base / "secret.txt", "outside the root");
     fs::create_directory_symlink(base, r / "node_modules/cesium/Build/Cesium/outside");
@@ -96,7 +102,8 @@ server::TileServerOptions optionsFor(const fs::path& store) {
 TEST(ViewerRoutes, SlopeAndAspectAreThePlanesByHand) {
   RunningServer server(optionsFor(planeStore()));
   char target[160];
-  std::snprintf(target, sizeof target, "/tilesets/plane/elevation?x=%.17g&y=%.17g", kX0 + 310.5, kY0 + 220.25);
+  std::snprintf(target, sizeof target, "/tilesets/plane/elevation?x=%.17g&y=%.17g", kX0 + 310.5,
+                kY0 + 220.25);
   const auto r = httpGet(server.port(), target);
   ASSERT_EQ(r.status, 200) << r.body;
   const auto e = json::parse(r.body);
@@ -137,7 +144,8 @@ TEST(ViewerRoutes, BreakLinesAreTheConstraintsChainedAsGeoJson) {
     std::vector<Point2> xy;
     for (const auto& p : coordinates) {
       char t[160];
-      std::snprintf(t, sizeof t, "/tilesets/plane/elevation?lon=%.17g&lat=%.17g", p[0].get<double>(), p[1].get<double>());
+      std::snprintf(t, sizeof t, "/tilesets/plane/elevation?lon=%.17g&lat=%.17g",
+                    p[0].get<double>(), p[1].get<double>());
       const auto e = json::parse(c.request(t).body);
       EXPECT_NEAR(p[2].get<double>(), planeZ(e["x"], e["y"]), 2e-3);
       xy.push_back({e["x"].get<double>(), e["y"].get<double>()});
@@ -154,7 +162,8 @@ TEST(ViewerRoutes, BreakLinesAreTheConstraintsChainedAsGeoJson) {
 
   const std::string etag = r.header("etag");
   EXPECT_FALSE(etag.empty());
-  EXPECT_EQ(c.request("/tilesets/plane/lines.geojson", "If-None-Match: " + etag + "\r\n").status, 304);
+  EXPECT_EQ(c.request("/tilesets/plane/lines.geojson", "If-None-Match: " + etag + "\r\n").status,
+            304);
   r = c.request("/tilesets/plane/lines.geojson", "Accept-Encoding: gzip\r\n");
   EXPECT_EQ(r.header("content-encoding"), "gzip");
   EXPECT_EQ(json::parse(gunzip(r.body)), g);
@@ -164,8 +173,9 @@ TEST(ViewerRoutes, BreakLinesAreTheConstraintsChainedAsGeoJson) {
 }
 
 TEST(ViewerRoutes, BreakLinesOfAStoreWithoutItsTinAre404) {
-  const auto store = testStoreCopy("viewer-no-tin", "bare.3dtiles",
-                                   [](const std::string& k) { return k != "tinsmith/terrain.tin"; });
+  const auto store = testStoreCopy("viewer-no-tin", "bare.3dtiles", [](const std::string& k) {
+    return k != "tinsmith/terrain.tin";
+  });
   RunningServer server(optionsFor(store));
   const auto r = httpGet(server.port(), "/tilesets/bare/lines.geojson");
   EXPECT_EQ(r.status, 404);
@@ -203,7 +213,9 @@ TEST_F(ViewerFiles, PagesAndLibrariesWithTheirTypesAndCaching) {
   ASSERT_EQ(r.status, 200);
   EXPECT_EQ(r.header("content-type"), "text/javascript; charset=utf-8");
   EXPECT_EQ(r.header("cache-control"), server::kLibraryCacheControl);
-  EXPECT_EQ(get("/viewer/lib/cesium/Cesium.js", "If-None-Match: " + r.header("etag") + "\r\n").status, 304);
+  EXPECT_EQ(
+      get("/viewer/lib/cesium/Cesium.js", "If-None-Match: " + r.header("etag") + "\r\n").status,
+      304);
   r = get("/viewer/lib/three/examples/jsm/libs/draco/gltf/draco_decoder.wasm");
   ASSERT_EQ(r.status, 200);
   EXPECT_EQ(r.header("content-type"), "application/wasm");
@@ -219,9 +231,9 @@ TEST_F(ViewerFiles, NothingOutsideTheTableIsServed) {
                              "/viewer/lib/cesium/outside/secret.txt", "/viewer/lib/cesium",
                              "/viewer/index.htm", "/viewer/lib/cesium/cesium.js", "/viewer"})
     EXPECT_EQ(get(target).status, 404) << target;
-  for (const char* target : {"/viewer/lib/cesium/../../../secret.txt", "/viewer/lib/%2e%2e/secret.txt",
-                             "/viewer/lib%2fcesium%2fCesium.js", "/viewer/viewer.js%00.png",
-                             "/viewer/lib/cesium/..%5c..%5csecret.txt"})
+  for (const char* target : {"/viewer/lib/cesium/../../../secret.txt",
+                             "/viewer/lib/%2e%2e/secret.txt", "/viewer/lib%2fcesium%2fCesium.js",
+                             "/viewer/viewer.js%00.png", "/viewer/lib/cesium/..%5c..%5csecret.txt"})
     EXPECT_EQ(get(target).status, 400) << target;
 }
 
@@ -265,10 +277,12 @@ TEST(BasePath, EveryRouteAnswersUnderThePrefixOnly) {
   EXPECT_EQ(get("/terrain/demo/viewer/lib/cesium/Cesium.js").status, 200);
   r = get("/terrain/demo/tilesets");
   ASSERT_EQ(r.status, 200);
-  EXPECT_EQ(json::parse(r.body)["tilesets"][0]["links"]["tileset"], "/terrain/demo/tilesets/hill/tileset.json");
+  EXPECT_EQ(json::parse(r.body)["tilesets"][0]["links"]["tileset"],
+            "/terrain/demo/tilesets/hill/tileset.json");
   EXPECT_EQ(get("/terrain/demo/tilesets/hill/tileset.json").status, 200);
   EXPECT_EQ(get("/terrain/demo/tilesets/hill/lines.geojson").status, 200);
-  for (const char* outside : {"/", "/tilesets", "/terrain", "/terrain/demox", "/terrain/demo2/tilesets"})
+  for (const char* outside :
+       {"/", "/tilesets", "/terrain", "/terrain/demox", "/terrain/demo2/tilesets"})
     EXPECT_EQ(get(outside).status, 404) << outside;
 }
 
