@@ -84,7 +84,8 @@ ViewerAssets::ViewerAssets(fs::path root) : root_(std::move(root)) {
   };
   // The pages: files directly in the root only, not its npm manifests.
   for (const auto& entry : fs::directory_iterator(root_, ec))
-    if (!hidden(entry.path()) && entry.is_regular_file(ec) && entry.path().extension() != ".json")
+    if (!hidden(entry.path()) && !entry.is_symlink(ec) && entry.is_regular_file(ec) &&
+        entry.path().extension() != ".json")
       add(entry.path(), "viewer/" + entry.path().filename().string(), false);
   for (const auto& mount : kLibraries) {
     const fs::path folder = root_ / mount.folder;
@@ -95,7 +96,7 @@ ViewerAssets::ViewerAssets(fs::path root) : root_(std::move(root)) {
         if (it->is_directory(ec)) it.disable_recursion_pending();
         continue;
       }
-      if (!it->is_regular_file(ec)) continue;
+      if (it->is_symlink(ec) || !it->is_regular_file(ec)) continue;
       add(it->path(),
           std::string(mount.url) + "/" + it->path().lexically_relative(folder).generic_string(),
           true);

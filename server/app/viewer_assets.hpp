@@ -7,8 +7,8 @@
 // Safety: the files are found once, at start-up, by walking a fixed list of
 // folders under the root; a request is answered by looking its decoded path
 // up in that table, never by joining the URL into a path. Hidden files and
-// folders (a name starting with '.'), symbolic links to folders and files
-// whose extension has no Content-Type here are left out.
+// folders (a name starting with '.'), symbolic links (to files or folders)
+// and files whose extension has no Content-Type here are left out.
 //
 // URL paths (segments joined by '/', as RequestTarget decodes them):
 //   viewer/NAME                          ROOT/NAME (top-level pages, scripts, styles; no .json)

@@ -88,6 +88,8 @@ fs::path fakeViewer() {
     write(r / "node_modules/3d-tiles-renderer/build/index.three.js", "export {};");
     write(base / "secret.txt", "outside the root");
     fs::create_directory_symlink(base, r / "node_modules/cesium/Build/Cesium/outside");
+    fs::create_symlink(base / "secret.txt", r / "node_modules/cesium/Build/Cesium/linked.txt");
+    fs::create_symlink(base / "secret.txt", r / "linked.js");
     return r;
   }();
   return root;
@@ -226,10 +228,12 @@ TEST_F(ViewerFiles, PagesAndLibrariesWithTheirTypesAndCaching) {
 }
 
 TEST_F(ViewerFiles, NothingOutsideTheTableIsServed) {
-  for (const char* target : {"/viewer/.secret.js", "/viewer/package.json", "/viewer/notes.md",
-                             "/viewer/lib/cesium/.cache/x.js", "/viewer/lib/cesium/package.json",
-                             "/viewer/lib/cesium/outside/secret.txt", "/viewer/lib/cesium",
-                             "/viewer/index.htm", "/viewer/lib/cesium/cesium.js", "/viewer"})
+  for (const char* target :
+       {"/viewer/.secret.js", "/viewer/package.json", "/viewer/notes.md",
+        "/viewer/lib/cesium/.cache/x.js", "/viewer/lib/cesium/package.json",
+        "/viewer/lib/cesium/outside/secret.txt", "/viewer/lib/cesium/linked.txt",
+        "/viewer/linked.js", "/viewer/lib/cesium", "/viewer/index.htm",
+        "/viewer/lib/cesium/cesium.js", "/viewer"})
     EXPECT_EQ(get(target).status, 404) << target;
   for (const char* target : {"/viewer/lib/cesium/../../../secret.txt",
                              "/viewer/lib/%2e%2e/secret.txt", "/viewer/lib%2fcesium%2fCesium.js",
