@@ -9,17 +9,13 @@
 #include <Eigen/SparseCholesky>
 
 #include "core/base/error.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
 
 namespace {
 
 using Triplet = Eigen::Triplet<double, SparseMatrix::StorageIndex>;
-
-/// Twice the signed area of (a, b, c): positive when CCW.
-double doubleArea(const Point2& a, const Point2& b, const Point2& c) {
-  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-}
 
 SparseMatrix fromTriplets(std::size_t n, const std::vector<Triplet>& triplets) {
   SparseMatrix m(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
@@ -48,9 +44,9 @@ void TriangleMoments::merge(const TriangleMoments& other) {
 }
 
 std::array<double, 3> barycentric(const Point2& p, const Point2& a, const Point2& b, const Point2& c) {
-  const double area = doubleArea(a, b, c);
-  const double ba = doubleArea(p, b, c) / area;
-  const double bb = doubleArea(a, p, c) / area;
+  const double area = geometry::orient2dInexact(a, b, c);
+  const double ba = geometry::orient2dInexact(p, b, c) / area;
+  const double bb = geometry::orient2dInexact(a, p, c) / area;
   return {ba, bb, 1.0 - ba - bb};
 }
 
@@ -197,7 +193,7 @@ SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Tr
   for (std::size_t k = 0; k < triangles.size(); ++k) {
     const auto& t = triangles[k];
     const Point2 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
-    const double area2 = std::abs(doubleArea(a, b, c));  // 2A
+    const double area2 = std::abs(geometry::orient2dInexact(a, b, c));  // 2A
     if (area2 == 0.0) throw geometryError("degenerate triangle " + std::to_string(k) + " in the membrane energy");
     const double eta[3] = {b.y - c.y, c.y - a.y, a.y - b.y};
     const double mu[3] = {c.x - b.x, a.x - c.x, b.x - a.x};
@@ -249,10 +245,10 @@ SparseMatrix umbrellaEnergy(std::span<const Point2> vertices, std::span<const Tr
 
 std::array<double, 4> thinPlateBetas(const Point2& s, const Point2& t, const Point2& l, const Point2& r) {
   const double length = std::hypot(t.x - s.x, t.y - s.y);
-  const double aLst = 0.5 * doubleArea(l, s, t);
-  const double aRts = 0.5 * doubleArea(r, t, s);
-  const double aTlr = 0.5 * doubleArea(t, l, r);
-  const double aSrl = 0.5 * doubleArea(s, r, l);
+  const double aLst = 0.5 * geometry::orient2dInexact(l, s, t);
+  const double aRts = 0.5 * geometry::orient2dInexact(r, t, s);
+  const double aTlr = 0.5 * geometry::orient2dInexact(t, l, r);
+  const double aSrl = 0.5 * geometry::orient2dInexact(s, r, l);
   if (aLst <= 0.0 || aRts <= 0.0) throw geometryError("degenerate or clockwise triangle in the thin-plate energy");
   const double denom = 2.0 * aLst * aRts;
   return {length * aTlr / denom, length * aSrl / denom, -length / (2.0 * aLst), -length / (2.0 * aRts)};

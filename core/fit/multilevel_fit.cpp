@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "core/base/error.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
 
@@ -97,13 +98,9 @@ void radixSortByCode(std::vector<std::pair<std::uint64_t, std::uint32_t>>& v, in
 /// lookups, taking the decisions of BinaryTriangulation::descend.
 struct LocatorNode {
   Point2 a, j;             ///< the splitting line a–j, grid coordinates
-  double lSide = 0.0;      ///< orient(a, j, l): the side of the l child
+  double lSide = 0.0;      ///< geometry::orient2dInexact(a, j, l): the side of the l child
   std::int32_t child[2]{};  ///< l child, r child: ≥ 0 a node, < 0 the leaf −1 − triangle index
 };
-
-double orient(const Point2& a, const Point2& b, const Point2& c) {
-  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-}
 
 std::int32_t buildLocator(const BinaryTriangulation& mesh, const KeyIndexMap& triIndex, const BinaryTriangle& t,
                           std::vector<LocatorNode>& nodes) {
@@ -116,7 +113,7 @@ std::int32_t buildLocator(const BinaryTriangulation& mesh, const KeyIndexMap& tr
   const Point2 pl = mesh.gridPosition(t.l), pa = mesh.gridPosition(t.a), pr = mesh.gridPosition(t.r);
   const Point2 pj{0.5 * (pl.x + pr.x), 0.5 * (pl.y + pr.y)};
   const auto index = static_cast<std::int32_t>(nodes.size());
-  nodes.push_back({pa, pj, orient(pa, pj, pl), {0, 0}});
+  nodes.push_back({pa, pj, geometry::orient2dInexact(pa, pj, pl), {0, 0}});
   const std::int32_t first = buildLocator(mesh, triIndex, BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1}, nodes);
   const std::int32_t second =
       buildLocator(mesh, triIndex, BinaryTriangle{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1}, nodes);
@@ -141,13 +138,6 @@ const char* solverName(SolverKind s) {
 }
 
 }  // namespace
-
-double frankeFunction(double x, double y) {
-  return 0.75 * std::exp(-((9 * x - 2) * (9 * x - 2) + (9 * y - 2) * (9 * y - 2)) / 4) +
-         0.75 * std::exp(-((9 * x + 1) * (9 * x + 1)) / 49 - (9 * y + 1) / 10) +
-         0.5 * std::exp(-((9 * x - 7) * (9 * x - 7) + (9 * y - 3) * (9 * y - 3)) / 4) -
-         0.2 * std::exp(-(9 * x - 4) * (9 * x - 4) - (9 * y - 7) * (9 * y - 7));
-}
 
 MultilevelFit::MultilevelFit(BinaryTriangulation mesh, std::vector<double> z, std::vector<LevelStats> levels)
     : mesh_(std::move(mesh)), z_(std::move(z)), levels_(std::move(levels)) {}
@@ -451,7 +441,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
           const Point2 g = mesh.toGrid(pts[i].xy());
           while (node >= 0) {
             const LocatorNode& nd = nodes[static_cast<std::size_t>(node)];
-            node = nd.child[orient(nd.a, nd.j, g) * nd.lSide >= 0.0 ? 0 : 1];
+            node = nd.child[geometry::orient2dInexact(nd.a, nd.j, g) * nd.lSide >= 0.0 ? 0 : 1];
           }
           const auto t = static_cast<std::uint32_t>(-1 - node);
           triOf[i] = t;
@@ -507,7 +497,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       const Triangle& tv = triVerts[t];
       const Point2 &pa = positions[tv[0]], &pb = positions[tv[1]], &pc = positions[tv[2]];
       const double ca = coefficients[tv[0]], cb = coefficients[tv[1]], cc = coefficients[tv[2]];
-      const double area2 = (pb.x - pa.x) * (pc.y - pa.y) - (pc.x - pa.x) * (pb.y - pa.y);
+      const double area2 = geometry::orient2dInexact(pa, pb, pc);
       const double gx = ((pb.y - pc.y) * ca + (pc.y - pa.y) * cb + (pa.y - pb.y) * cc) / area2;
       const double gy = ((pc.x - pb.x) * ca + (pa.x - pc.x) * cb + (pb.x - pa.x) * cc) / area2;
       planes[t] = {pa.x, pa.y, ca, gx, gy};
