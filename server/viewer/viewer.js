@@ -21,7 +21,7 @@
   const PROFILE_COLOUR = '#ff5ad2';
   const LINE_COLOURS = {
     road: '#ff7a1a', river: '#1f8fff', lake: '#2fd0ff', boundary: '#f2f2f2',
-    hole: '#f2f2f2', contour: '#7a5a3a', other: '#ffe14d',
+    hole: '#f2f2f2', contour: '#7a5a3a', breakline: '#ffe14d', other: '#ffe14d',
   };
 
   const $ = (id) => document.getElementById(id);
