@@ -71,7 +71,10 @@ function startServer(args) {
     { stdio: ['ignore', 'ignore', 'pipe'] });
   let text = '';
   return new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`tinsmith serve did not start: ${text}`)), 20_000);
+    const timer = setTimeout(() => {
+      child.kill('SIGKILL');  // never left running behind a failed test
+      reject(new Error(`tinsmith serve did not start: ${text}`));
+    }, 20_000);
     child.stderr.on('data', (chunk) => {
       text += chunk;
       const m = /on (http:\/\/127\.0\.0\.1:\d+)/.exec(text);
