@@ -1,13 +1,17 @@
 // `tinsmith serve`: serve tile stores over HTTP: tilesets, tiles, elevation,
-// a page listing them, health and metrics (DESIGN.md "Server").
+// break lines, the viewer pages, health and metrics (DESIGN.md "Server").
 //   tinsmith serve STORE|FOLDER [MORE…] [--host H] [--port P] [--cors ORIGIN|off]
-//                  [--cache-mb N] [--threads N] [--quiet]
+//                  [--cache-mb N] [--threads N] [--viewer DIR] [--base-path /P] [--quiet]
+// The viewer's files are looked for, when --viewer is not given, beside the
+// executable (../share/tinsmith/viewer), in /usr/share/tinsmith/viewer and in
+// the source tree it was built from (server/viewer, after tools/setup.sh).
 // SIGTERM and SIGINT shut it down gracefully (requests in flight finish) and
 // it exits 0.
 #include <pthread.h>
 #include <signal.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -32,7 +36,26 @@ struct ServeOptions {
   int maxConnections = 10000;
   double readTimeout = 10, idleTimeout = 30, reloadSeconds = 2;
   bool quiet = false;
+  std::string viewer;
+  std::string basePath;
 };
+
+/// The viewer folder: --viewer as given, else the first usable default;
+/// null when there is none (the server then says what to install).
+std::shared_ptr<const server::ViewerAssets> viewerAssets(const std::string& given) {
+  namespace fs = std::filesystem;
+  if (!given.empty()) return std::make_shared<const server::ViewerAssets>(given);
+  std::vector<fs::path> candidates;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back(self.parent_path().parent_path() / "share" / "tinsmith" / "viewer");
+  candidates.emplace_back("/usr/share/tinsmith/viewer");
+#ifdef TINSMITH_SOURCE_VIEWER_DIR
+  candidates.emplace_back(TINSMITH_SOURCE_VIEWER_DIR);
+#endif
+  const auto root = server::findViewerRoot(candidates);
+  return root ? std::make_shared<const server::ViewerAssets>(*root) : nullptr;
+}
 
 std::chrono::milliseconds seconds(double s) {
   return std::chrono::milliseconds(static_cast<long long>(s * 1000));
@@ -95,13 +118,20 @@ void addServeCommand(CLI::App& app) {
                   "Seconds between checks for stores replaced on disk or new in a served folder (0: never)")
       ->check(CLI::Range(0.0, 86400.0))
       ->capture_default_str();
+  cmd->add_option("--viewer", opt->viewer,
+                  "Folder of the viewer's pages and libraries (default: beside the executable, "
+                  "/usr/share/tinsmith/viewer, or the source tree's server/viewer)");
+  cmd->add_option("--base-path", opt->basePath,
+                  "Answer under this path prefix (e.g. /terrain, behind a reverse proxy)");
   cmd->add_flag("-q,--quiet", opt->quiet, "No access log (one line per request on stderr)");
   cmd->footer(
-      "Routes: / (what is served), /health, /metrics (Prometheus), /tilesets,\n"
+      "Routes: / (the CesiumJS viewer), /three (three.js viewer), /viewer/… (their\n"
+      "files), /health, /metrics (Prometheus), /tilesets,\n"
       "/tilesets/ID/tileset.json, /tilesets/ID/tilesets/Z/X/Y.json,\n"
       "/tilesets/ID/tiles/Z/X/Y.glb, /tilesets/ID/elevation?x=&y= (or lon=&lat=; POST\n"
       "{\"points\": [[x, y], …]}), /tilesets/ID/profile?line=x,y;x,y&spacing=S (or\n"
-      "lonlat=; POST {\"line\": …}). ID is a store's file name without .3dtiles.\n"
+      "lonlat=; POST {\"line\": …}), /tilesets/ID/lines.geojson (break lines, GeoJSON).\n"
+      "ID is a store's file name without .3dtiles.\n"
       "SIGTERM/SIGINT: requests in flight finish, then exit 0.\n\n" +
       cmd->get_footer());
   cmd->callback([opt] {
@@ -117,9 +147,20 @@ void addServeCommand(CLI::App& app) {
     o.service.cacheBytes = opt->cacheMb << 20;
     o.log = opt->quiet ? nullptr : stderr;
     o.reloadInterval = seconds(opt->reloadSeconds);
+    o.service.basePath = server::normalizeBasePath(opt->basePath);
+    o.service.viewer = viewerAssets(opt->viewer);
+    const auto viewer = o.service.viewer;
+    const std::string base = o.service.basePath;
     server::TileServer server(std::move(o));
     std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
-              << " tileset(s) on http://" << opt->host << ":" << server.port() << "/" << std::endl;
+              << " tileset(s) on http://" << opt->host << ":" << server.port() << base << "/" << std::endl;
+    if (!viewer || !viewer->hasCesium())
+      std::cerr << "tinsmith serve: the viewer is not installed (run tools/setup.sh, or give --viewer DIR); "
+                   "/ lists the stores"
+                << std::endl;
+    else
+      std::cerr << "tinsmith serve: viewer from " << viewer->root().string() << " (" << viewer->size()
+                << " files)" << std::endl;
     serveUntilSignalled(server);
     if (!opt->quiet) std::cerr << "tinsmith serve: stopped" << std::endl;
   });
