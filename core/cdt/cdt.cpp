@@ -11,8 +11,8 @@
 //   crossing_resolution.cpp   where a segment meets a constraint (named steps)
 //   domain.*                which triangles are inside (boundary, holes)
 //   validator.cpp           Cdt::validate
-//   edge_feature_map.hpp,
-//   spatial_order.hpp       the helpers they share
+//   edge_feature_map.hpp    constrained edges' features
+// (spatial sorts: core/geometry/spatial_sort.hpp; threads: core/base/parallel.hpp)
 #include "core/cdt/cdt.hpp"
 
 #include <algorithm>

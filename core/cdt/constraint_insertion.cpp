@@ -7,7 +7,7 @@
 
 #include "core/base/error.hpp"
 #include "core/cdt/constraints.hpp"
-#include "core/cdt/spatial_order.hpp"
+#include "core/geometry/spatial_sort.hpp"
 
 namespace tinsmith::cdt {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/base/error.hpp"
-#include "core/cdt/spatial_order.hpp"
+#include "core/geometry/spatial_sort.hpp"
 
 namespace tinsmith::cdt {
 
@@ -163,11 +163,11 @@ std::vector<std::uint32_t> Triangulation::insertionOrder() const {
   const unsigned threads = threadCount();
   const std::size_t count = n - insertedUpTo;
   std::vector<Box> boxes(threads);
-  parallelChunks(threads, count, [&](unsigned k, std::size_t b, std::size_t e) {
+  parallelParts(count, threads, threads, [&](std::size_t b, std::size_t e, unsigned k) {
     for (std::size_t i = insertedUpTo + b; i < insertedUpTo + e; ++i) {
       if (rep[i] == kNone) boxes[k].add(xy[i]);
     }
-  });
+  }, kSerialBelow);
   Box box;
   for (const Box& bx : boxes) box.add(bx);
   // BRIO (biased randomized insertion order): point i goes to round k with
@@ -183,7 +183,7 @@ std::vector<std::uint32_t> Triangulation::insertionOrder() const {
   // 0xffffffff: they sort last and are cut off.
   constexpr std::uint64_t kSkip = 0xffffffffull << 32;
   std::vector<std::uint64_t> keys(count);
-  parallelChunks(threads, count, [&](unsigned, std::size_t b, std::size_t e) {
+  parallelParts(count, threads, threads, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t j = b; j < e; ++j) {
       const std::size_t i = insertedUpTo + j;
       if (rep[i] != kNone) {
@@ -199,7 +199,7 @@ std::vector<std::uint32_t> Triangulation::insertionOrder() const {
       const std::uint32_t key = ((rounds - round) << 26) | hilbert(xy[i]);
       keys[j] = (static_cast<std::uint64_t>(key) << 32) | i;
     }
-  });
+  }, kSerialBelow);
   radixSortHigh32(keys, threads);
   std::vector<std::uint32_t> order;
   order.reserve(count);

@@ -11,7 +11,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
-#include <thread>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -65,10 +64,7 @@ class Triangulation : public TriangleStore {
   /// checked before the first goes in. Returns the id of the first.
   VertexId appendPoints(std::span<const Point3> points, FeatureId feature);
 
-  [[nodiscard]] unsigned threadCount() const {
-    if (options.threads != 0) return options.threads;
-    return std::max(1u, std::thread::hardware_concurrency());
-  }
+  [[nodiscard]] unsigned threadCount() const { return resolveThreads(options.threads); }
   std::uint32_t nextRandom() {
     rng ^= rng << 13;
     rng ^= rng >> 17;

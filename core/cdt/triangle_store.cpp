@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/base/error.hpp"
-#include "core/cdt/spatial_order.hpp"
+#include "core/geometry/spatial_sort.hpp"
 
 namespace tinsmith::cdt {
 
@@ -152,11 +152,11 @@ MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<cons
   tv.clear();
   opp.clear();
   mesh.points.resize(outV);
-  parallelChunks(threads, used.size(), [&](unsigned, std::size_t b, std::size_t e) {
+  parallelParts(used.size(), threads, threads, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t v = b; v < e; ++v) {
       if (used[v] != kNone) mesh.points[used[v]] = {xy[v].x, xy[v].y, z[v]};
     }
-  });
+  }, kSerialBelow);
   vertexOf = std::move(used);
   return mesh;
 }

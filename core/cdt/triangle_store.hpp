@@ -21,15 +21,22 @@
 #include <utility>
 #include <vector>
 
+#include "core/base/parallel.hpp"
 #include "core/base/point.hpp"
 #include "core/cdt/edge_feature_map.hpp"
 #include "core/geometry/predicates.hpp"
+#include "core/geometry/spatial_sort.hpp"
 #include "core/mesh/mesh.hpp"
 
 namespace tinsmith::cdt {
 
 /// No vertex, half-edge or triangle.
 inline constexpr std::uint32_t kNone = 0xffffffffu;
+/// Data-parallel loops over fewer items than this run on the calling thread.
+inline constexpr std::size_t kSerialBelow = 4096;
+using geometry::Box;
+using geometry::HilbertGrid;
+using geometry::radixSortHigh32;
 /// The vertex at infinity, third corner of every ghost triangle.
 inline constexpr std::uint32_t kInf = 0xfffffffeu;
 

@@ -30,7 +30,7 @@
 
 #include "core/base/error.hpp"
 #include "core/cdt/constraints.hpp"
-#include "core/cdt/spatial_order.hpp"
+#include "core/geometry/spatial_sort.hpp"
 
 namespace tinsmith::cdt {
 namespace {
@@ -400,12 +400,12 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
   auto copyKept = [&](ConstrainedTriangulation& from, const std::vector<std::uint32_t>& slot,
                       const std::vector<std::uint32_t>& global) {
     auto each = [&](const auto& f) {
-      parallelChunks(threadCount(), slot.size(), [&](unsigned, std::size_t b, std::size_t e) {
+      parallelParts(slot.size(), threadCount(), threadCount(), [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t t = b; t < e; ++t) {
           if (slot[t] == kNone) continue;
           for (std::uint32_t i = 0; i < 3; ++i) f(3 * t + i, 3 * std::size_t{slot[t]} + i);
         }
-      });
+      }, kSerialBelow);
     };
     tv.resize(size);
     each([&](std::size_t h, std::size_t out) {

@@ -1,14 +1,20 @@
 // Spatial sorting: the space-filling curves tinsmith orders points by and
-// the radix sorts that order them in linear time. The CDT inserts along the
+// the radix sorts that order them in linear time (the same result for any
+// thread count). The CDT inserts along the
 // Hilbert curve (locality for the walk); the fitter sorts along the Morton
 // (Z-order) curve, whose cells of every level are contiguous runs.
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
+
+#include "core/base/parallel.hpp"
+#include "core/base/point.hpp"
 
 namespace tinsmith::geometry {
 
@@ -35,6 +41,42 @@ inline std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
   }
   return d;
 }
+
+/// A bounding box that grows by points and boxes.
+struct Box {
+  double minX = INFINITY, minY = INFINITY, maxX = -INFINITY, maxY = -INFINITY;
+  void add(const Point2& p) {
+    minX = std::min(minX, p.x);
+    maxX = std::max(maxX, p.x);
+    minY = std::min(minY, p.y);
+    maxY = std::max(maxY, p.y);
+  }
+  void add(const Box& b) {
+    minX = std::min(minX, b.minX);
+    maxX = std::max(maxX, b.maxX);
+    minY = std::min(minY, b.minY);
+    maxY = std::max(maxY, b.maxY);
+  }
+};
+
+/// Hilbert index (hilbertIndex13) of points on a 2^13 grid over a box.
+class HilbertGrid {
+ public:
+  explicit HilbertGrid(const Box& box)
+      : box_(box),
+        sx_(box.maxX > box.minX ? kGrid / (box.maxX - box.minX) : 0.0),
+        sy_(box.maxY > box.minY ? kGrid / (box.maxY - box.minY) : 0.0) {}
+  [[nodiscard]] std::uint32_t operator()(const Point2& p) const {
+    const auto gx = static_cast<std::uint32_t>(std::min(kGrid, (p.x - box_.minX) * sx_));
+    const auto gy = static_cast<std::uint32_t>(std::min(kGrid, (p.y - box_.minY) * sy_));
+    return geometry::hilbertIndex13(gx, gy);
+  }
+
+ private:
+  static constexpr double kGrid = 8191.0;
+  Box box_;
+  double sx_, sy_;
+};
 
 /// Morton code interleaving: the low 32 bits of v spread to the even bits.
 inline std::uint64_t spreadBits(std::uint64_t v) {
@@ -75,6 +117,34 @@ inline void radixSortByCode(std::vector<std::pair<std::uint64_t, std::uint32_t>>
       sum += c;
     }
     for (const auto& e : v) tmp[offset[(e.first >> sh) & (kBuckets - 1)]++] = e;
+    v.swap(tmp);
+  }
+}
+
+// LSD radix sort of 64-bit values on their upper 32 bits (stable). With
+// several threads each sorts its chunk's share into place through per-chunk
+// bucket offsets, so the result is the same for any thread count.
+inline void radixSortHigh32(std::vector<std::uint64_t>& v, unsigned threads) {
+  std::vector<std::uint64_t> tmp(v.size());
+  if (v.size() < 4096) threads = 1;
+  std::vector<std::array<std::size_t, 256>> count(threads);
+  for (int shift = 32; shift < 64; shift += 8) {
+    parallelParts(v.size(), threads, threads, [&](std::size_t b, std::size_t e, unsigned k) {
+      count[k].fill(0);
+      for (std::size_t i = b; i < e; ++i) ++count[k][(v[i] >> shift) & 0xff];
+    });
+    std::size_t sum = 0;
+    for (int d = 0; d < 256; ++d) {
+      for (unsigned k = 0; k < threads; ++k) {
+        const std::size_t c = count[k][d];
+        count[k][d] = sum;
+        sum += c;
+      }
+    }
+    parallelParts(v.size(), threads, threads, [&](std::size_t b, std::size_t e, unsigned k) {
+      auto& off = count[k];
+      for (std::size_t i = b; i < e; ++i) tmp[off[(v[i] >> shift) & 0xff]++] = v[i];
+    });
     v.swap(tmp);
   }
 }

@@ -76,7 +76,9 @@ function load(id) {
     framed = true;
   });
   tiles.addEventListener('tiles-load-end', () => {
-    if (!framed) return;
+    // The queue also empties between the root tileset and its first content
+    // (the content is requested on a later update): ready means a tile drawn.
+    if (!framed || api.loadedModels === 0) return;
     status(`${id}: ${api.loadedModels} tile${api.loadedModels === 1 ? "" : "s"} loaded. Drag to orbit, right-drag to pan, wheel to zoom.`);
     // Two more frames so the last tiles are drawn before anyone looks.
     requestAnimationFrame(() => requestAnimationFrame(() => resolveReady(api)));

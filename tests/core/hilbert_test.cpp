@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/geometry/hilbert.hpp"
+#include "core/geometry/spatial_sort.hpp"
 
 namespace tinsmith::geometry {
 namespace {
