@@ -16,7 +16,7 @@ FROM debian:bookworm AS runtime
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       libgdal32 libproj25 proj-data libgeographiclib23 libopenexr-3-1-30 libimath-3-1-29 libdraco7 \
-      libtinygltf2d libsqlite3-0 libtomlplusplus3 zlib1g libgomp1 \
+      libtinygltf2d libsqlite3-0 libtomlplusplus3 zlib1g libbrotli1 libgomp1 \
       curl ca-certificates \
  && rm -rf /var/lib/apt/lists/* \
  && useradd --system --create-home --home-dir /var/lib/tinsmith tinsmith
