@@ -12,12 +12,15 @@ RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
  && strip build/bin/tinsmith
 
 FROM debian:bookworm AS runtime
-# Runtime counterparts of the -dev packages in tools/setup.sh.
+# The packages of the libraries the binary links (readelf -d: NEEDED; checked
+# against ldd build/release/bin/tinsmith), plus proj-data (proj.db and the
+# EGM96 grid) and curl for the health check. tinygltf is linked away (only
+# its headers are used) and nothing links libgomp, so neither is here.
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       libgdal32 libproj25 proj-data libgeographiclib23 libopenexr-3-1-30 libimath-3-1-29 libdraco7 \
-      libtinygltf2d libsqlite3-0 libtomlplusplus3 zlib1g libbrotli1 libgomp1 \
-      curl ca-certificates \
+      libsqlite3-0 libtomlplusplus3 zlib1g libbrotli1 \
+      curl \
  && rm -rf /var/lib/apt/lists/* \
  && useradd --system --create-home --home-dir /var/lib/tinsmith tinsmith
 COPY --from=builder /src/build/bin/tinsmith /usr/local/bin/tinsmith

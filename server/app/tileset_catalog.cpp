@@ -151,7 +151,12 @@ Tileset::Tileset(std::string id, const fs::path& path)
                        {"profile", "/tilesets/" + id_ + "/profile"}};
 }
 
-Tileset::~Tileset() = default;
+Tileset::~Tileset() {
+  // Readers first: an archive written on demand goes back to a rollback
+  // journal when its writer closes last (see ingest/store/archive_store.cpp).
+  store_.reset();
+  writer_.reset();
+}
 
 const Surface& Tileset::surface() const {
   std::call_once(surfaceOnce_, [this] {

@@ -62,6 +62,8 @@ void expectMissingTilesBuiltAsOffline(const std::string& name) {
       }
     EXPECT_EQ(server.server().metrics().tilesBuilt(), deep);
   }
+  // The archive is back in a rollback journal: nothing beside it.
+  EXPECT_FALSE(std::filesystem::exists(path.string() + "-wal"));
   // Written into the store: a fresh reader has every tile, byte for byte.
   const auto again = store::openStoreForReading(path);
   for (const auto& [key, bytes] : all) EXPECT_EQ(again->get(key), bytes) << key;
@@ -73,6 +75,20 @@ TEST(OnDemand, MissingTilesOfAnArchiveAreBuiltWithTheOfflineBytesAndKept) {
 
 TEST(OnDemand, MissingTilesOfADirectoryStoreAreBuiltWithTheOfflineBytesAndKept) {
   expectMissingTilesBuiltAsOffline("lazy-dir");
+}
+
+TEST(OnDemand, TheServersOwnWritesDoNotReloadTheStore) {
+  const auto path = testStoreCopy("server-on-demand-reload", "own.3dtiles", aboveZoom2);
+  auto options = onDemandOptions(path);
+  options.reloadInterval = std::chrono::milliseconds(20);
+  RunningServer server(options);
+  HttpConnection c(server.port());
+  for (const auto& [key, bytes] : storedTiles()) {
+    ASSERT_EQ(c.request("/tilesets/own/" + key).status, 200) << key;
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(server.server().catalog().version(), 0u);  // never swapped
 }
 
 TEST(OnDemand, ManyClientsAskingForOneMissingTileGetItBuiltOnce) {
