@@ -49,16 +49,15 @@ struct BuildRecord {
 
 }  // namespace
 
-TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin,
-                             const std::string& store)
+TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const std::string& store)
     : state_(std::make_unique<State>()) {
   BuildRecord r{nlohmann::json::parse(build, nullptr, false), store};
   if (!r.j.is_object() || r.j.value("format", "") != "tinsmith-tiles/1")
     throw inputError(store + ": tinsmith/build.json is not a tinsmith-tiles/1 build record", {},
                      "rebuild the store with this version's tinsmith tile");
   if (crc32(tin) != static_cast<std::uint32_t>(r.number("/tin/crc32")))
-    throw inputError(store + ": the TIN is not the one its tiles were built from (CRC differs)",
-                     {}, "rebuild the store with tinsmith tile");
+    throw inputError(store + ": the TIN is not the one its tiles were built from (CRC differs)", {},
+                     "rebuild the store with tinsmith tile");
   state_->tin = decodeTin(tin, store + ":tinsmith/terrain.tin");
 
   TileJobOptions o;
@@ -70,7 +69,8 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin,
   const auto frame = parseContentFrame(r.string("/options/frame"));
   o.geoid = r.string("/options/geoid");
   if (!compression || !frame || !isKnownGeoid(o.geoid))
-    throw inputError(store + ": tinsmith/build.json names a compression, frame or geoid this "
+    throw inputError(store +
+                     ": tinsmith/build.json names a compression, frame or geoid this "
                      "version does not know");
   o.compression = *compression;
   o.frame = *frame;
@@ -97,14 +97,17 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin,
       tiler.levelsPerTile() == static_cast<int>(r.number("/pyramid/levelsPerTile")) &&
       tiler.maxZoom() == static_cast<int>(r.number("/options/maxZoom"));
   if (!samePyramid)
-    throw inputError(store + ": the pyramid planned again from its TIN differs from the one its "
-                     "tiles were built on, so missing tiles cannot be built to match",
+    throw inputError(store +
+                         ": the pyramid planned again from its TIN differs from the one its "
+                         "tiles were built on, so missing tiles cannot be built to match",
                      {}, "rebuild the whole store with tinsmith tile");
 }
 
 TileRebuilder::~TileRebuilder() = default;
 
-int TileRebuilder::maxZoom() const { return state_->tiler->maxZoom(); }
+int TileRebuilder::maxZoom() const {
+  return state_->tiler->maxZoom();
+}
 
 std::optional<tiles::TileContent> TileRebuilder::build(const tiles::TileId& id) const {
   const tiles::Tiler& tiler = *state_->tiler;

@@ -31,8 +31,8 @@ class Metrics {
   /// A tile built on demand, and how long it took.
   void countTileBuilt(std::chrono::steady_clock::duration took) {
     tilesBuilt_.fetch_add(1, kRelaxed);
-    buildNanos_.fetch_add(
-        static_cast<std::uint64_t>(std::chrono::nanoseconds(took).count()), kRelaxed);
+    buildNanos_.fetch_add(static_cast<std::uint64_t>(std::chrono::nanoseconds(took).count()),
+                          kRelaxed);
   }
   /// A request that waited for a build another request started.
   void countBuildWait() { buildWaits_.fetch_add(1, kRelaxed); }

@@ -9,8 +9,7 @@ namespace tinsmith::server {
 OnDemandTiles::OnDemandTiles(ContentCache& cache, Metrics& metrics, std::FILE* notices)
     : cache_(cache), metrics_(metrics), notices_(notices) {}
 
-std::shared_ptr<const Content> OnDemandTiles::fetch(const Tileset& tileset,
-                                                    const tiles::TileId& id,
+std::shared_ptr<const Content> OnDemandTiles::fetch(const Tileset& tileset, const tiles::TileId& id,
                                                     const std::string& cacheKey) {
   if (!tileset.hasTin() || !tileset.references(id)) return nullptr;
   std::promise<std::shared_ptr<const Content>> promise;
@@ -46,8 +45,7 @@ std::shared_ptr<const Content> OnDemandTiles::fetch(const Tileset& tileset,
   return content;
 }
 
-std::shared_ptr<const Content> OnDemandTiles::build(const Tileset& tileset,
-                                                    const tiles::TileId& id,
+std::shared_ptr<const Content> OnDemandTiles::build(const Tileset& tileset, const tiles::TileId& id,
                                                     const std::string& cacheKey) {
   const auto start = std::chrono::steady_clock::now();
   auto tile = tileset.rebuilder().build(id);

@@ -37,13 +37,20 @@ std::int64_t lineOf(const toml::node& node) {
 
 const char* typeName(const toml::node& node) {
   switch (node.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    default: return "a date/time";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    default:
+      return "a date/time";
   }
 }
 
@@ -61,7 +68,9 @@ struct Reader {
   [[noreturn]] void wrongType(const std::string& key, const toml::node& node,
                               const std::string& expected) const {
     fail("server." + key + " must be " + expected + ", not " + typeName(node), lineOf(node),
-         node.is_string() ? "write it without quotes" : expected == "a string" ? "put it in quotes" : "");
+         node.is_string()         ? "write it without quotes"
+         : expected == "a string" ? "put it in quotes"
+                                  : "");
   }
   std::string string(const std::string& key, const toml::node& node) const {
     if (const auto* s = node.as_string()) return s->get();

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <ctime>
-
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -37,6 +36,15 @@ std::string accessLogLine(const Exchange& e) {
          target + tail;
 }
 
+namespace {
+
+ServiceOptions withNotices(ServiceOptions service, std::FILE* notices) {
+  service.notices = notices;
+  return service;
+}
+
+}  // namespace
+
 std::string accessLogJson(const Exchange& e) {
   const std::time_t now = std::time(nullptr);
   std::tm utc{};
@@ -62,11 +70,7 @@ std::string accessLogJson(const Exchange& e) {
 TileServer::TileServer(TileServerOptions options)
     : options_(std::move(options)),
       catalog_(options_.stores),
-      service_(catalog_, metrics_, [this] {
-        ServiceOptions o = options_.service;
-        o.notices = options_.notices;
-        return o;
-      }()) {
+      service_(catalog_, metrics_, withNotices(options_.service, options_.notices)) {
   http_ = std::make_unique<HttpServer>(
       options_.http, [this](const Request& r) { return service_.handle(r); },
       [this](const Exchange& e) { logExchange(e); },

@@ -32,7 +32,9 @@ Response internalFailure(ErrorKind kind, const std::string& what) {
 }  // namespace
 
 TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
-    : catalog_(catalog), metrics_(metrics), options_(std::move(options)),
+    : catalog_(catalog),
+      metrics_(metrics),
+      options_(std::move(options)),
       cache_(options_.cacheBytes),
       onDemand_(cache_, metrics_, options_.notices) {}
 
@@ -144,7 +146,8 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
   const auto tileset = catalog_.find(route.tileset);  // held for the whole request
   if (!tileset) return notFound("no tileset '" + route.tileset + "' (see /tilesets)");
   switch (route.kind) {
-    case RouteKind::TilesetJson: return serveStored(request, *tileset, "tileset.json", nullptr);
+    case RouteKind::TilesetJson:
+      return serveStored(request, *tileset, "tileset.json", nullptr);
     case RouteKind::ExternalTileset:
     case RouteKind::Tile: {
       const bool tile = route.kind == RouteKind::Tile;
@@ -211,8 +214,7 @@ Response TileService::serveJson(const Request& request, const std::string& json,
   const bool big = json.size() >= kGzipAtLeast;
   const bool brotli = big && acceptsBrotli(request.acceptEncoding);
   const bool gzip = big && !brotli && acceptsGzip(request.acceptEncoding);
-  return serveContent(request, *makeContent(json + "\n", gzip, brotli), kJson, cacheControl,
-                      false);
+  return serveContent(request, *makeContent(json + "\n", gzip, brotli), kJson, cacheControl, false);
 }
 
 Response TileService::serveContent(const Request& request, const Content& content,

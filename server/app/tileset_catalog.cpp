@@ -6,8 +6,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <optional>
 #include <numbers>
+#include <optional>
 
 #include "core/base/error.hpp"
 #include "core/tiles/tileset_json.hpp"

@@ -15,17 +15,16 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "core/base/point.hpp"
 #include "core/surface/surface.hpp"
-#include "ingest/filters/reproject.hpp"
 #include "core/tiles/pyramid.hpp"
+#include "ingest/filters/reproject.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/tile_rebuild.hpp"
 

@@ -137,7 +137,6 @@ std::string gzipCompress(std::string_view bytes) {
   return out;
 }
 
-
 std::string brotliCompress(std::string_view bytes) {
   std::string out(BrotliEncoderMaxCompressedSize(bytes.size()), '\0');
   std::size_t size = out.size();

@@ -26,9 +26,13 @@ std::map<std::string, std::string> storedTiles() {
   return tiles;
 }
 
-int zoomOf(const std::string& key) { return std::stoi(key.substr(6)); }
+int zoomOf(const std::string& key) {
+  return std::stoi(key.substr(6));
+}
 
-bool aboveZoom2(const std::string& key) { return !key.starts_with("tiles/") || zoomOf(key) < 2; }
+bool aboveZoom2(const std::string& key) {
+  return !key.starts_with("tiles/") || zoomOf(key) < 2;
+}
 
 server::TileServerOptions onDemandOptions(const std::filesystem::path& store) {
   auto o = RunningServer::defaults();
@@ -111,6 +115,12 @@ TEST(OnDemand, ManyClientsAskingForOneMissingTileGetItBuiltOnce) {
   EXPECT_EQ(server.server().metrics().tilesBuilt(), 1u);
   const std::string metrics = httpGet(server.port(), "/metrics").body;
   EXPECT_NE(metrics.find("tinsmith_tiles_built_on_demand_total 1\n"), std::string::npos) << metrics;
+  // The build (the pyramid's plan and the zoom's fit: tenths of a second)
+  // outlasts the clients' arrival, so some of them waited for it.
+  const std::string waits = "\ntinsmith_on_demand_waits_total ";
+  const auto at = metrics.find(waits);
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_GE(std::stoi(metrics.substr(at + waits.size())), 1) << metrics;
 }
 
 TEST(OnDemand, TilesTheTilesetDoesNotReferenceStay404) {
@@ -125,8 +135,8 @@ TEST(OnDemand, TilesTheTilesetDoesNotReferenceStay404) {
   int unreferenced = 0;
   for (int x = 0; x < 8 && unreferenced < 3; ++x)
     for (int y = 0; y < 8 && unreferenced < 3; ++y) {
-      const std::string key = tiles::tileContentKey({3, static_cast<std::uint32_t>(x),
-                                                     static_cast<std::uint32_t>(y)});
+      const std::string key =
+          tiles::tileContentKey({3, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y)});
       if (all.contains(key)) continue;
       EXPECT_EQ(httpGet(server.port(), "/tilesets/holes/" + key).status, 404) << key;
       ++unreferenced;
@@ -150,10 +160,10 @@ TEST(OnDemand, WithoutTheOptionAMissingTileIs404) {
 TEST(OnDemand, TileStoreUntilZoomWritesTheWholeTilesetAndOnlyTheTilesAbove) {
   const auto dir = scratchDir("server-store-until-" + std::to_string(::getpid()));
   const auto lazy = dir / "lazy.3dtiles";
-  const auto r = runTinsmith("tile -q " + (testStoreDir() / "hill.tin").string() + " -o " +
-                             lazy.string() +
-                             " --tolerance 0.25 --max-triangles 512 --max-zoom 3 "
-                             "--store-until-zoom 2");
+  const auto r =
+      runTinsmith("tile -q " + (testStoreDir() / "hill.tin").string() + " -o " + lazy.string() +
+                  " --tolerance 0.25 --max-triangles 512 --max-zoom 3 "
+                  "--store-until-zoom 2");
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const auto full = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
   const auto part = store::openStoreForReading(lazy);
@@ -172,10 +182,12 @@ TEST(OnDemand, TileStoreUntilZoomWritesTheWholeTilesetAndOnlyTheTilesAbove) {
       EXPECT_TRUE(c.request("/tilesets/lazy/" + key).body == full->get(key)) << key;
     }
   // A shard cannot leave tiles out.
-  const auto bad = runTinsmith("tile -q " + (testStoreDir() / "hill.tin").string() + " -o " +
-                               (dir / "x.3dtiles").string() + " --until-zoom 2 --store-until-zoom 1");
+  const auto bad =
+      runTinsmith("tile -q " + (testStoreDir() / "hill.tin").string() + " -o " +
+                  (dir / "x.3dtiles").string() + " --until-zoom 2 --store-until-zoom 1");
   EXPECT_EQ(bad.exitCode, 2) << bad.err;
-  EXPECT_NE(bad.err.find("--store-until-zoom is for a whole pyramid"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--store-until-zoom is for a whole pyramid"), std::string::npos)
+      << bad.err;
 }
 
 }  // namespace

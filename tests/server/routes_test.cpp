@@ -148,7 +148,8 @@ TEST_F(Routes, RangesGive206OrA416) {
 TEST_F(Routes, JsonIsGzippedWhenAcceptedWithItsOwnEtag) {
   HttpConnection c(port());
   const auto plain = c.request("/tilesets/hill/tileset.json");
-  const auto packed = c.request("/tilesets/hill/tileset.json", "Accept-Encoding: deflate, gzip\r\n");
+  const auto packed =
+      c.request("/tilesets/hill/tileset.json", "Accept-Encoding: deflate, gzip\r\n");
   ASSERT_EQ(packed.status, 200);
   EXPECT_EQ(packed.header("content-encoding"), "gzip");
   EXPECT_EQ(packed.header("vary"), "Accept-Encoding");
@@ -173,7 +174,8 @@ TEST_F(Routes, JsonIsBrotliWhenAcceptedBeforeGzipWithItsOwnEtag) {
   HttpConnection c(port());
   const auto plain = c.request("/tilesets/hill/tileset.json");
   const auto gz = c.request("/tilesets/hill/tileset.json", "Accept-Encoding: gzip\r\n");
-  const auto br = c.request("/tilesets/hill/tileset.json", "Accept-Encoding: gzip, deflate, br\r\n");
+  const auto br =
+      c.request("/tilesets/hill/tileset.json", "Accept-Encoding: gzip, deflate, br\r\n");
   ASSERT_EQ(br.status, 200);
   EXPECT_EQ(br.header("content-encoding"), "br");
   EXPECT_EQ(br.header("vary"), "Accept-Encoding");
@@ -201,9 +203,9 @@ TEST_F(Routes, JsonIsBrotliWhenAcceptedBeforeGzipWithItsOwnEtag) {
   for (int i = 0; i < 200; ++i)
     points += (i ? "," : "") + std::string("[") + std::to_string(430100 + i) + ", 4515600]";
   points += "]}";
-  const auto batch = c.request("/tilesets/hill/elevation",
-                               "Accept-Encoding: br\r\nContent-Type: application/json\r\n", "POST",
-                               points);
+  const auto batch =
+      c.request("/tilesets/hill/elevation",
+                "Accept-Encoding: br\r\nContent-Type: application/json\r\n", "POST", points);
   ASSERT_EQ(batch.status, 200) << batch.body;
   EXPECT_EQ(batch.header("content-encoding"), "br");
   EXPECT_EQ(nlohmann::json::parse(unbrotli(batch.body))["points"].size(), 200u);

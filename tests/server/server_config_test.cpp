@@ -3,6 +3,8 @@
 // errors naming the file, the line, the key and what is allowed. Then
 // through the binary: `tinsmith serve --config` serves with the file's
 // values, and flags given on the command line win over them.
+#include "server/app/server_config.hpp"
+
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
@@ -13,7 +15,6 @@
 #include <regex>
 
 #include "core/base/error.hpp"
-#include "server/app/server_config.hpp"
 #include "tests/server/server_test_support.hpp"
 
 extern char** environ;
@@ -103,8 +104,9 @@ TEST(ServerConfig, MistakesNameTheFileTheLineTheKeyAndWhatIsAllowed) {
   EXPECT_NE(type.find("server.port must be an integer, not a string"), std::string::npos) << type;
   EXPECT_NE(type.find("without quotes"), std::string::npos) << type;
 
-  EXPECT_NE(failureOf("[server]\nport = 70000\n").find("server.port must be 0 to 65535 (got 70000)"),
-            std::string::npos);
+  EXPECT_NE(
+      failureOf("[server]\nport = 70000\n").find("server.port must be 0 to 65535 (got 70000)"),
+      std::string::npos);
   EXPECT_NE(failureOf("[server]\nquiet = 1\n").find("server.quiet must be true or false"),
             std::string::npos);
   EXPECT_NE(failureOf("[server]\nstores = \"a.3dtiles\"\n").find("server.stores must be an array"),
@@ -112,8 +114,9 @@ TEST(ServerConfig, MistakesNameTheFileTheLineTheKeyAndWhatIsAllowed) {
   EXPECT_NE(failureOf("[server]\nlog_format = \"xml\"\n")
                 .find("server.log_format must be \"text\" or \"json\" (got \"xml\")"),
             std::string::npos);
-  EXPECT_NE(failureOf("[server]\nread_timeout = 0\n").find("server.read_timeout must be 0.1 to 3600"),
-            std::string::npos);
+  EXPECT_NE(
+      failureOf("[server]\nread_timeout = 0\n").find("server.read_timeout must be 0.1 to 3600"),
+      std::string::npos);
   EXPECT_NE(failureOf("server = 1\n").find("'server' must be a table"), std::string::npos);
   const std::string table = failureOf("[sever]\nport = 1\n");
   EXPECT_NE(table.find("unknown top-level key 'sever'"), std::string::npos) << table;
@@ -223,6 +226,37 @@ TEST(ServerConfig, HelpDocumentsTheConfigAndTheNewFlags) {
   EXPECT_EQ(help.exitCode, 0);
   for (const char* text : {"--config", "[server]", "--log-format", "--on-demand", "cache_mb"})
     EXPECT_NE(help.out.find(text), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace tinsmith::test
+
+namespace tinsmith::test {
+namespace {
+
+TEST(AccessLog, TheJsonFormIsOneValidObjectWhateverTheTarget) {
+  server::Request request;
+  request.method = "GET";
+  request.target = std::string("/tiles/\"quoted\"\\back\x01\xff\xfe") + std::string(600, 'a');
+  server::Response response;
+  response.status = 404;
+  response.route = server::RouteKind::Tile;
+  const server::Exchange exchange{
+      request, response, "127.0.0.1:5000", 123, std::chrono::microseconds(1500), true};
+  const std::string line = server::accessLogJson(exchange);
+  EXPECT_EQ(line.find('\n'), std::string::npos);
+  const auto j = nlohmann::json::parse(line);  // valid JSON, bad UTF-8 replaced
+  EXPECT_EQ(j["peer"], "127.0.0.1:5000");
+  EXPECT_EQ(j["method"], "GET");
+  EXPECT_EQ(j["status"], 404);
+  EXPECT_EQ(j["bytes"], 123);
+  EXPECT_DOUBLE_EQ(j["ms"].get<double>(), 1.5);
+  EXPECT_EQ(j["cache"], "miss");
+  EXPECT_EQ(j["completed"], true);
+  EXPECT_TRUE(j["target"].get<std::string>().starts_with("/tiles/\"quoted\"\\back\x01"));
+  EXPECT_LE(j["target"].get<std::string>().size(), 512u + 6);  // cut; U+FFFD is 3 bytes
+  EXPECT_TRUE(std::regex_match(j["time"].get<std::string>(),
+                               std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ)")));
 }
 
 }  // namespace

@@ -6,12 +6,11 @@
 #pragma once
 
 #include <arpa/inet.h>
+#include <brotli/decode.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <brotli/decode.h>
 #include <zlib.h>
 
 #include <cmath>

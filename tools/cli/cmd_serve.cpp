@@ -12,8 +12,8 @@
 
 #include <cstdio>
 #include <functional>
-#include <map>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
@@ -39,9 +39,8 @@ struct FlagOverride {
 
 template <typename T>
 FlagOverride overrides(const CLI::Option* option, T ServerSettings::*member) {
-  return {option, [member](ServerSettings& to, const ServerSettings& from) {
-            to.*member = from.*member;
-          }};
+  return {option,
+          [member](ServerSettings& to, const ServerSettings& from) { to.*member = from.*member; }};
 }
 
 std::chrono::milliseconds seconds(double s) {
@@ -135,9 +134,8 @@ void addServeCommand(CLI::App& app) {
       &ServerSettings::quiet);
   add(cmd->add_option("--log-format", flags->logFormat,
                       "Access log lines: text, or json (one JSON object per line)")
-          ->transform(CLI::CheckedTransformer(
-              std::map<std::string, server::LogFormat>{{"text", server::LogFormat::Text},
-                                                       {"json", server::LogFormat::Json}}))
+          ->transform(CLI::CheckedTransformer(std::map<std::string, server::LogFormat>{
+              {"text", server::LogFormat::Text}, {"json", server::LogFormat::Json}}))
           ->option_text("text|json (default: text)"),
       &ServerSettings::logFormat);
   add(cmd->add_flag("--on-demand", flags->onDemand,
