@@ -236,8 +236,11 @@ bool Tileset::keep(const std::string& key, std::string_view bytes, std::string& 
   if (writerFailed_) return false;
   try {
     if (!writer_) {
-      writer_ = store::openStoreForWriting(store_->path(), true);
+      // Said before the opening, which already changes the file (an archive
+      // goes to WAL mode): a refresh in between must not take it for a
+      // replacement.
       writesInPlace_ = true;
+      writer_ = store::openStoreForWriting(store_->path(), true);
     }
     writer_->put(key, bytes);
     return true;

@@ -69,7 +69,7 @@ class Tileset {
   /// false, having written nothing, when the store cannot be opened for
   /// writing (then `why` says why, once). Thread-safe.
   bool keep(const std::string& key, std::string_view bytes, std::string& why) const;
-  /// Whether keep() has opened the store for writing: the archive's file
+  /// Whether keep() has opened (or tried to open) the store for writing: the archive's file
   /// then changes under its own name (TilesetCatalog::refresh knows).
   [[nodiscard]] bool writesInPlace() const { return writesInPlace_.load(); }
 
