@@ -1,6 +1,8 @@
 # tinsmith — multi-stage image on Debian bookworm.
-# builder: the same tools/setup.sh a developer runs, then a Release build.
-# runtime: only the shared libraries the binary links, the binary, non-root.
+# builder: the same tools/setup.sh a developer runs (Debian's node and npm
+# with it), then a Release build and the viewer's npm packages.
+# runtime: only the shared libraries the binary links, the binary, the
+# viewer's pages and the library files they load, non-root.
 FROM debian:bookworm AS builder
 WORKDIR /src
 COPY tools/setup.sh tools/setup.sh
@@ -10,6 +12,20 @@ RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DTINSMITH_TESTS=OFF -DTINSMITH_BENCHMARKS=OFF \
  && cmake --build build -j"$(nproc)" --target tinsmith \
  && strip build/bin/tinsmith
+# The viewer (server/viewer/package-lock.json), staged in /viewer as
+# /usr/share/tinsmith/viewer will hold it: the pages, and of node_modules
+# only the trees the server serves (server/app/viewer_assets.hpp) with the
+# packages' licences.
+RUN npm ci --prefix server/viewer --no-audit --no-fund --loglevel=error \
+ && mkdir -p /viewer \
+ && cp server/viewer/*.html server/viewer/*.js server/viewer/*.css /viewer/ \
+ && for tree in cesium/Build/Cesium three/build three/examples/jsm 3d-tiles-renderer/build; do \
+      mkdir -p "/viewer/node_modules/$tree" \
+      && cp -a "server/viewer/node_modules/$tree/." "/viewer/node_modules/$tree/"; \
+    done \
+ && cp server/viewer/node_modules/cesium/LICENSE.md /viewer/node_modules/cesium/ \
+ && cp server/viewer/node_modules/three/LICENSE /viewer/node_modules/three/ \
+ && cp server/viewer/node_modules/3d-tiles-renderer/LICENSE /viewer/node_modules/3d-tiles-renderer/
 
 FROM debian:bookworm AS runtime
 # The packages of the libraries the binary links (readelf -d: NEEDED; checked
@@ -24,6 +40,8 @@ RUN apt-get update \
  && rm -rf /var/lib/apt/lists/* \
  && useradd --system --create-home --home-dir /var/lib/tinsmith tinsmith
 COPY --from=builder /src/build/bin/tinsmith /usr/local/bin/tinsmith
+# Where `tinsmith serve` looks for the viewer (after ../share beside the binary).
+COPY --from=builder /viewer /usr/share/tinsmith/viewer
 USER tinsmith
 WORKDIR /var/lib/tinsmith
 VOLUME ["/var/lib/tinsmith/stores"]

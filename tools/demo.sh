@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # README command 1: install, build, and run the whole pipeline on the bundled
-# Red Butte sample (../shared/data/red-butte), then serve it until Ctrl-C.
-#   bash tools/demo.sh              # … and serve http://127.0.0.1:8080/
+# Red Butte sample (../shared/data/red-butte), then serve it with the viewer
+# until Ctrl-C.
+#   bash tools/demo.sh              # … and serve the viewer at http://127.0.0.1:8080/
 #   bash tools/demo.sh --no-serve   # stop after the tiles (CI, scripts)
 #   PORT=9000 bash tools/demo.sh    # serve on another port
 set -euo pipefail
@@ -63,5 +64,10 @@ if [ "$serve" -eq 0 ]; then
   echo "== 4. server: skipped (--no-serve); run: $tinsmith serve out/red-butte.3dtiles"
   exit 0
 fi
-echo "== 4. server: open http://127.0.0.1:$port/ (tilesets: /tilesets; Ctrl-C stops it)"
-exec "$tinsmith" serve out/red-butte.3dtiles --port "$port"
+echo "== 4. server and viewer (Ctrl-C stops it)"
+echo
+echo "   Open http://127.0.0.1:$port/ in a browser: Red Butte Canyon in 3-D (CesiumJS),"
+echo "   the height, slope and coordinates under the cursor, profiles, the break lines."
+echo "   Lighter three.js page: http://127.0.0.1:$port/three   JSON: http://127.0.0.1:$port/tilesets"
+echo
+exec "$tinsmith" serve out/red-butte.3dtiles --port "$port" --quiet

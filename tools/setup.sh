@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs everything tinsmith needs to build, test and run, from Debian
 # bookworm packages, plus the pinned npm packages of the JavaScript tile
-# checkers (tests/js/package-lock.json). Idempotent: installs only what is
-# missing. Needs root (or sudo) when a Debian package is missing.
+# checkers (tests/js/package-lock.json) and of the viewer pages that
+# `tinsmith serve` serves (server/viewer/package-lock.json: CesiumJS, three,
+# 3d-tiles-renderer). Idempotent: installs only what is missing. Needs root
+# (or sudo) when a Debian package is missing.
 #
 #   bash tools/setup.sh           # build, test and run
 #   bash tools/setup.sh --bench   # also the tools the benchmarks compare against
@@ -58,16 +60,19 @@ if [ ${#missing[@]} -gt 0 ]; then
   did+=("installed ${#missing[@]} Debian packages (${missing[*]})")
 fi
 
-# The tile checkers' npm packages, exactly as locked; again only when
-# node_modules is missing or older than the lock.
-js="$(cd "$(dirname "$0")/.." && pwd)/tests/js"
-if [ ! -d "$js/node_modules" ] || [ "$js/node_modules/.package-lock.json" -ot "$js/package-lock.json" ]; then
-  npm ci --prefix "$js" --no-audit --no-fund --loglevel=error >/dev/null
-  did+=("ran npm ci in tests/js")
-fi
+# The npm packages of the tile checkers and of the viewer, exactly as
+# locked; again only when node_modules is missing or older than the lock.
+root="$(cd "$(dirname "$0")/.." && pwd)"
+for dir in tests/js server/viewer; do
+  [ -f "$root/$dir/package-lock.json" ] || continue  # not copied (the Docker builder's first step)
+  if [ ! -d "$root/$dir/node_modules" ] || [ "$root/$dir/node_modules/.package-lock.json" -ot "$root/$dir/package-lock.json" ]; then
+    npm ci --prefix "$root/$dir" --no-audit --no-fund --loglevel=error >/dev/null
+    did+=("ran npm ci in $dir")
+  fi
+done
 
 if [ ${#did[@]} -eq 0 ]; then
-  echo "setup: nothing to do (all ${#packages[@]} Debian packages installed, tests/js/node_modules up to date)"
+  echo "setup: nothing to do (all ${#packages[@]} Debian packages installed, tests/js and server/viewer node_modules up to date)"
 else
   line=""
   for d in "${did[@]}"; do line+="${line:+; }$d"; done

@@ -6,6 +6,7 @@
 #include <cstddef>
 
 #include "core/cdt/cdt.hpp"
+#include "core/cdt/constraints.hpp"
 #include "core/mesh/validate.hpp"
 
 namespace tinsmith {
@@ -22,6 +23,9 @@ struct CdtTestAccess {
   /// look-up of whether its vertex was reached already).
   static ValidationReport validate(const Cdt& cdt, std::size_t& chainSteps,
                                    const ValidationOptions& options = {});
+  /// How many crossings of constraints the given step of crossing resolution
+  /// placed so far (cdt::CrossingStep, in core/cdt/constraints.hpp).
+  static std::size_t crossingsPlacedBy(const Cdt& cdt, cdt::CrossingStep step);
 };
 
 }  // namespace tinsmith

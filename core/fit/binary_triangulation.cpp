@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/base/error.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
 
@@ -48,11 +49,6 @@ void KeyIndexMap::clear() {
 }
 
 namespace {
-
-/// Twice the signed area of (a, b, c) in grid coordinates.
-double orient(const Point2& a, const Point2& b, const Point2& c) {
-  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-}
 
 }  // namespace
 
@@ -239,7 +235,7 @@ BinaryLocation BinaryTriangulation::descend(Point2 g, BinaryTriangle t) const {
     if (!isActive(j)) break;
     const Point2 pj{0.5 * (pl.x + pr.x), 0.5 * (pl.y + pr.y)};
     // The line a–j splits (l, r, a); p goes with l when on l's side.
-    const bool lSide = orient(pa, pj, g) * orient(pa, pj, pl) >= 0.0;
+    const bool lSide = geometry::orient2dInexact(pa, pj, g) * geometry::orient2dInexact(pa, pj, pl) >= 0.0;
     if (lSide) {
       t = BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1};
       const Point2 oldA = pa;
@@ -253,9 +249,9 @@ BinaryLocation BinaryTriangulation::descend(Point2 g, BinaryTriangle t) const {
       pa = pj;
     }
   }
-  const double area = orient(pl, pr, pa);
-  const double bl = orient(g, pr, pa) / area;
-  const double br = orient(pl, g, pa) / area;
+  const double area = geometry::orient2dInexact(pl, pr, pa);
+  const double bl = geometry::orient2dInexact(g, pr, pa) / area;
+  const double br = geometry::orient2dInexact(pl, g, pa) / area;
   return {t, {bl, br, 1.0 - bl - br}};
 }
 
@@ -338,6 +334,25 @@ std::vector<std::uint64_t> BinaryTriangulation::triangleStrip() const {
     }
   }
   return s;
+}
+
+std::int32_t NestedLocator::add(const BinaryTriangulation& mesh, const KeyIndexMap& leafIndex,
+                               const BinaryTriangle& t) {
+  if (!mesh.isSplit(t)) {
+    const std::uint32_t id = leafIndex.find(t.path);
+    if (id == KeyIndexMap::kNone) throw internalError("nested location: a leaf triangle is not in the triangulation");
+    return -1 - static_cast<std::int32_t>(id);
+  }
+  const std::uint64_t j = (t.l + t.r) / 2;
+  const Point2 pl = mesh.gridPosition(t.l), pa = mesh.gridPosition(t.a), pr = mesh.gridPosition(t.r);
+  const Point2 pj{0.5 * (pl.x + pr.x), 0.5 * (pl.y + pr.y)};
+  const auto index = static_cast<std::int32_t>(nodes_.size());
+  nodes_.push_back({pa, pj, geometry::orient2dInexact(pa, pj, pl), {0, 0}});
+  const std::int32_t first = add(mesh, leafIndex, BinaryTriangle{t.a, j, t.l, t.path << 1, t.depth + 1});
+  const std::int32_t second = add(mesh, leafIndex, BinaryTriangle{t.r, j, t.a, (t.path << 1) | 1, t.depth + 1});
+  nodes_[static_cast<std::size_t>(index)].child[0] = first;
+  nodes_[static_cast<std::size_t>(index)].child[1] = second;
+  return index;
 }
 
 }  // namespace tinsmith::fit

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
 
@@ -190,6 +191,38 @@ class BinaryTriangulation {
   std::uint64_t side_;
   KeyIndexMap ids_;
   std::vector<std::uint64_t> keys_;
+};
+
+/// Point location in the current triangulation below the triangles of an
+/// earlier one (the triangulations are nested, 8.10). The bisection subtree
+/// under each earlier triangle is laid out once as nodes holding the
+/// splitting line; a point walks it with one orientation test a step and no
+/// hash lookups, taking the decisions of BinaryTriangulation::descend.
+class NestedLocator {
+ public:
+  /// Lays out the subtree of `mesh`'s current triangulation under `t`, whose
+  /// leaves are looked up in `leafIndex` (current triangle path → index), and
+  /// returns the handle locate() starts from. Throws internalError when a leaf
+  /// is missing from `leafIndex`.
+  std::int32_t add(const BinaryTriangulation& mesh, const KeyIndexMap& leafIndex, const BinaryTriangle& t);
+  /// The leaf-index of the current triangle holding grid point `grid`
+  /// (BinaryTriangulation::toGrid), starting from a handle add() returned for
+  /// a triangle that holds the point.
+  [[nodiscard]] std::uint32_t locate(std::int32_t handle, Point2 grid) const {
+    while (handle >= 0) {
+      const Node& nd = nodes_[static_cast<std::size_t>(handle)];
+      handle = nd.child[geometry::orient2dInexact(nd.a, nd.j, grid) * nd.lSide >= 0.0 ? 0 : 1];
+    }
+    return static_cast<std::uint32_t>(-1 - handle);
+  }
+
+ private:
+  struct Node {
+    Point2 a, j;              ///< the splitting line a–j, grid coordinates
+    double lSide = 0.0;       ///< orient2dInexact(a, j, l): the side of the l child
+    std::int32_t child[2]{};  ///< l child, r child: ≥ 0 a node, < 0 the leaf −1 − index
+  };
+  std::vector<Node> nodes_;
 };
 
 }  // namespace tinsmith::fit

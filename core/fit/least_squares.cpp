@@ -9,17 +9,13 @@
 #include <Eigen/SparseCholesky>
 
 #include "core/base/error.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
 
 namespace {
 
 using Triplet = Eigen::Triplet<double, SparseMatrix::StorageIndex>;
-
-/// Twice the signed area of (a, b, c): positive when CCW.
-double doubleArea(const Point2& a, const Point2& b, const Point2& c) {
-  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-}
 
 SparseMatrix fromTriplets(std::size_t n, const std::vector<Triplet>& triplets) {
   SparseMatrix m(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
@@ -48,9 +44,9 @@ void TriangleMoments::merge(const TriangleMoments& other) {
 }
 
 std::array<double, 3> barycentric(const Point2& p, const Point2& a, const Point2& b, const Point2& c) {
-  const double area = doubleArea(a, b, c);
-  const double ba = doubleArea(p, b, c) / area;
-  const double bb = doubleArea(a, p, c) / area;
+  const double area = geometry::orient2dInexact(a, b, c);
+  const double ba = geometry::orient2dInexact(p, b, c) / area;
+  const double bb = geometry::orient2dInexact(a, p, c) / area;
   return {ba, bb, 1.0 - ba - bb};
 }
 
@@ -146,8 +142,8 @@ NormalEquations scatterMoments(std::size_t vertexCount, std::span<const Triangle
   return eq;
 }
 
-NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const Triangle> triangles,
-                                        std::span<const Sample> samples) {
+std::vector<TriangleMoments> triangleMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
+                                             std::span<const Sample> samples) {
   checkTriangles(vertexCount, triangles);
   std::vector<TriangleMoments> moments(triangles.size());
   for (std::size_t k = 0; k < samples.size(); ++k) {
@@ -159,7 +155,12 @@ NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const
     }
     moments[s.triangle].add(s.barycentric, s.z, s.weight);
   }
-  return scatterMoments(vertexCount, triangles, moments);
+  return moments;
+}
+
+NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const Triangle> triangles,
+                                        std::span<const Sample> samples) {
+  return scatterMoments(vertexCount, triangles, triangleMoments(vertexCount, triangles, samples));
 }
 
 PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
@@ -197,7 +198,7 @@ SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Tr
   for (std::size_t k = 0; k < triangles.size(); ++k) {
     const auto& t = triangles[k];
     const Point2 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
-    const double area2 = std::abs(doubleArea(a, b, c));  // 2A
+    const double area2 = std::abs(geometry::orient2dInexact(a, b, c));  // 2A
     if (area2 == 0.0) throw geometryError("degenerate triangle " + std::to_string(k) + " in the membrane energy");
     const double eta[3] = {b.y - c.y, c.y - a.y, a.y - b.y};
     const double mu[3] = {c.x - b.x, a.x - c.x, b.x - a.x};
@@ -249,10 +250,10 @@ SparseMatrix umbrellaEnergy(std::span<const Point2> vertices, std::span<const Tr
 
 std::array<double, 4> thinPlateBetas(const Point2& s, const Point2& t, const Point2& l, const Point2& r) {
   const double length = std::hypot(t.x - s.x, t.y - s.y);
-  const double aLst = 0.5 * doubleArea(l, s, t);
-  const double aRts = 0.5 * doubleArea(r, t, s);
-  const double aTlr = 0.5 * doubleArea(t, l, r);
-  const double aSrl = 0.5 * doubleArea(s, r, l);
+  const double aLst = 0.5 * geometry::orient2dInexact(l, s, t);
+  const double aRts = 0.5 * geometry::orient2dInexact(r, t, s);
+  const double aTlr = 0.5 * geometry::orient2dInexact(t, l, r);
+  const double aSrl = 0.5 * geometry::orient2dInexact(s, r, l);
   if (aLst <= 0.0 || aRts <= 0.0) throw geometryError("degenerate or clockwise triangle in the thin-plate energy");
   const double denom = 2.0 * aLst * aRts;
   return {length * aTlr / denom, length * aSrl / denom, -length / (2.0 * aLst), -length / (2.0 * aRts)};
@@ -498,19 +499,27 @@ SolveReport solveSystem(const SparseMatrix& a, const Vector& b, Vector& c, Solve
 LeastSquaresResult fitLeastSquares(std::span<const Point2> vertices, std::span<const Triangle> triangles,
                                    std::span<const Sample> samples, const LeastSquaresOptions& options,
                                    const Vector& initial) {
-  NormalEquations eq = assembleNormalEquations(vertices.size(), triangles, samples);
+  // The multilevel fit's assembly: per-triangle moments, scattered into the
+  // smoothing matrix's pattern (or alone without smoothing).
+  const std::vector<TriangleMoments> moments = triangleMoments(vertices.size(), triangles, samples);
   LeastSquaresResult result;
-  SparseMatrix a = eq.btb;
+  SparseMatrix a;
+  Vector b;
   if (options.smoothing != Smoothing::None) {
-    const SparseMatrix energy = smoothingMatrix(options.smoothing, vertices, triangles);
-    result.lambdaDefault = defaultLambda(eq.btb, energy);
-    result.lambda = options.lambdaAbsolute ? *options.lambdaAbsolute : options.lambdaFactor * result.lambdaDefault;
-    a = eq.btb + result.lambda * energy;
-    a.makeCompressed();
+    PenalizedSystem sys = assemblePenalized(triangles, moments, smoothingMatrix(options.smoothing, vertices, triangles),
+                                            options.lambdaFactor, options.lambdaAbsolute);
+    result.lambdaDefault = sys.lambdaDefault;
+    result.lambda = sys.lambda;
+    a = std::move(sys.a);
+    b = std::move(sys.b);
+  } else {
+    NormalEquations eq = scatterMoments(vertices.size(), triangles, moments);
+    a = std::move(eq.btb);
+    b = std::move(eq.btz);
   }
-  applyFixedVertices(a, eq.btz, options.fixed);
-  result.coefficients = initial.size() == eq.btz.size() ? initial : Vector::Zero(eq.btz.size());
-  result.report = solveSystem(a, eq.btz, result.coefficients, options.solver, options.control);
+  applyFixedVertices(a, b, options.fixed);
+  result.coefficients = initial.size() == b.size() ? initial : Vector::Zero(b.size());
+  result.report = solveSystem(a, b, result.coefficients, options.solver, options.control);
   return result;
 }
 

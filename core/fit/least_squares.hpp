@@ -87,6 +87,12 @@ struct MeshEdge {
 /// more than two triangles or two triangles with the same orientation.
 std::vector<MeshEdge> meshEdges(std::size_t vertexCount, std::span<const Triangle> triangles);
 
+/// Each triangle's moments (its 3×3 block of BᵀWB and 3 entries of BᵀWz)
+/// from the samples inside it. Throws inputError for a sample whose triangle
+/// index is out of range.
+std::vector<TriangleMoments> triangleMoments(std::size_t vertexCount, std::span<const Triangle> triangles,
+                                             std::span<const Sample> samples);
+
 /// Assembles BᵀWB and BᵀWz from samples (8.13, 8.8). Throws inputError for a
 /// sample whose triangle index is out of range.
 NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const Triangle> triangles,

@@ -112,7 +112,4 @@ class MultilevelFit {
 /// domain, bad weights or missing criteria.
 MultilevelFit fitMultilevel(std::span<const Point3> points, const MultilevelOptions& options);
 
-/// Franke's test function on [0, 1]² (8.14).
-double frankeFunction(double x, double y);
-
 }  // namespace tinsmith::fit

@@ -1,32 +1,5 @@
-// Hilbert curve order for spatial sorting.
+// Superseded by core/geometry/spatial_sort.hpp, which holds every spatial
+// sort; kept only until its last includer moves.
 #pragma once
 
-#include <cstdint>
-
-namespace tinsmith::geometry {
-
-// Hilbert index of (x, y) on a 2^13 grid (26 bits), two levels a step: a
-// state (the curve's orientation in the current square, 0..3) and two bits of
-// x and of y give four bits of the index and the next state. The tables were
-// derived from the textbook rotate-and-reflect loop and agree with it on the
-// whole grid (tests/core/hilbert_test.cpp).
-inline std::uint32_t hilbertIndex13(std::uint32_t x, std::uint32_t y) {
-  // One level: state*4 + (x bit << 1 | y bit) -> digit << 2 | next state.
-  static constexpr std::uint8_t kOne[16] = {1, 4, 14, 8, 0, 15, 5, 9, 10, 6, 12, 3, 11, 13, 7, 2};
-  // Two levels: state*16 + (2 bits of x) * 4 + (2 bits of y) -> 4 index bits
-  // << 2 | next state.
-  static constexpr std::uint8_t kTwo[64] = {
-      0,  15, 17, 20, 5,  9,  30, 24, 58, 54, 33, 36, 60, 51, 46, 40, 1,  4,  59, 61, 14, 8,
-      55, 50, 16, 31, 32, 47, 21, 25, 37, 41, 42, 38, 26, 22, 44, 35, 28, 19, 49, 52, 11, 13,
-      62, 56, 7,  2,  43, 45, 48, 63, 39, 34, 53, 57, 27, 29, 10, 6,  23, 18, 12, 3};
-  std::uint32_t e = kOne[((x >> 12) & 1) << 1 | ((y >> 12) & 1)];
-  std::uint32_t d = e >> 2, state = e & 3;
-  for (int b = 10; b >= 0; b -= 2) {
-    e = kTwo[state * 16 + ((x >> b) & 3) * 4 + ((y >> b) & 3)];
-    d = (d << 4) | (e >> 2);
-    state = e & 3;
-  }
-  return d;
-}
-
-}  // namespace tinsmith::geometry
+#include "core/geometry/spatial_sort.hpp"

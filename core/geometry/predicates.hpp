@@ -98,6 +98,16 @@ enum class SegmentIntersection {
 SegmentIntersection segmentIntersection(const Point2& p0, const Point2& p1, const Point2& q0,
                                         const Point2& q1);
 
+/// Twice the signed area of (a, b, c) — positive when counter-clockwise — in
+/// plain floating point: an INEXACT orientation, for constructions (areas,
+/// gradients, barycentric weights) and for decisions where a wrong sign near
+/// zero is harmless. Its sign is not a predicate; orient2d is. Works on any
+/// point type with x and y.
+template <class P>
+[[nodiscard]] inline double orient2dInexact(const P& a, const P& b, const P& c) {
+  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+}
+
 /// True if c lies on the closed segment ab (exactly: collinear and within the
 /// bounding box).
 bool onSegment(const Point2& a, const Point2& b, const Point2& c);

@@ -171,6 +171,36 @@ void Mesh::setEdgeFeatures(const std::vector<std::pair<std::uint32_t, std::uint3
   finishEdgeFeatures();
 }
 
+Mesh Mesh::adopt(MeshStorage&& storage) {
+  Mesh m;
+  m.points_ = std::move(storage.points);
+  m.corners_ = std::move(storage.corners);
+  m.twins_ = std::move(storage.twins);
+  m.outgoing_ = std::move(storage.outgoing);
+  m.consBits_ = std::move(storage.consBits);
+  m.featureBegin_ = std::move(storage.featureBegin);
+  m.featureIds_ = std::move(storage.featureIds);
+  m.features_ = std::move(storage.features);
+  m.crs_ = std::move(storage.crs);
+  m.finishEdgeFeatures();
+  return m;
+}
+
+MeshStorage Mesh::release() && {
+  MeshStorage s;
+  s.points = std::move(points_);
+  s.corners = std::move(corners_);
+  s.twins = std::move(twins_);
+  s.outgoing = std::move(outgoing_);
+  s.consBits = std::move(consBits_);
+  s.featureBegin = std::move(featureBegin_);
+  s.featureIds = std::move(featureIds_);
+  s.features = std::move(features_);
+  s.crs = std::move(crs_);
+  *this = Mesh();
+  return s;
+}
+
 void Mesh::finishEdgeFeatures() {
   if (featureIds_.empty()) {
     consBits_.clear();

@@ -51,6 +51,26 @@ using VertexId = StrongId<VertexTag>;
 using HalfedgeId = StrongId<HalfedgeTag>;
 using TriangleId = StrongId<TriangleTag>;
 
+/// The arrays of a Mesh, for a builder that lays them out itself (the CDT's
+/// compaction) and hands them over whole with Mesh::adopt, and takes them back
+/// with Mesh::release. Nothing is checked or re-linked on the way: the builder
+/// guarantees what Mesh documents (CCW triangles, twins paired or invalid,
+/// outgoing as Mesh::outgoing describes).
+struct MeshStorage {
+  std::vector<Point3> points;
+  std::vector<std::uint32_t> corners;  ///< 3 per triangle
+  std::vector<std::uint32_t> twins;    ///< per half-edge (HalfedgeId values)
+  std::vector<HalfedgeId> outgoing;    ///< per vertex
+  /// Constrained half-edges as a bitset over half-edge ids (64 a word; empty
+  /// or all zero: none); the r-th constrained half-edge (ascending) has the
+  /// features featureIds[featureBegin[r] .. featureBegin[r + 1]), ascending.
+  std::vector<std::uint64_t> consBits;
+  std::vector<std::uint32_t> featureBegin;
+  std::vector<std::uint32_t> featureIds;
+  std::vector<TinFeature> features;
+  std::string crs;
+};
+
 /// A finished TIN mesh (possibly non-convex, with holes). Built by the CDT
 /// (Cdt::mesh()) or from TinData (Mesh::fromTinData). Immutable once built.
 class Mesh {
@@ -142,9 +162,12 @@ class Mesh {
   static Mesh build(std::vector<Point3> points, std::vector<std::uint32_t> corners,
                     const std::vector<TinData::ConstrainedEdge>& edgeFeatures,
                     std::vector<TinFeature> features, std::string crs);
+  /// Takes over arrays laid out by the caller (see MeshStorage), unchecked.
+  static Mesh adopt(MeshStorage&& storage);
+  /// Gives the arrays back (the inverse of adopt); the mesh is left empty.
+  [[nodiscard]] MeshStorage release() &&;
 
  private:
-  friend class Cdt;  // builds its output mesh in place (no re-linking)
   std::vector<Point3> points_;
   std::vector<std::uint32_t> corners_;       // 3 per triangle
   std::vector<std::uint32_t> twins_;         // per half-edge (HalfedgeId values)

@@ -35,7 +35,7 @@ std::string ValidationReport::summary() const {
   std::ostringstream s;
   s << (ok ? "ok" : "FAILED") << ": " << vertices << " vertices, " << triangles << " triangles, "
     << edges << " edges (" << boundaryEdges << " on the boundary in " << boundaryLoops
-    << " loops), " << constrainedEdges << " constrained";
+    << (boundaryLoops == 1 ? " loop), " : " loops), ") << constrainedEdges << " constrained edges";
   if (!ok) {
     s << "; " << problemCount << " problems";
     for (const auto& p : problems) s << "\n  " << p;
@@ -121,7 +121,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     for (std::size_t steps = 0; !seen[h.value]; ++steps) {
       seen[h.value] = true;
       const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
-      area += (a.x - o.x) * (b.y - o.y) - (b.x - o.x) * (a.y - o.y);
+      area += geometry::orient2dInexact(o, a, b);
       // Next boundary half-edge leaving target(h): rotate clockwise from next(h).
       HalfedgeId g = Mesh::next(h);
       std::size_t guard = 0;

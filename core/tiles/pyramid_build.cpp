@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "core/base/error.hpp"
+#include "core/base/parallel.hpp"
 
 namespace tinsmith::tiles {
 
@@ -29,8 +30,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
           "choose a subtree under a refined tile (tinsmith info lists them)");
     }
   }
-  const unsigned workers = threads > 0 ? static_cast<unsigned>(threads)
-                                       : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned workers = resolveThreads(threads);
 
   PyramidSummary summary;
   std::vector<TileId> level;

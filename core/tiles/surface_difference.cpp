@@ -1,4 +1,5 @@
 #include "core/tiles/surface_difference.hpp"
+#include "core/geometry/predicates.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -18,21 +19,19 @@ struct Plane {
   double inv = 0.0;
   Plane(P2 a_, P2 b_, P2 c_, double za_, double zb_, double zc_)
       : a(a_), b(b_), c(c_), za(za_), zb(zb_), zc(zc_) {
-    const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+    const double det = geometry::orient2dInexact(a, b, c);
     inv = det != 0.0 ? 1.0 / det : 0.0;
   }
   [[nodiscard]] double at(P2 p) const {
-    const double wb = ((p.x - a.x) * (c.y - a.y) - (c.x - a.x) * (p.y - a.y)) * inv;
-    const double wc = ((b.x - a.x) * (p.y - a.y) - (p.x - a.x) * (b.y - a.y)) * inv;
+    const double wb = geometry::orient2dInexact(a, p, c) * inv;
+    const double wc = geometry::orient2dInexact(a, b, p) * inv;
     return za + wb * (zb - za) + wc * (zc - za);
   }
 };
 
 /// Inexact side test (the result is within rounding of the exact overlay,
 /// which is all a bound on a difference needs).
-double sideOf(P2 a, P2 b, P2 p) {
-  return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-}
+double sideOf(P2 a, P2 b, P2 p) { return geometry::orient2dInexact(a, b, p); }
 
 }  // namespace
 

@@ -58,7 +58,7 @@ bool lexLess(const Point3& a, const Point3& b) {
 
 bool isBreakLineKind(FeatureKind kind) {
   return kind == FeatureKind::Road || kind == FeatureKind::River || kind == FeatureKind::Lake ||
-         kind == FeatureKind::Other;
+         kind == FeatureKind::BreakLine || kind == FeatureKind::Other;
 }
 
 std::vector<TerrainLine> extractTerrainLines(const TinData& tin) {

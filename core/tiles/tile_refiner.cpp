@@ -284,13 +284,12 @@ class Refiner {
     p.y = std::clamp(p.y, rect.y0 + margin, rect.y1 - margin);
     // p by its barycentric weights; an edge whose weight is within rounding
     // of zero (or below: p computed a rounding outside) is the edge p is on.
-    const double area =
-        (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
+    const double area = geometry::orient2dInexact(c[0], c[1], c[2]);
     if (!(area > 0)) return false;
     auto weight = [&](Point2 q, int i) {  // of corner i: the edge opposite it is i + 1
       const Point2& a = c[(i + 1) % 3];
       const Point2& b = c[(i + 2) % 3];
-      return ((b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x)) / area;
+      return geometry::orient2dInexact(a, b, q) / area;
     };
     constexpr double kOnEdge = 1e-9;
     int edge = -1;

@@ -9,6 +9,7 @@
 #include "core/fit/least_squares.hpp"
 #include "core/surface/surface.hpp"
 #include "core/tiles/tile_refiner.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::tiles {
 
@@ -89,7 +90,7 @@ FitData fitData(const TinData& tin) {
     const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
     // About one sample per spacing² of area (a barycentric grid of n steps
     // has n²/2 points): a long sliver on the hull gets a few, not thousands.
-    const double area = 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+    const double area = 0.5 * std::abs(geometry::orient2dInexact(a, b, c));
     const int n = static_cast<int>(std::min(64.0, std::ceil(std::sqrt(2 * area) / spacing)));
     for (int i = 1; i < n; ++i) {
       for (int j = 1; i + j < n; ++j) {

@@ -28,15 +28,18 @@ enum class FeatureKind : std::uint8_t {
   Boundary,    ///< the outer boundary of the TIN's domain
   Hole,        ///< a void: triangles inside are removed
   Raster,      ///< points from a DEM layer
+  BreakLine,   ///< a break line without a named role (`tinsmith tin --breaklines`)
 };
 
 /// When constraints cross or points merge, z comes from the feature with the
-/// higher priority: river > road > lake > contour > everything else.
+/// higher priority: river > road > lake > break line > contour > spot height
+/// > everything else. A line's z therefore wins over a point it passes through.
 constexpr int constraintPriority(FeatureKind kind) {
   switch (kind) {
-    case FeatureKind::River: return 5;
-    case FeatureKind::Road: return 4;
-    case FeatureKind::Lake: return 3;
+    case FeatureKind::River: return 6;
+    case FeatureKind::Road: return 5;
+    case FeatureKind::Lake: return 4;
+    case FeatureKind::BreakLine: return 3;
     case FeatureKind::Contour: return 2;
     case FeatureKind::SpotHeight: return 1;
     default: return 0;

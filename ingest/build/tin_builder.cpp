@@ -121,6 +121,7 @@ bool takesLines(FeatureKind kind) {
     case FeatureKind::Lake:
     case FeatureKind::Boundary:
     case FeatureKind::Hole:
+    case FeatureKind::BreakLine:
       return true;
     default:
       return false;

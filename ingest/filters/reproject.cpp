@@ -5,14 +5,12 @@
 
 #include <array>
 #include <atomic>
-#include <exception>
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <thread>
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/base/parallel.hpp"
 #include "ingest/base/gdal_runtime.hpp"
 
 namespace tinsmith::ingest {
@@ -112,46 +110,33 @@ void reprojectLayer(IngestedLayer& layer, const std::string& targetCrs, const Pr
   };
   std::vector<std::optional<Failure>> failures(units.size());
   std::atomic<std::size_t> next{0};
-  std::exception_ptr workerError;
-  std::mutex errorMutex;
   // Each thread makes its own transformation: PROJ objects are not shared
   // between threads.
   auto work = [&] {
-    try {
-      const CrsTransform transform(layer.crs, targetCrs, where);
-      for (std::size_t u = next++; u < units.size(); u = next++) {
-        const Unit& unit = units[u];
-        if (unit.points) {
-          const auto bad =
-              transform.transform(layer.points.data() + unit.begin, unit.end - unit.begin);
-          if (bad >= 0) {
-            const auto i = unit.begin + static_cast<std::size_t>(bad);
-            failures[u] = Failure{layer.pointIds[i], layer.points[i]};
-          }
-          continue;
+    const CrsTransform transform(layer.crs, targetCrs, where);
+    for (std::size_t u = next++; u < units.size(); u = next++) {
+      const Unit& unit = units[u];
+      if (unit.points) {
+        const auto bad =
+            transform.transform(layer.points.data() + unit.begin, unit.end - unit.begin);
+        if (bad >= 0) {
+          const auto i = unit.begin + static_cast<std::size_t>(bad);
+          failures[u] = Failure{layer.pointIds[i], layer.points[i]};
         }
-        for (std::size_t f = unit.begin; f < unit.end && !failures[u]; ++f) {
-          auto& v = layer.features[f].vertices;
-          const auto bad = transform.transform(v.data(), v.size());
-          if (bad >= 0)
-            failures[u] = Failure{layer.features[f].fid, v[static_cast<std::size_t>(bad)]};
-        }
+        continue;
       }
-    } catch (...) {
-      const std::lock_guard lock(errorMutex);
-      if (!workerError) workerError = std::current_exception();
+      for (std::size_t f = unit.begin; f < unit.end && !failures[u]; ++f) {
+        auto& v = layer.features[f].vertices;
+        const auto bad = transform.transform(v.data(), v.size());
+        if (bad >= 0)
+          failures[u] = Failure{layer.features[f].fid, v[static_cast<std::size_t>(bad)]};
+      }
     }
   };
   const std::string detail = layer.config.name;
   const auto total = static_cast<std::uint64_t>(layer.vertexCount());
   reportProgress(progress, "filters.reproject", detail, 0, total);
-  const unsigned threads = std::min<unsigned>(
-      {std::max(1u, std::thread::hardware_concurrency()), 8u, static_cast<unsigned>(units.size())});
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (workerError) std::rethrow_exception(workerError);
+  runWorkers(std::min<unsigned>({resolveThreads(0), 8u, static_cast<unsigned>(units.size())}), work);
   for (const auto& failure : failures) {
     if (!failure) continue;
     throw inputError("cannot be transformed into the project CRS " + targetCrs + " (point " +

@@ -18,7 +18,7 @@ namespace tinsmith::ingest {
 namespace {
 
 constexpr std::array<std::uint8_t, 8> kMagic = {0x89, 'T', 'I', 'N', 0x0D, 0x0A, 0x1A, 0x0A};
-constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(FeatureKind::Raster);
+constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(FeatureKind::BreakLine);
 
 // CRC-32 tables for slicing by 8 (eight bytes per step; table 0 is the
 // classic byte-wise table, table k advances a byte by k more zero bytes).
@@ -239,6 +239,7 @@ std::string_view featureKindName(FeatureKind kind) {
     case FeatureKind::Boundary: return "boundary";
     case FeatureKind::Hole: return "hole";
     case FeatureKind::Raster: return "raster";
+    case FeatureKind::BreakLine: return "breakline";
   }
   return "unknown";
 }

@@ -9,6 +9,7 @@
 
 #include "ingest/tinfile/tin_file.hpp"
 #include "ingest/tinfile/tin_view.hpp"
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::ingest {
 
@@ -41,7 +42,7 @@ void summariseGeometry(TinSummary& s, const View& tin) {
     const auto& a = vertices[t[0]];
     const auto& b = vertices[t[1]];
     const auto& c = vertices[t[2]];
-    s.area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
+    s.area += 0.5 * geometry::orient2dInexact(a, b, c);
   }
 }
 

@@ -1,7 +1,10 @@
 #include "server/app/elevation.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <vector>
+
+#include "core/base/error.hpp"
 
 namespace tinsmith::server {
 
@@ -44,6 +47,16 @@ Json zValue(const Tileset& tileset, Point2 p) {
   return s ? Json(s->z) : Json(nullptr);
 }
 
+/// The direction the slope faces (downhill), degrees clockwise from the
+/// project CRS's grid north in [0, 360); null where the plane is level.
+Json aspectOf(const Point3& normal) {
+  if (normal.x == 0 && normal.y == 0) return nullptr;
+  // normal ∝ (−∂z/∂x, −∂z/∂y, 1): its x, y point downhill.
+  double degrees = std::atan2(normal.x, normal.y) * 180 / std::numbers::pi;
+  if (degrees < 0) degrees += 360;
+  return degrees >= 360 ? 0.0 : degrees;
+}
+
 Json pointRecord(const Tileset& tileset, const AskedPoint& p) {
   Json j;
   j["x"] = p.xy.x;
@@ -52,7 +65,24 @@ Json pointRecord(const Tileset& tileset, const AskedPoint& p) {
     j["lon"] = p.lonlat->x;
     j["lat"] = p.lonlat->y;
   }
-  j["z"] = zValue(tileset, p.xy);
+  const auto s = tileset.surface().sample(p.xy);
+  if (!s) {
+    j["z"] = nullptr;
+    return j;
+  }
+  j["z"] = s->z;
+  j["slope"] = s->slopeDegrees;
+  j["aspect"] = aspectOf(s->normal);
+  // The height the tiles place this point at (geoid applied), for comparing
+  // with what a 3-D viewer picks; left out when the store's CRS cannot be
+  // converted.
+  try {
+    const Point3 point{p.xy.x, p.xy.y, s->z};
+    encode::Geodetic g;
+    tileset.toGeodetic({&point, 1}, {&g, 1});
+    if (std::isfinite(g.height)) j["ellipsoidalHeight"] = g.height;
+  } catch (const Error&) {
+  }
   return j;
 }
 

@@ -30,10 +30,15 @@ struct ParameterError : std::runtime_error {
 /// At most this many points in one batch, samples in one profile.
 inline constexpr std::size_t kMaxPoints = 10'000;
 
-/// GET …/elevation?x=&y= or ?lon=&lat=: {"x","y"[,"lon","lat"],"z"}; z null off the TIN.
+/// GET …/elevation?x=&y= or ?lon=&lat=: {"x","y"[,"lon","lat"],"z","slope",
+/// "aspect","ellipsoidalHeight"}; z null (and nothing after it) off the TIN.
+/// slope: of the TIN triangle under the point, degrees from level; aspect:
+/// the way it faces (downhill), degrees clockwise from the project CRS's grid
+/// north, null where level; ellipsoidalHeight: z as the tiles place it (plus
+/// the store's geoid undulation, if any), metres above WGS84's ellipsoid.
 nlohmann::ordered_json elevationAt(const Tileset& tileset, const RequestTarget& query);
 /// POST …/elevation {"points": [[x, y], …], "crs": "project" | "lonlat"}:
-/// {"crs", "points": [{"x","y","z"}, …]}.
+/// {"crs", "points": [{"x","y","z",…}, …]}, each point as the GET answers it.
 nlohmann::ordered_json elevationBatch(const Tileset& tileset, const std::string& body);
 /// GET …/profile?line=x,y;x,y;…[&spacing=S] (or lonlat=lon,lat;…), or POST
 /// {"line": [[x, y], …], "spacing": S, "crs": …}: samples at every multiple

@@ -167,6 +167,14 @@ const std::map<std::string, Apply>& serverKeys() {
            r.fail("server.log_format must be \"text\" or \"json\" (got \"" + name + "\")",
                   lineOf(n));
        }},
+      {"viewer",
+       [](const Reader& r, const std::string& k, const toml::node& n) {
+         fs::path p = r.string(k, n);
+         if (!p.empty() && p.is_relative()) p = r.file.parent_path() / p;
+         r.settings.viewer = p.lexically_normal().string();
+       }},
+      {"base_path", [](const Reader& r, const std::string& k,
+                       const toml::node& n) { r.settings.basePath = r.string(k, n); }},
       {"on_demand", [](const Reader& r, const std::string& k,
                        const toml::node& n) { r.settings.onDemand = r.boolean(k, n); }},
   };

@@ -8,6 +8,8 @@
 //   read_timeout = 10.0       idle_timeout = 30.0  reload = 2.0
 //   quiet = false             log_format = "text"  # or "json"
 //   on_demand = false
+//   viewer = "viewer"         # a folder, relative to the config's folder
+//   base_path = "/terrain"
 //
 // The file may be a whole build config (config/red-butte.toml): only its
 // [server] table is read, and its other top-level tables must be ones a
@@ -42,6 +44,8 @@ struct ServerSettings {
   bool quiet = false;
   LogFormat logFormat = LogFormat::Text;
   bool onDemand = false;
+  std::string viewer;    ///< the viewer's folder; "": the defaults
+  std::string basePath;  ///< "" or a path prefix, as --base-path takes it
 };
 
 /// Reads the [server] table of the TOML file `file` into `settings`: each

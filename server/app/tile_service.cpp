@@ -1,6 +1,7 @@
 #include "server/app/tile_service.hpp"
 
 #include "core/base/error.hpp"
+#include "server/app/break_lines.hpp"
 #include "core/tiles/tileset_json.hpp"
 #include "server/app/elevation.hpp"
 #include "server/app/index_page.hpp"
@@ -29,7 +30,58 @@ Response internalFailure(ErrorKind kind, const std::string& what) {
   return r;
 }
 
+Response redirect(const std::string& location) {
+  Response r = errorResponse(301, ErrorKind::Input, "moved to " + location);
+  r.addHeader("Location", location);
+  return r;
+}
+
+/// The part of `target` under `base`: "/…" for "/base/…" (all of it when
+/// base is ""), "" for "/base" and "/base?…" (to be redirected to "/base/"),
+/// nullopt when the target is not under base.
+std::optional<std::string_view> underBase(std::string_view target, const std::string& base) {
+  if (base.empty()) return target;
+  if (!target.starts_with(base)) return std::nullopt;
+  target.remove_prefix(base.size());
+  if (target.empty() || target.front() == '?') return std::string_view{};
+  if (target.front() != '/') return std::nullopt;  // "/basement" is not under "/base"
+  return target;
+}
+
+constexpr const char* kNoViewer =
+    "The viewer is not installed, so this page only lists what the server holds. "
+    "Install its files with tools/setup.sh (npm ci in server/viewer) and restart, "
+    "or give tinsmith serve --viewer DIR (a folder holding index.html and node_modules; "
+    "the Docker image has it in /usr/share/tinsmith/viewer).";
+constexpr const char* kNoThree =
+    "The three.js viewer's libraries (three, 3d-tiles-renderer) are not installed: "
+    "run tools/setup.sh (npm ci in server/viewer), or give tinsmith serve --viewer DIR.";
+
 }  // namespace
+
+std::string normalizeBasePath(std::string_view text) {
+  std::string out;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t slash = text.find('/', at);
+    const std::string_view segment = text.substr(at, slash == std::string_view::npos ? slash : slash - at);
+    at = slash == std::string_view::npos ? text.size() : slash + 1;
+    if (segment.empty()) {
+      if (at == 1 || at == text.size()) continue;  // a leading or trailing '/'
+      throw usageError("--base-path '" + std::string(text) + "' has an empty segment", "write /a/b");
+    }
+    const bool ok = segment.size() <= 64 && segment != "." && segment != ".." &&
+                    segment.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                              "0123456789._~-") == std::string_view::npos;
+    if (!ok)
+      throw usageError("--base-path '" + std::string(text) + "': '" + std::string(segment) +
+                           "' is not a plain path segment",
+                       "use letters, digits and . _ ~ - between the slashes");
+    out += "/";
+    out += segment;
+  }
+  return out;
+}
 
 TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
     : catalog_(catalog),
@@ -47,9 +99,17 @@ std::shared_ptr<const TileService::Listing> TileService::listing() {
   const auto tilesets = catalog_.tilesets();
   nlohmann::ordered_json list;
   list["tilesets"] = nlohmann::ordered_json::array();
-  for (const auto& t : tilesets) list["tilesets"].push_back(t->summary());
+  for (const auto& t : tilesets) {
+    auto summary = t->summary();
+    if (!options_.basePath.empty() && summary.contains("links"))
+      for (auto& [name, link] : summary["links"].items())
+        if (link.is_string()) link = options_.basePath + link.get<std::string>();
+    list["tilesets"].push_back(std::move(summary));
+  }
   fresh->tilesets = makeContent(list.dump(2) + "\n", true);
-  fresh->index = makeContent(indexPageHtml(tilesets), true);
+  const bool cesium = options_.viewer && options_.viewer->hasCesium();
+  fresh->index = makeContent(indexPageHtml(tilesets, options_.basePath, cesium ? "" : kNoViewer), true);
+  fresh->threeFallback = makeContent(indexPageHtml(tilesets, options_.basePath, kNoThree), true);
   listing_ = std::move(fresh);
   return listing_;
 }
@@ -58,8 +118,14 @@ Response TileService::handle(const Request& request) {
   Response response;
   RouteKind kind = RouteKind::Unknown;
   try {
-    const auto target = parseRequestTarget(request.target);
-    if (!target) {
+    const auto rest = underBase(request.target, options_.basePath);
+    const auto target = rest && !rest->empty() ? parseRequestTarget(*rest) : std::nullopt;
+    if (!rest) {
+      response = notFound("this server answers under " + options_.basePath + "/ only");
+    } else if (rest->empty() && !options_.basePath.empty()) {
+      kind = RouteKind::Index;
+      response = redirect(options_.basePath + "/" + request.target.substr(options_.basePath.size()));
+    } else if (!target) {
       response = errorResponse(400, ErrorKind::Input,
                                "malformed request target (bad escape, '..', '\\', NUL or "
                                "control byte, empty segment)",
@@ -123,7 +189,13 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
 
   switch (route.kind) {
     case RouteKind::Index:
+      if (options_.viewer && options_.viewer->hasCesium()) return serveViewer(request, "viewer/index.html", true);
       return serveContent(request, *listing()->index, "text/html; charset=utf-8", "no-cache", false);
+    case RouteKind::ThreePage:
+      if (options_.viewer && options_.viewer->hasThree()) return serveViewer(request, "viewer/three.html", true);
+      return serveContent(request, *listing()->threeFallback, "text/html; charset=utf-8", "no-cache",
+                          false);
+    case RouteKind::ViewerAsset: return serveViewer(request, route.asset, false);
     case RouteKind::Health: {
       Response r;
       r.addHeader("Content-Type", kJson);
@@ -164,6 +236,10 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
       if (!tileset->hasTin())
         return notFound("tileset '" + tileset->id() + "' carries no TIN, so it has no elevations");
       break;
+    case RouteKind::Lines:
+      if (!tileset->hasTin())
+        return notFound("tileset '" + tileset->id() + "' carries no TIN, so it has no break lines");
+      return serveLines(request, *tileset);
     default: break;
   }
   switch (route.kind) {
@@ -207,6 +283,27 @@ Response TileService::serveStored(const Request& request, const Tileset& tileset
                             tile ? kTileCacheControl : kTilesetCacheControl, tile);
   r.cacheHit = hit;
   return r;
+}
+
+Response TileService::serveViewer(const Request& request, const std::string& asset, bool page) {
+  const ViewerAssets::Asset* found = options_.viewer ? options_.viewer->find(asset) : nullptr;
+  if (!found)
+    return notFound(options_.viewer ? "the viewer has no file " + asset
+                                    : std::string("the viewer is not installed (see /)"));
+  const auto content = options_.viewer->content(*found);
+  if (!content) return internalFailure(ErrorKind::Io, "cannot read " + found->file.string());
+  return serveContent(request, *content, found->contentType,
+                      page || !found->library ? kPageCacheControl : kLibraryCacheControl, false);
+}
+
+Response TileService::serveLines(const Request& request, const Tileset& tileset) {
+  const std::string cacheKey = std::to_string(tileset.generation()) + "/lines.geojson";
+  auto content = cache_.find(cacheKey);
+  if (!content) {
+    content = makeContent(breakLinesGeoJson(tileset).dump() + "\n", true);
+    cache_.insert(cacheKey, content);
+  }
+  return serveContent(request, *content, "application/geo+json", kTilesetCacheControl, false);
 }
 
 Response TileService::serveJson(const Request& request, const std::string& json,

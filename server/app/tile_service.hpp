@@ -16,6 +16,7 @@
 #include "server/app/metrics.hpp"
 #include "server/app/on_demand.hpp"
 #include "server/app/tileset_catalog.hpp"
+#include "server/app/viewer_assets.hpp"
 #include "server/http/message.hpp"
 
 namespace tinsmith::server {
@@ -27,7 +28,19 @@ struct ServiceOptions {
   bool onDemand = false;
   /// Where on-demand notices go (a store kept in memory only); null: nowhere.
   std::FILE* notices = stderr;
+  /// The viewer's pages and libraries (/, /three, /viewer/…); null: none,
+  /// and "/" lists the stores and says what to install.
+  std::shared_ptr<const ViewerAssets> viewer;
+  /// "" or a path prefix ("/maps/terrain": no trailing '/') under which
+  /// every route answers (a reverse proxy's location); see
+  /// normalizeBasePath().
+  std::string basePath;
 };
+
+/// A --base-path value as ServiceOptions keeps it: "" for "" or "/";
+/// "/a/b" for "/a/b/" or "a/b". Throws usageError unless every segment is
+/// 1-64 of [A-Za-z0-9._~-] and not "." or "..".
+std::string normalizeBasePath(std::string_view text);
 
 /// Cache-Control values: tiles change only when their store is rebuilt;
 /// tileset files and the list may change with it, so they are short.
@@ -44,7 +57,7 @@ class TileService {
   /// a store in.
   struct Listing {
     std::uint64_t version = 0;
-    std::shared_ptr<const Content> tilesets, index;
+    std::shared_ptr<const Content> tilesets, index, threeFallback;
   };
   std::shared_ptr<const Listing> listing();
 
@@ -54,6 +67,8 @@ class TileService {
                        const tiles::TileId* tile);
   Response serveContent(const Request& request, const Content& content, const char* contentType,
                         const char* cacheControl, bool ranges) const;
+  Response serveViewer(const Request& request, const std::string& asset, bool page);
+  Response serveLines(const Request& request, const Tileset& tileset);
   Response serveJson(const Request& request, const std::string& json, const char* cacheControl) const;
   void addCors(Response& response) const;
 

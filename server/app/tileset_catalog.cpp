@@ -120,6 +120,9 @@ Tileset::Tileset(std::string id, const fs::path& path)
   const nlohmann::json::json_pointer crsAt("/tin/crs");
   if (build.is_object() && build.contains(crsAt) && build.at(crsAt).is_string())
     crs_ = build.at(crsAt).get<std::string>();
+  const nlohmann::json::json_pointer geoidAt("/options/geoid");
+  if (build.is_object() && build.contains(geoidAt) && build.at(geoidAt).is_string())
+    geoid_ = build.at(geoidAt).get<std::string>();
   maxZoom_ = static_cast<int>(std::clamp(number(build, "/options/maxZoom").value_or(kMaxZoom), 0.0,
                                          static_cast<double>(kMaxZoom)));
 
@@ -148,7 +151,8 @@ Tileset::Tileset(std::string id, const fs::path& path)
   summary_["elevation"] = hasTin_;
   summary_["links"] = {{"tileset", "/tilesets/" + id_ + "/tileset.json"},
                        {"elevation", "/tilesets/" + id_ + "/elevation"},
-                       {"profile", "/tilesets/" + id_ + "/profile"}};
+                       {"profile", "/tilesets/" + id_ + "/profile"},
+                       {"lines", "/tilesets/" + id_ + "/lines.geojson"}};
 }
 
 Tileset::~Tileset() {
@@ -262,6 +266,16 @@ Point2 Tileset::fromLonLat(double lon, double lat) const {
   if (fromLonLat_->transform(&p, 1) >= 0 || !std::isfinite(p.x) || !std::isfinite(p.y))
     throw inputError("lon, lat cannot be transformed into " + crs_, {}, "check lon and lat");
   return {p.x, p.y};
+}
+
+void Tileset::toGeodetic(std::span<const Point3> in, std::span<encode::Geodetic> out) const {
+  const ingest::ProjGeoReference* reference = nullptr;
+  {
+    std::lock_guard lock(geodeticMutex_);
+    if (!geodetic_) geodetic_ = std::make_unique<ingest::ProjGeoReference>(crs_, geoid_);
+    reference = geodetic_.get();
+  }
+  reference->toGeodetic(in, out);  // thread-safe: a PROJ transformation per thread
 }
 
 TilesetCatalog::TilesetCatalog(const std::vector<fs::path>& paths) {

@@ -22,9 +22,11 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/encode/frames.hpp"
 #include "core/surface/surface.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "ingest/filters/reproject.hpp"
+#include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/tile_rebuild.hpp"
 
@@ -76,6 +78,11 @@ class Tileset {
   /// Longitude, latitude (WGS84 degrees) into the project CRS. Thread-safe.
   /// Throws inputError when PROJ cannot transform the point.
   [[nodiscard]] Point2 fromLonLat(double lon, double lat) const;
+  /// Project x, y, z (the TIN's) into WGS84 lon, lat and height above the
+  /// ellipsoid, as the tiles were placed: through the geoid the store was
+  /// built with (build.json options.geoid), if any. Thread-safe. Throws
+  /// inputError when the store names no CRS or PROJ cannot convert.
+  void toGeodetic(std::span<const Point3> in, std::span<encode::Geodetic> out) const;
 
  private:
   std::string id_;
@@ -98,6 +105,9 @@ class Tileset {
   mutable std::atomic<bool> writesInPlace_{false};
   mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
   mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;
+  std::string geoid_;
+  mutable std::mutex geodeticMutex_;  // guards the creation of geodetic_ only
+  mutable std::unique_ptr<ingest::ProjGeoReference> geodetic_;
 };
 
 class TilesetCatalog {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/base/parallel.hpp"
 #include "server/http/error_status.hpp"
 
 namespace tinsmith::server {
@@ -319,7 +320,7 @@ HttpServer::HttpServer(ServerOptions options, Handler handler, Observer observer
   m.observer = std::move(observer);
   m.connectionObserver = std::move(connections);
   int threads = m.options.threads;
-  if (threads <= 0) threads = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
+  if (threads <= 0) threads = static_cast<int>(resolveThreads(0));
   for (int i = 0; i < threads; ++i) {
     m.contexts.push_back(std::make_unique<asio::io_context>(1));
     m.guards.push_back(asio::make_work_guard(*m.contexts.back()));

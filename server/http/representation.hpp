@@ -40,7 +40,7 @@ bool acceptsBrotli(std::string_view acceptEncoding);  ///< "br"
 /// internalError when zlib fails.
 std::string gzipCompress(std::string_view bytes);
 
-/// `bytes` compressed as brotli (RFC 7932), quality 9. Throws internalError
+/// `bytes` compressed as brotli (RFC 7932), quality 5. Throws internalError
 /// when the encoder fails.
 std::string brotliCompress(std::string_view bytes);
 

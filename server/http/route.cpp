@@ -40,6 +40,9 @@ std::string_view routeName(RouteKind kind) {
     case RouteKind::Tile: return "tile";
     case RouteKind::Elevation: return "elevation";
     case RouteKind::Profile: return "profile";
+    case RouteKind::Lines: return "lines";
+    case RouteKind::ThreePage: return "three_page";
+    case RouteKind::ViewerAsset: return "viewer_asset";
     case RouteKind::Unknown: return "unknown";
   }
   return "unknown";
@@ -71,6 +74,12 @@ std::variant<Route, RouteError> matchRoute(const RequestTarget& target) {
     if (s[0] == "health") route.kind = RouteKind::Health;
     if (s[0] == "metrics") route.kind = RouteKind::Metrics;
     if (s[0] == "tilesets") route.kind = RouteKind::Tilesets;
+    if (s[0] == "three") route.kind = RouteKind::ThreePage;
+    return route;
+  }
+  if (s[0] == "viewer") {
+    route.kind = RouteKind::ViewerAsset;
+    for (const auto& segment : s) route.asset += (route.asset.empty() ? "" : "/") + segment;
     return route;
   }
   if (s[0] != "tilesets" || !isValidTilesetId(s[1])) return route;
@@ -79,6 +88,7 @@ std::variant<Route, RouteError> matchRoute(const RequestTarget& target) {
     if (s[2] == "tileset.json") route.kind = RouteKind::TilesetJson;
     if (s[2] == "elevation") route.kind = RouteKind::Elevation;
     if (s[2] == "profile") route.kind = RouteKind::Profile;
+    if (s[2] == "lines.geojson") route.kind = RouteKind::Lines;
     return route;
   }
   if (s.size() == 6 && (s[2] == "tiles" || s[2] == "tilesets")) {

@@ -10,6 +10,9 @@
 //   /tilesets/{id}/tiles/{z}/{x}/{y}.glb      Tile
 //   /tilesets/{id}/elevation                  Elevation
 //   /tilesets/{id}/profile                    Profile
+//   /tilesets/{id}/lines.geojson              Lines
+//   /three                                    ThreePage (the three.js viewer)
+//   /viewer/…                                 ViewerAsset (a file of the viewer)
 #pragma once
 
 #include <string>
@@ -31,6 +34,9 @@ enum class RouteKind {
   Tile,
   Elevation,
   Profile,
+  Lines,
+  ThreePage,
+  ViewerAsset,
   Unknown,  ///< no route (404); also the metrics label of malformed targets
 };
 inline constexpr int kRouteKinds = static_cast<int>(RouteKind::Unknown) + 1;
@@ -51,6 +57,9 @@ struct Route {
   tiles::TileId tile;   ///< Tile and ExternalTileset
   /// z/x/y are integers but name no tile (z > kMaxZoom, x or y ≥ 2^z): a 404.
   bool outsidePyramid = false;
+  /// ViewerAsset: the decoded segments joined by '/' ("viewer/lib/…"), a
+  /// key for the viewer's table of files, never a file path.
+  std::string asset;
 };
 
 /// A target that names a route shape with a bad part: 400 naming `parameter`.

@@ -14,6 +14,7 @@
 #include "core/base/point.hpp"
 #include "core/fit/least_squares.hpp"
 #include "core/fit/multilevel_fit.hpp"
+#include "tests/support/franke_function.hpp"
 
 namespace tinsmith::fit::testing {
 

@@ -208,7 +208,7 @@ TEST(TinFile, UnwritableTargetIsAnIoErrorAndKeepsTheOldFile) {
 }
 
 TEST(TinFile, FeatureKindNamesRoundTrip) {
-  for (int k = 0; k <= static_cast<int>(FeatureKind::Raster); ++k) {
+  for (int k = 0; k <= static_cast<int>(FeatureKind::BreakLine); ++k) {
     const auto kind = static_cast<FeatureKind>(k);
     EXPECT_EQ(featureKindFromName(featureKindName(kind)), kind);
   }

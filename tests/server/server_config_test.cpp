@@ -51,9 +51,11 @@ reload = 0
 quiet = true
 log_format = "json"
 on_demand = true
+viewer = "viewer"
+base_path = "/maps/terrain"
 )",
                                                      "/etc/tinsmith/site.toml", s);
-  EXPECT_EQ(present.size(), 13u);
+  EXPECT_EQ(present.size(), 15u);
   ASSERT_EQ(s.stores.size(), 2u);
   EXPECT_EQ(s.stores[0], "/etc/tinsmith/stores/a.3dtiles");  // relative to the file
   EXPECT_EQ(s.stores[1], "/srv/b.3dtiles");
@@ -69,6 +71,8 @@ on_demand = true
   EXPECT_TRUE(s.quiet);
   EXPECT_EQ(s.logFormat, server::LogFormat::Json);
   EXPECT_TRUE(s.onDemand);
+  EXPECT_EQ(s.viewer, "/etc/tinsmith/viewer");
+  EXPECT_EQ(s.basePath, "/maps/terrain");
 }
 
 TEST(ServerConfig, KeysLeftOutKeepTheirValuesAndNoTableChangesNothing) {

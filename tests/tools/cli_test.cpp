@@ -40,7 +40,10 @@ TEST(Cli, NoSubcommandIsAUsageError) {
 }
 
 TEST(Cli, UnknownSubcommandOrOptionIsAUsageError) {
-  EXPECT_EQ(runTinsmith("frobnicate").exitCode, 2);
+  const auto unknown = runTinsmith("frobnicate");
+  EXPECT_EQ(unknown.exitCode, 2);
+  EXPECT_NE(unknown.err.find("unknown command 'frobnicate'"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("tin, fit"), std::string::npos) << unknown.err;
   EXPECT_EQ(runTinsmith("--no-such-flag").exitCode, 2);
 }
 

@@ -212,6 +212,25 @@ TEST(TinCli, InfoAndQueryDescribeTheTin) {
   EXPECT_NE(r.err.find("outside the TIN"), std::string::npos) << r.err;
 }
 
+TEST(TinCli, ABreakLineKeepsItsZWhereItPassesThroughASpotHeight) {
+  // Regression: in plain mode points and break lines were both of kind
+  // Other, so at a break-line vertex on an input point the earlier input —
+  // the point — gave the vertex its z and the line was no longer exact.
+  const auto dir = test::scratchDir("cli-line-over-point");
+  writeText(dir / "p.xyz", "0 0 10\n100 0 10\n100 100 10\n0 100 10\n50 50 99\n");
+  writeText(dir / "l.txt", "10 10 20\n50 50 30\n90 90 40\n");
+  const fs::path tin = dir / "out.tin";
+  auto r = runTinsmith("tin -q --points " + (dir / "p.xyz").string() + " --breaklines " +
+                       (dir / "l.txt").string() + " -o " + tin.string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  r = runTinsmith("query " + tin.string() + " 50 50 --json");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["z"].get<double>(), 30.0) << r.out;
+  r = runTinsmith("info " + tin.string() + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["kinds"]["breakline"]["constrained_edges"], 2) << r.out;
+}
+
 TEST(TinCli, QueryOfOnePointOutsideExitsThreeAlsoWithJson) {
   // Regression: with --json a single point outside the TIN exited 0 (z null)
   // where the text mode exits 3. Now both exit 3; the JSON record is still

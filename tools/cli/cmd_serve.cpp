@@ -1,16 +1,20 @@
 // `tinsmith serve`: serve tile stores over HTTP: tilesets, tiles, elevation,
-// a page listing them, health and metrics (DESIGN.md "Server").
+// break lines, the viewer pages, health and metrics (DESIGN.md "Server").
 //   tinsmith serve STORE|FOLDER [MORE…] [--config FILE] [--host H] [--port P]
-//                  [--cors ORIGIN|off] [--cache-mb N] [--threads N] [--quiet]
-//                  [--log-format text|json] [--on-demand] …
+//                  [--cors ORIGIN|off] [--cache-mb N] [--threads N] [--viewer DIR]
+//                  [--base-path /P] [--quiet] [--log-format text|json] [--on-demand] …
 // Every flag is also a key of a config file's [server] table
 // (server/app/server_config.hpp); flags given win over the file.
+// The viewer's files are looked for, when --viewer is not given, beside the
+// executable (../share/tinsmith/viewer), in /usr/share/tinsmith/viewer and in
+// the source tree it was built from (server/viewer, after tools/setup.sh).
 // SIGTERM and SIGINT shut it down gracefully (requests in flight finish) and
 // it exits 0.
 #include <pthread.h>
 #include <signal.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -41,6 +45,23 @@ template <typename T>
 FlagOverride overrides(const CLI::Option* option, T ServerSettings::*member) {
   return {option,
           [member](ServerSettings& to, const ServerSettings& from) { to.*member = from.*member; }};
+}
+
+/// The viewer folder: --viewer as given, else the first usable default;
+/// null when there is none (the server then says what to install).
+std::shared_ptr<const server::ViewerAssets> viewerAssets(const std::string& given) {
+  namespace fs = std::filesystem;
+  if (!given.empty()) return std::make_shared<const server::ViewerAssets>(given);
+  std::vector<fs::path> candidates;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back(self.parent_path().parent_path() / "share" / "tinsmith" / "viewer");
+  candidates.emplace_back("/usr/share/tinsmith/viewer");
+#ifdef TINSMITH_SOURCE_VIEWER_DIR
+  candidates.emplace_back(TINSMITH_SOURCE_VIEWER_DIR);
+#endif
+  const auto root = server::findViewerRoot(candidates);
+  return root ? std::make_shared<const server::ViewerAssets>(*root) : nullptr;
 }
 
 std::chrono::milliseconds seconds(double s) {
@@ -142,12 +163,22 @@ void addServeCommand(CLI::App& app) {
                     "Build tiles the tileset references but the store lacks from the store's "
                     "TIN (once per tile; kept in memory and written into a writable store)"),
       &ServerSettings::onDemand);
+  add(cmd->add_option(
+          "--viewer", flags->viewer,
+          "Folder of the viewer's pages and libraries (default: beside the "
+          "executable, /usr/share/tinsmith/viewer, or the source tree's server/viewer)"),
+      &ServerSettings::viewer);
+  add(cmd->add_option("--base-path", flags->basePath,
+                      "Answer under this path prefix (e.g. /terrain, behind a reverse proxy)"),
+      &ServerSettings::basePath);
   cmd->footer(
-      "Routes: / (what is served), /health, /metrics (Prometheus), /tilesets,\n"
+      "Routes: / (the CesiumJS viewer), /three (three.js viewer), /viewer/… (their\n"
+      "files), /health, /metrics (Prometheus), /tilesets,\n"
       "/tilesets/ID/tileset.json, /tilesets/ID/tilesets/Z/X/Y.json,\n"
       "/tilesets/ID/tiles/Z/X/Y.glb, /tilesets/ID/elevation?x=&y= (or lon=&lat=; POST\n"
       "{\"points\": [[x, y], …]}), /tilesets/ID/profile?line=x,y;x,y&spacing=S (or\n"
-      "lonlat=; POST {\"line\": …}). ID is a store's file name without .3dtiles.\n"
+      "lonlat=; POST {\"line\": …}), /tilesets/ID/lines.geojson (break lines, GeoJSON).\n"
+      "ID is a store's file name without .3dtiles.\n"
       "Config: --config FILE reads FILE's [server] table, e.g.\n"
       "  [server]\n"
       "  stores = [\"../out/red-butte.3dtiles\"]\n"
@@ -180,9 +211,22 @@ void addServeCommand(CLI::App& app) {
     o.log = opt.quiet ? nullptr : stderr;
     o.logFormat = opt.logFormat;
     o.reloadInterval = seconds(opt.reloadSeconds);
+    o.service.basePath = server::normalizeBasePath(opt.basePath);
+    o.service.viewer = viewerAssets(opt.viewer);
+    const auto viewer = o.service.viewer;
+    const std::string base = o.service.basePath;
     server::TileServer server(std::move(o));
     std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
-              << " tileset(s) on http://" << opt.host << ":" << server.port() << "/" << std::endl;
+              << " tileset(s) on http://" << opt.host << ":" << server.port() << base << "/"
+              << std::endl;
+    if (!viewer || !viewer->hasCesium())
+      std::cerr << "tinsmith serve: the viewer is not installed (run tools/setup.sh, or give "
+                   "--viewer DIR); "
+                   "/ lists the stores"
+                << std::endl;
+    else
+      std::cerr << "tinsmith serve: viewer from " << viewer->root().string() << " ("
+                << viewer->size() << " files)" << std::endl;
     serveUntilSignalled(server);
     if (!opt.quiet) std::cerr << "tinsmith serve: stopped" << std::endl;
   });

@@ -60,7 +60,8 @@ bool isTextPolylineFile(const std::filesystem::path& p) {
   return ext == ".txt" || ext == ".xyz" || ext == ".pl" || ext == ".poly" || ext == ".lines";
 }
 
-// Plain mode: every input as it is, all features of kind Other.
+// Plain mode: every input as it is; points of kind Other, break lines of kind
+// BreakLine, so a line keeps its z where it passes through a point.
 std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
   std::vector<ingest::BuildLayer> layers;
   for (const auto& file : o.points) {
@@ -88,7 +89,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
     ingest::BuildLayer layer;
     layer.name = std::filesystem::path(file).filename().string();
     layer.kindName = "breaklines";
-    layer.kind = FeatureKind::Other;
+    layer.kind = FeatureKind::BreakLine;
     layer.source = file;
     if (isTextPolylineFile(file)) {
       for (auto& pl : ingest::readTextPolylines(file))

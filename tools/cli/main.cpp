@@ -49,6 +49,19 @@ int main(int argc, char** argv) {
   addQueryCommand(app);
   addValidateCommand(app);
 
+  // CLI11 reads an unknown first word as a stray argument and says only that
+  // "a subcommand is required"; name the word and the commands instead.
+  std::string names;
+  bool known = false;
+  for (const auto* sub : app.get_subcommands({})) {
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+    known = known || (argc > 1 && sub->get_name() == argv[1]);
+  }
+  if (argc > 1 && argv[1][0] != '-' && !known) {
+    std::cerr << "ERROR: unknown command '" << argv[1] << "' — use one of " << names
+              << " (tinsmith --help lists them)\n";
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -20,6 +20,7 @@
 
 #include "core/base/error.hpp"
 #include "core/fit/multilevel_fit.hpp"
+#include "tests/support/franke_function.hpp"
 
 using namespace tinsmith;
 using namespace tinsmith::fit;

@@ -1,0 +1,474 @@
+// The two-halves build of the CDT's first bulk of points (see
+// CdtOptions::splitMinPoints).
+//
+// The first bulk of points may be triangulated as two halves on either side
+// of a vertical line x = xr, each on its own thread, and then merged by
+// repairing the seam between them:
+//   * a triangle of DT(left) whose circumcircle lies strictly left of every
+//     right point is a triangle of DT(all) — "safe" (likewise on the right);
+//   * every other triangle of DT(all) has its corners among the corners of
+//     the unsafe triangles (ghosts count as unsafe): the seam set S;
+//   * so DT(all) = safe left ∪ safe right ∪ the triangles of DT(S) in the
+//     hole the safe ones leave. DT(S) is built with the hole's border edges
+//     as constraints (they are Delaunay edges of all the points), which
+//     keeps the two sides consistent on cocircular input.
+// The same holds for constrained triangulations when each half carries only
+// constraints with both ends on its side (they stay there, so they cannot
+// cross the other side's safe triangles) and DT(S) also keeps the
+// constrained edges inside the hole; constraints across the split go in
+// afterwards.
+// The split depends on the points only, never on the thread count, so
+// neither does the mesh.
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <utility>
+
+#include "core/base/error.hpp"
+#include "core/cdt/constraints.hpp"
+#include "core/cdt/spatial_order.hpp"
+
+namespace tinsmith::cdt {
+namespace {
+
+/// x-extent [lo, hi] of the circumcircle of (a, b, c), CCW, widened by a
+/// bound on its rounding error; false when the triangle is too flat for the
+/// bound to hold (callers then treat it as unsafe).
+bool circleXRange(const Point2& a, const Point2& b, const Point2& c, double& lo, double& hi) {
+  constexpr double eps = 0x1p-52;
+  const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+  const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+  const double d = 2 * (bx * cy - by * cx);
+  const double dErr = 16 * eps * (std::abs(bx * cy) + std::abs(by * cx));
+  if (!(d > 4 * dErr)) return false;
+  const double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
+  // |error| of each centre coordinate: numerator rounding plus the relative
+  // error of d (at most a third here), with a factor 2 to spare.
+  const double uxErr = 2 * (16 * eps * (std::abs(cy) * b2 + std::abs(by) * c2) / d +
+                            std::abs(ux) * dErr / (d - dErr));
+  const double uyErr = 2 * (16 * eps * (std::abs(bx) * c2 + std::abs(cx) * b2) / d +
+                            std::abs(uy) * dErr / (d - dErr));
+  const double r = std::sqrt(ux * ux + uy * uy);
+  const double slack = uxErr + uxErr + uyErr + 8 * eps * (std::abs(a.x) + std::abs(ux) + r);
+  lo = a.x + ux - r - slack;
+  hi = a.x + ux + r + slack;
+  return std::isfinite(lo) && std::isfinite(hi);
+}
+
+/// A border edge between a safe triangle and the hole: u→v (global ids) has
+/// the hole on its left; `safe` is the twin half-edge in the safe triangle
+/// (in this triangulation for the left half, in `right` for the right half).
+struct SeamBorder {
+  std::uint32_t u, v, safe;
+  bool rightHalf;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> ConstrainedTriangulation::unsafeTriangles(bool leftHalf, double leftMax,
+                                                                    double rightMin) const {
+  std::vector<std::uint8_t> unsafe(triCount(), 0);
+  std::vector<std::uint8_t> tested(triCount(), 0);
+  std::vector<std::uint32_t> todo;
+  for (std::uint32_t t = 0; t < triCount(); ++t) {
+    if (isGhost(t)) {
+      unsafe[t] = tested[t] = 1;
+      todo.push_back(t);
+    }
+  }
+  while (!todo.empty()) {
+    const std::uint32_t t = todo.back();
+    todo.pop_back();
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t n = opp[3 * t + i] / 3;
+      if (tested[n]) continue;
+      tested[n] = 1;
+      double lo = 0, hi = 0;
+      const bool known = circleXRange(xy[tv[3 * n]], xy[tv[3 * n + 1]], xy[tv[3 * n + 2]], lo, hi);
+      if (!known || (leftHalf ? !(hi < rightMin) : !(lo > leftMax))) {
+        unsafe[n] = 1;
+        todo.push_back(n);
+      }
+    }
+  }
+  return unsafe;
+}
+
+double ConstrainedTriangulation::splitValue(const std::vector<std::uint32_t>& order) const {
+  std::vector<double> xs(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) xs[i] = xy[order[i]].x;
+  const std::size_t mid = xs.size() / 2;
+  std::nth_element(xs.begin(), xs.begin() + static_cast<std::ptrdiff_t>(mid), xs.end());
+  const double median = xs[mid];
+  const double tol = options.snapTolerance;
+  if (!(tol > 0)) return median;
+  // The gap wider than tol in x nearest to the median, from the sorted
+  // values around it.
+  for (double window = 64 * tol; window <= 1e6 * tol; window *= 64) {
+    std::vector<double> near;
+    for (double x : xs) {
+      if (std::abs(x - median) <= window) near.push_back(x);
+    }
+    if (near.size() > xs.size() / 4) break;  // too dense around the median
+    std::sort(near.begin(), near.end());
+    double best = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t i = 0; i + 1 < near.size(); ++i) {
+      if (near[i + 1] - near[i] > tol &&
+          !(std::abs(near[i + 1] - median) >= std::abs(best - median))) {
+        best = near[i + 1];
+      }
+    }
+    if (!std::isnan(best)) return best;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& order) {
+  const double split = splitValue(order);
+  if (std::isnan(split)) return false;
+  std::vector<std::uint32_t> leftOrder, rightOrder;
+  leftOrder.reserve(order.size() / 2 + 1);
+  rightOrder.reserve(order.size() / 2 + 1);
+  double leftMax = -INFINITY, rightMin = INFINITY;
+  for (std::uint32_t v : order) {
+    const double x = xy[v].x;
+    if (x < split) {
+      leftOrder.push_back(v);
+      leftMax = std::max(leftMax, x);
+    } else {
+      rightOrder.push_back(v);
+      rightMin = std::min(rightMin, x);
+    }
+  }
+  std::size_t ib = 0, ic = 0;
+  if (leftOrder.size() < order.size() / 8 || rightOrder.size() < order.size() / 8 ||
+      !findFirstTriangle(leftOrder, ib, ic) || !findFirstTriangle(rightOrder, ib, ic)) {
+    return false;
+  }
+  std::vector<std::uint32_t>().swap(order);
+
+  // The right half in a triangulation of its own, its vertices numbered in input
+  // order (so that merge ties still go to the earlier input).
+  std::vector<std::uint32_t> localOf(xy.size(), kNone);
+  for (std::uint32_t v : rightOrder) localOf[v] = 0;
+  std::vector<std::uint32_t> rightGlobal;
+  rightGlobal.reserve(rightOrder.size());
+  for (std::uint32_t g = 0; g < localOf.size(); ++g) {
+    if (localOf[g] == kNone) continue;
+    localOf[g] = static_cast<std::uint32_t>(rightGlobal.size());
+    rightGlobal.push_back(g);
+  }
+  for (std::uint32_t& v : rightOrder) v = localOf[v];
+  // Segments with both ends on one side go in with that half (a segment
+  // lies on the side of its ends); the rest after the merge.
+  std::vector<std::uint32_t> leftSegments, rightSegments, seamSegments;
+  for (auto k = static_cast<std::uint32_t>(segmentsDone); k < segments.size(); ++k) {
+    const bool leftA = xy[segments[k].a].x < split, leftB = xy[segments[k].b].x < split;
+    (leftA && leftB ? leftSegments : !leftA && !leftB ? rightSegments : seamSegments).push_back(k);
+  }
+  std::vector<Segment> rightSegmentList;
+  rightSegmentList.reserve(rightSegments.size());
+  for (std::uint32_t k : rightSegments) {
+    Segment sg = segments[k];
+    sg.a = localOf[sg.a];
+    sg.b = localOf[sg.b];
+    rightSegmentList.push_back(sg);
+  }
+  std::vector<std::uint32_t>().swap(localOf);
+  std::vector<Point2> rightXy(rightGlobal.size());
+  std::vector<double> rightZ(rightGlobal.size());
+  std::vector<FeatureId> rightFeature(rightGlobal.size());
+  for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
+    rightXy[j] = xy[rightGlobal[j]];
+    rightZ[j] = z[rightGlobal[j]];
+    rightFeature[j] = vfeat[rightGlobal[j]];
+  }
+  ConstrainedTriangulation right(options.snapTolerance, rerouteDepthLimit, features,
+                                 std::move(rightXy), std::move(rightZ), std::move(rightFeature),
+                                 std::move(rightSegmentList));
+  right.insertedUpTo = rightGlobal.size();  // inserted below, in rightOrder
+  right.reserveTriangles(trianglesFor(rightOrder.size(), rightSegments.size()));
+  right.edgeFeatures.reserve(rightSegments.size());
+
+  // Each half is triangulated and classified on its own thread.
+  std::vector<std::uint8_t> unsafeLeft, unsafeRight;
+  std::exception_ptr rightError;
+  auto buildRight = [&] {
+    try {
+      right.insertInOrder(rightOrder);
+      right.insertPendingSegments();
+      unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
+    } catch (...) {
+      rightError = std::current_exception();
+    }
+  };
+  auto buildLeft = [&] {
+    insertInOrder(leftOrder);
+    insertSegments(leftSegments);
+    unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
+  };
+  if (threadCount() >= 2) {
+    std::thread worker(buildRight);
+    try {
+      buildLeft();
+    } catch (...) {
+      worker.join();
+      throw;
+    }
+    worker.join();
+  } else {
+    buildLeft();
+    buildRight();
+  }
+  if (rightError) std::rethrow_exception(rightError);
+  std::vector<std::uint32_t>().swap(leftOrder);
+  std::vector<std::uint32_t>().swap(rightOrder);
+
+  // The right half's vertices (its crossings get new global ids), merges,
+  // crossings and constrained edges, in global ids.
+  for (std::size_t j = rightGlobal.size(); j < right.xy.size(); ++j) {
+    rightGlobal.push_back(static_cast<std::uint32_t>(xy.size()));
+    xy.push_back(right.xy[j]);
+    z.push_back(0);
+    vfeat.push_back(kNoFeature);
+    rep.push_back(kNone);
+  }
+  insertedUpTo = xy.size();
+  for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
+    const std::uint32_t g = rightGlobal[j];
+    rep[g] = rightGlobal[right.rep[j]];
+    z[g] = right.z[j];
+    vfeat[g] = right.vfeat[j];
+  }
+  for (const auto& [keep, from] : right.zSource) zSource[rightGlobal[keep]] = rightGlobal[from];
+  for (CdtReport::Merge mg : right.report.merges) {
+    mg.kept = VertexId(rightGlobal[mg.kept.value]);
+    mg.merged = VertexId(rightGlobal[mg.merged.value]);
+    report.merges.push_back(mg);
+  }
+  for (CdtReport::Intersection ev : right.report.intersections) {
+    ev.vertex = VertexId(rightGlobal[ev.vertex.value]);
+    report.intersections.push_back(ev);
+  }
+  deepestReroute = std::max(deepestReroute, right.deepestReroute);
+  for (std::size_t k = 0; k < kCrossingSteps; ++k) crossingSteps[k] += right.crossingSteps[k];
+  if (bend.size() < right.bend.size()) bend.resize(right.bend.size(), 0.0);
+  for (std::size_t g = 0; g < right.bend.size(); ++g) bend[g] += right.bend[g];
+  report.dropped.insert(report.dropped.end(), right.report.dropped.begin(),
+                        right.report.dropped.end());
+  right.edgeFeatures.forEach([&](std::uint64_t key, EdgeFeatureMap::View fs) {
+    const std::uint64_t global = edgeKey(rightGlobal[key >> 32], rightGlobal[key & 0xffffffffu]);
+    for (FeatureId f : fs) edgeFeatures.add(global, f);
+  });
+  // Only the right half's triangles are needed from here on.
+  std::vector<Point2>().swap(right.xy);
+  std::vector<double>().swap(right.z);
+  std::vector<FeatureId>().swap(right.vfeat);
+  std::vector<std::uint32_t>().swap(right.rep);
+  std::vector<std::uint32_t>().swap(right.vhe);
+  right.edgeFeatures = EdgeFeatureMap();
+  right.report = CdtReport();
+
+  mergeHalves(right, rightGlobal, unsafeLeft, unsafeRight);
+  // Vertex half-edges are recomputed when next needed.
+  trackVhe = false;
+  insertSegments(seamSegments);
+  segmentsDone = segments.size();
+  return true;
+}
+
+void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
+                                           const std::vector<std::uint32_t>& rightGlobal,
+                                           const std::vector<std::uint8_t>& unsafeLeft,
+                                           const std::vector<std::uint8_t>& unsafeRight) {
+  // The seam set S (corners of unsafe triangles), numbered in input order,
+  // and the border edges of the hole.
+  std::unordered_map<std::uint32_t, std::uint32_t> seamOf;
+  std::vector<std::uint32_t> seamGlobal;
+  std::vector<SeamBorder> borders;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> inner;  // constrained edges in the hole
+  auto collect = [&](const std::vector<std::uint32_t>& corners,
+                     const std::vector<std::uint32_t>& twins,
+                     const std::vector<std::uint8_t>& constrained,
+                     const std::vector<std::uint8_t>& unsafe, bool rightHalf) {
+    for (std::uint32_t t = 0; t < unsafe.size(); ++t) {
+      if (!unsafe[t]) continue;
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        std::uint32_t v = corners[3 * t + i];
+        if (v == kInf) continue;
+        if (rightHalf) v = rightGlobal[v];
+        if (seamOf.try_emplace(v, 0).second) seamGlobal.push_back(v);
+        const std::uint32_t h = 3 * t + i, g = twins[h];
+        std::uint32_t w = corners[nxt(h)];
+        if (rightHalf && w != kInf) w = rightGlobal[w];
+        if (!unsafe[g / 3]) {
+          borders.push_back({v, w, g, rightHalf});
+        } else if (constrained[h] && h < g) {
+          inner.emplace_back(v, w);
+        }
+      }
+    }
+  };
+  collect(tv, opp, cons, unsafeLeft, false);
+  collect(right.tv, right.opp, right.cons, unsafeRight, true);
+  std::sort(seamGlobal.begin(), seamGlobal.end());
+  for (std::uint32_t j = 0; j < seamGlobal.size(); ++j) seamOf[seamGlobal[j]] = j;
+
+  // DT(S) with the border edges (feature 0) and the constrained edges in the
+  // hole (feature 1) as constraints.
+  std::vector<Point2> seamXy;
+  seamXy.reserve(seamGlobal.size());
+  for (std::uint32_t g : seamGlobal) seamXy.push_back(xy[g]);
+  std::vector<Segment> seamSegments;
+  seamSegments.reserve(borders.size() + inner.size());
+  for (const SeamBorder& b : borders) seamSegments.push_back({seamOf[b.u], seamOf[b.v], 0});
+  for (const auto& [u, w] : inner) seamSegments.push_back({seamOf[u], seamOf[w], 1});
+  ConstrainedTriangulation seam(
+      0.0, kRerouteDepthLimit,
+      {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}}, std::move(seamXy),
+      std::vector<double>(seamGlobal.size(), 0.0),
+      std::vector<FeatureId>(seamGlobal.size(), kNoFeature), std::move(seamSegments));
+  seam.insertPendingPoints();
+  seam.insertPendingSegments();
+  if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
+      !seam.report.dropped.empty() || !seam.bend.empty()) {
+    throw internalError("the seam between the two halves changed its input");
+  }
+
+  // The hole: DT(S) triangles reachable from the border without crossing it.
+  // (With no safe triangle at all, DT(S) is the whole triangulation.)
+  std::vector<std::uint8_t> inHole(seam.triCount(), borders.empty() ? 1 : 0);
+  std::vector<std::uint32_t> seamHalfedge(borders.size());
+  std::vector<std::uint32_t> todo;
+  for (std::size_t k = 0; k < borders.size(); ++k) {
+    const std::uint32_t h = seam.findHalfedge(seamOf[borders[k].u], seamOf[borders[k].v]);
+    if (h == kNone) throw internalError("a seam border edge is missing");
+    seamHalfedge[k] = h;
+    if (!inHole[h / 3]) {
+      inHole[h / 3] = 1;
+      todo.push_back(h / 3);
+    }
+  }
+  while (!todo.empty()) {
+    const std::uint32_t t = todo.back();
+    todo.pop_back();
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t h = 3 * t + i;
+      if (seam.cons[h]) {
+        const auto fs = seam.edgeFeatures.find(edgeKey(seam.tv[h], seam.tv[nxt(h)]));
+        if (std::find(fs.begin(), fs.end(), FeatureId{0}) != fs.end()) continue;  // border
+      }
+      const std::uint32_t n = seam.opp[h] / 3;
+      if (!inHole[n]) {
+        inHole[n] = 1;
+        todo.push_back(n);
+      }
+    }
+  }
+  for (std::uint32_t h : seamHalfedge) {
+    if (inHole[seam.opp[h] / 3]) throw internalError("the seam hole is not closed");
+  }
+
+  // New slots: freed left slots first, then appended.
+  std::vector<std::uint32_t> freeSlots;
+  for (std::uint32_t t = 0; t < unsafeLeft.size(); ++t) {
+    if (unsafeLeft[t]) {
+      freeSlots.push_back(t);
+      tv[3 * t] = kNone;
+    }
+  }
+  std::size_t used = 0;
+  std::uint32_t appended = triCount();
+  auto takeSlot = [&] { return used < freeSlots.size() ? freeSlots[used++] : appended++; };
+  std::vector<std::uint32_t> rightSlot(right.triCount(), kNone);
+  for (std::uint32_t t = 0; t < right.triCount(); ++t) {
+    if (!unsafeRight[t]) rightSlot[t] = takeSlot();
+  }
+  std::vector<std::uint32_t> seamSlot(seam.triCount(), kNone);
+  for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
+    if (inHole[t]) seamSlot[t] = takeSlot();
+  }
+  // Copies the kept triangles of another triangulation array by array, freeing each
+  // source array once copied (two full copies of the right half's arrays
+  // never coexist); twins outside the kept set are linked through the
+  // borders below.
+  const std::size_t size = 3 * static_cast<std::size_t>(appended);
+  auto copyKept = [&](ConstrainedTriangulation& from, const std::vector<std::uint32_t>& slot,
+                      const std::vector<std::uint32_t>& global) {
+    auto each = [&](const auto& f) {
+      parallelChunks(threadCount(), slot.size(), [&](unsigned, std::size_t b, std::size_t e) {
+        for (std::size_t t = b; t < e; ++t) {
+          if (slot[t] == kNone) continue;
+          for (std::uint32_t i = 0; i < 3; ++i) f(3 * t + i, 3 * std::size_t{slot[t]} + i);
+        }
+      });
+    };
+    tv.resize(size);
+    each([&](std::size_t h, std::size_t out) {
+      const std::uint32_t v = from.tv[h];
+      tv[out] = v == kInf ? kInf : global[v];
+    });
+    std::vector<std::uint32_t>().swap(from.tv);
+    opp.resize(size);
+    each([&](std::size_t h, std::size_t out) {
+      const std::uint32_t g = from.opp[h];
+      opp[out] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+    });
+    std::vector<std::uint32_t>().swap(from.opp);
+    cons.resize(size);
+    each([&](std::size_t h, std::size_t out) { cons[out] = from.cons[h]; });
+    std::vector<std::uint8_t>().swap(from.cons);
+  };
+  copyKept(right, rightSlot, rightGlobal);
+  copyKept(seam, seamSlot, seamGlobal);
+  // The seam's constraints include the hole's border: take the flags from
+  // the real constrained edges instead.
+  for (const std::uint32_t t : seamSlot) {
+    if (t == kNone) continue;
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t u = tv[3 * t + i], w = tv[3 * t + (i + 1) % 3];
+      cons[3 * t + i] = u != kInf && w != kInf && !edgeFeatures.find(edgeKey(u, w)).empty();
+    }
+  }
+  for (std::size_t k = 0; k < borders.size(); ++k) {
+    const SeamBorder& b = borders[k];
+    const std::uint32_t h = seamHalfedge[k];
+    const std::uint32_t safe = b.rightHalf ? 3 * rightSlot[b.safe / 3] + b.safe % 3 : b.safe;
+    link(safe, 3 * seamSlot[h / 3] + h % 3);
+  }
+  for (const std::uint32_t t : seamSlot) {
+    if (t == kNone) continue;
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t h = 3 * t + i;
+      if (opp[h] >= opp.size() || opp[opp[h]] != h) {
+        throw internalError("merging the two halves left a broken triangle");
+      }
+    }
+  }
+
+  // Close the gaps the unused freed slots left: the last triangles move in.
+  std::uint32_t end = triCount();
+  for (std::size_t k = used; k < freeSlots.size(); ++k) {
+    const std::uint32_t f = freeSlots[k];
+    while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
+    if (f >= end) break;
+    const std::uint32_t t = --end;
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      tv[3 * f + i] = tv[3 * t + i];
+      cons[3 * f + i] = cons[3 * t + i];
+      link(3 * f + i, opp[3 * t + i]);
+    }
+    tv[3 * t] = kNone;
+  }
+  while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
+  tv.resize(3 * static_cast<std::size_t>(end));
+  opp.resize(3 * static_cast<std::size_t>(end));
+  cons.resize(3 * static_cast<std::size_t>(end));
+  lastTriangle = 0;
+}
+
+}  // namespace tinsmith::cdt
