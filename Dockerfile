@@ -28,12 +28,15 @@ RUN npm ci --prefix server/viewer --no-audit --no-fund --loglevel=error \
  && cp server/viewer/node_modules/3d-tiles-renderer/LICENSE /viewer/node_modules/3d-tiles-renderer/
 
 FROM debian:bookworm AS runtime
-# Runtime counterparts of the -dev packages in tools/setup.sh.
+# The packages of the libraries the binary links (readelf -d: NEEDED; checked
+# against ldd build/release/bin/tinsmith), plus proj-data (proj.db and the
+# EGM96 grid) and curl for the health check. tinygltf is linked away (only
+# its headers are used) and nothing links libgomp, so neither is here.
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       libgdal32 libproj25 proj-data libgeographiclib23 libopenexr-3-1-30 libimath-3-1-29 libdraco7 \
-      libtinygltf2d libsqlite3-0 libtomlplusplus3 zlib1g libgomp1 \
-      curl ca-certificates \
+      libsqlite3-0 libtomlplusplus3 zlib1g libbrotli1 \
+      curl \
  && rm -rf /var/lib/apt/lists/* \
  && useradd --system --create-home --home-dir /var/lib/tinsmith tinsmith
 COPY --from=builder /src/build/bin/tinsmith /usr/local/bin/tinsmith

@@ -73,6 +73,8 @@ find_package(Boost 1.74 QUIET)
 tinsmith_require("Boost 1.74 (Beast, Asio)" libboost-dev Boost_FOUND)
 find_package(ZLIB QUIET)
 tinsmith_require("zlib" zlib1g-dev ZLIB_FOUND)
+pkg_check_modules(BROTLIENC QUIET IMPORTED_TARGET libbrotlienc)
+tinsmith_require("brotli (encoder)" libbrotli-dev BROTLIENC_FOUND)
 
 if(TINSMITH_TESTS)
   find_package(GTest QUIET)

@@ -26,7 +26,7 @@ packages=(
   libeigen3-dev libgeographiclib-dev libopenexr-dev libtinygltf-dev libdraco-dev
   libgdal-dev gdal-bin libproj-dev proj-data libsqlite3-dev sqlite3 libtomlplusplus-dev libcli11-dev
   nlohmann-json3-dev
-  libboost-dev zlib1g-dev            # the server: Beast/Asio (Debian's default Boost), gzip
+  libboost-dev zlib1g-dev libbrotli-dev  # the server: Beast/Asio (Debian's default Boost), gzip, brotli
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev
   chromium                           # tests/js/cesium_smoke.mjs renders in it

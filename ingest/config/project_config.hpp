@@ -6,8 +6,9 @@
 //   [tin]      snap_tolerance, flat_triangle_repair, river_descent, strict
 //   [tiles]    tolerance, max_triangles, max_zoom, lambda, compression, frame,
 //              geoid (the options of `tinsmith tile`), output (the store)
-//   [fit], [server]  accepted; their keys are kept as raw TOML text until
-//              their own parsers exist (see ProjectConfig::extraTables)
+//   [fit], [server]  accepted; their keys are kept as raw TOML text (see
+//              ProjectConfig::extraTables); `tinsmith serve --config` reads
+//              [server] itself (server/app/server_config.hpp)
 //
 // Every problem is a tinsmith::Error (kind Input) whose location names the
 // config file and the line, and whose message names the key: unknown keys,

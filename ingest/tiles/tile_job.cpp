@@ -136,7 +136,7 @@ std::vector<TileRecord> storeRecords(const store::TileStore& st) {
 /// Writes the tileset files from the records and, for an archive, the
 /// finished store in canonical order; removes the staging archive.
 void finish(store::TileStore& stage, const fs::path& output, const std::vector<TileRecord>& records,
-            const std::string& build) {
+            const std::string& build, int storeUntilZoom = 1 << 20) {
   tiles::TilesetOptions tileset;
   tileset.extras = tilesetExtras(build);
   std::vector<std::string> tilesetKeys;
@@ -144,7 +144,10 @@ void finish(store::TileStore& stage, const fs::path& output, const std::vector<T
     stage.put(key, json);
     tilesetKeys.push_back(key);
   }
-  if (stage.path() != output) store::writeStore(stage, canonicalKeys(records, tilesetKeys), output);
+  std::vector<TileRecord> stored;
+  for (const auto& r : records)
+    if (r.id.z < storeUntilZoom) stored.push_back(r);
+  if (stage.path() != output) store::writeStore(stage, canonicalKeys(stored, tilesetKeys), output);
 }
 
 fs::path stagingPath(const fs::path& output) {
@@ -209,6 +212,11 @@ void checkTileJobOptions(const TileJobOptions& o) {
   if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
   if (o.subtree && o.untilZoom)
     throw usageError("--subtree and --until-zoom make different shards: give one");
+  if (o.storeUntilZoom && *o.storeUntilZoom < 1)
+    throw usageError("--store-until-zoom must be 1 or more (the root is always stored)");
+  if (o.storeUntilZoom && (o.subtree || o.untilZoom))
+    throw usageError("--store-until-zoom is for a whole pyramid, not a shard",
+                     "leave out --subtree and --until-zoom");
 }
 
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const fs::path& output,
@@ -258,8 +266,9 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     };
   }
   const int untilZoom = options.untilZoom.value_or(1 << 20);
+  const int storeUntilZoom = options.storeUntilZoom.value_or(1 << 20);
   callbacks.emit = [&](const tiles::TileContent& c) {
-    stage->put(tiles::tileContentKey(c.record.id), c.glb);
+    if (c.record.id.z < storeUntilZoom) stage->put(tiles::tileContentKey(c.record.id), c.glb);
   };
   callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
     reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
@@ -272,7 +281,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   // resumed run found there.
   const std::vector<TileRecord>& records = walked.records;
   if (!options.subtree && !options.untilZoom) {
-    finish(*stage, output, records, build);
+    finish(*stage, output, records, build, storeUntilZoom);
   } else if (stagePath != output) {
     // A shard: no tileset.json of its own; `tinsmith merge` writes it.
     store::writeStore(*stage, canonicalKeys(records, {}), output);

@@ -37,6 +37,10 @@ struct TileJobOptions {
   std::string geoid;                     ///< "" (ellipsoidal) or "egm96"
   std::optional<tiles::TileId> subtree;  ///< only this tile and its descendants
   std::optional<int> untilZoom;          ///< only tiles above this zoom
+  /// Tiles at this zoom and below are built (their records make
+  /// tileset.json) but not stored: the server's --on-demand builds them
+  /// again from the store's TIN when asked (ingest/tiles/tile_rebuild.hpp).
+  std::optional<int> storeUntilZoom;
   bool resume = false;
   int threads = 0;
 };
@@ -52,7 +56,8 @@ std::string_view contentFrameName(tiles::ContentFrame frame);
 /// Throws usageError (naming the option and the bad value) unless the
 /// options can make a pyramid: tolerance > 0, max triangles ≥ 64, max zoom in
 /// [0, 30], λ factor > 0, a known geoid, threads ≥ 0, until-zoom ≥ 1, not
-/// both a subtree and an until-zoom. runTileJob checks the same; callers that
+/// both a subtree and an until-zoom, store-until-zoom ≥ 1 and only for a
+/// whole pyramid. runTileJob checks the same; callers that
 /// do long work first (tinsmith build) call it before.
 void checkTileJobOptions(const TileJobOptions& options);
 

@@ -7,16 +7,24 @@
 namespace tinsmith::server {
 
 std::size_t Content::footprint() const {
-  return sizeof(Content) + (bytes ? bytes->size() : 0) + (gzip ? gzip->size() : 0) + etag.size() +
-         gzipEtag.size();
+  return sizeof(Content) + (bytes ? bytes->size() : 0) + (gzip ? gzip->size() : 0) +
+         (brotli ? brotli->size() : 0) + etag.size() + gzipEtag.size() + brotliEtag.size();
 }
 
 std::shared_ptr<const Content> makeContent(std::string bytes, bool compressible) {
+  return makeContent(std::move(bytes), compressible, compressible);
+}
+
+std::shared_ptr<const Content> makeContent(std::string bytes, bool gzip, bool brotli) {
   auto c = std::make_shared<Content>();
   c->etag = strongEtag(bytes);
-  if (compressible) {
+  if (gzip) {
     c->gzip = std::make_shared<const std::string>(gzipCompress(bytes));
     c->gzipEtag = c->etag.substr(0, c->etag.size() - 1) + "-gz\"";
+  }
+  if (brotli) {
+    c->brotli = std::make_shared<const std::string>(brotliCompress(bytes));
+    c->brotliEtag = c->etag.substr(0, c->etag.size() - 1) + "-br\"";
   }
   c->bytes = std::make_shared<const std::string>(std::move(bytes));
   return c;

@@ -15,18 +15,23 @@
 
 namespace tinsmith::server {
 
-/// Bytes as served: the content, its strong ETag and, for JSON, its gzip
-/// form with its own ETag (a different representation, RFC 9110 8.8.3).
+/// Bytes as served: the content, its strong ETag and, for JSON, its gzip and
+/// brotli forms, each with its own ETag (a different representation, RFC
+/// 9110 8.8.3), compressed once when the content is made.
 struct Content {
   std::shared_ptr<const std::string> bytes;
   std::string etag;
   std::shared_ptr<const std::string> gzip;  ///< null when not compressed
   std::string gzipEtag;
+  std::shared_ptr<const std::string> brotli;  ///< null when not compressed
+  std::string brotliEtag;
   [[nodiscard]] std::size_t footprint() const;
 };
 
-/// Content for `bytes`, gzipped too when `compressible`.
+/// Content for `bytes`, gzipped and brotli-compressed too when `compressible`.
 std::shared_ptr<const Content> makeContent(std::string bytes, bool compressible);
+/// Content with only the compressed forms asked for (a response made once).
+std::shared_ptr<const Content> makeContent(std::string bytes, bool gzip, bool brotli);
 
 class ContentCache {
  public:

@@ -85,6 +85,23 @@ std::string Metrics::prometheusText() const {
                 static_cast<unsigned long long>(cacheMisses_.load(kRelaxed)),
                 static_cast<long long>(openConnections_.load(kRelaxed)));
   out += tail;
+  std::snprintf(tail, sizeof tail,
+                "# HELP tinsmith_tiles_built_on_demand_total Tiles built from a store's TIN "
+                "(--on-demand), each once.\n"
+                "# TYPE tinsmith_tiles_built_on_demand_total counter\n"
+                "tinsmith_tiles_built_on_demand_total %llu\n"
+                "# HELP tinsmith_on_demand_waits_total Requests that waited for a tile another "
+                "request was building.\n"
+                "# TYPE tinsmith_on_demand_waits_total counter\n"
+                "tinsmith_on_demand_waits_total %llu\n"
+                "# HELP tinsmith_on_demand_build_seconds_total Time spent building tiles on "
+                "demand.\n"
+                "# TYPE tinsmith_on_demand_build_seconds_total counter\n"
+                "tinsmith_on_demand_build_seconds_total %.6f\n",
+                static_cast<unsigned long long>(tilesBuilt_.load(kRelaxed)),
+                static_cast<unsigned long long>(buildWaits_.load(kRelaxed)),
+                static_cast<double>(buildNanos_.load(kRelaxed)) * 1e-9);
+  out += tail;
   return out;
 }
 

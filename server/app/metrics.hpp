@@ -1,6 +1,6 @@
 // The server's counters, exposed as Prometheus text (/metrics): requests by
 // route and status, a latency histogram, response bytes, tile cache hits and
-// misses, open connections. Lock-free (relaxed atomics): a scrape sees each
+// misses, open connections, tiles built on demand. Lock-free (relaxed atomics): a scrape sees each
 // counter whole, not all of them at one instant.
 #pragma once
 
@@ -28,6 +28,15 @@ class Metrics {
                     std::chrono::steady_clock::duration elapsed);
   void countCache(bool hit) { (hit ? cacheHits_ : cacheMisses_).fetch_add(1, kRelaxed); }
   void countConnection(int delta) { openConnections_.fetch_add(delta, kRelaxed); }
+  /// A tile built on demand, and how long it took.
+  void countTileBuilt(std::chrono::steady_clock::duration took) {
+    tilesBuilt_.fetch_add(1, kRelaxed);
+    buildNanos_.fetch_add(static_cast<std::uint64_t>(std::chrono::nanoseconds(took).count()),
+                          kRelaxed);
+  }
+  /// A request that waited for a build another request started.
+  void countBuildWait() { buildWaits_.fetch_add(1, kRelaxed); }
+  [[nodiscard]] std::uint64_t tilesBuilt() const { return tilesBuilt_.load(kRelaxed); }
 
   /// Requests counted for (route, status) so far (for tests).
   [[nodiscard]] std::uint64_t requests(RouteKind route, int status) const;
@@ -47,6 +56,7 @@ class Metrics {
   std::atomic<std::uint64_t> latencyNanos_{0};
   std::atomic<std::uint64_t> cacheHits_{0}, cacheMisses_{0};
   std::atomic<std::int64_t> openConnections_{0};
+  std::atomic<std::uint64_t> tilesBuilt_{0}, buildWaits_{0}, buildNanos_{0};
 };
 
 }  // namespace tinsmith::server

@@ -1,6 +1,8 @@
 #include "server/app/tile_server.hpp"
 
+#include <cmath>
 #include <ctime>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 namespace tinsmith::server {
@@ -34,10 +36,41 @@ std::string accessLogLine(const Exchange& e) {
          target + tail;
 }
 
+namespace {
+
+ServiceOptions withNotices(ServiceOptions service, std::FILE* notices) {
+  service.notices = notices;
+  return service;
+}
+
+}  // namespace
+
+std::string accessLogJson(const Exchange& e) {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char time[32];
+  std::strftime(time, sizeof time, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  nlohmann::ordered_json j;
+  j["peer"] = std::string(e.peer);
+  j["time"] = time;
+  j["method"] = e.request.method.substr(0, 16);
+  j["target"] = e.request.target.substr(0, 512);
+  j["status"] = e.response.status;
+  j["bytes"] = e.bytesWritten;
+  j["ms"] = std::round(std::chrono::duration<double, std::milli>(e.elapsed).count() * 1000) / 1000;
+  j["cache"] = e.response.route == RouteKind::Tile || e.response.route == RouteKind::TilesetJson ||
+                       e.response.route == RouteKind::ExternalTileset
+                   ? nlohmann::ordered_json(e.response.cacheHit ? "hit" : "miss")
+                   : nlohmann::ordered_json();
+  j["completed"] = e.completed;
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
 TileServer::TileServer(TileServerOptions options)
     : options_(std::move(options)),
       catalog_(options_.stores),
-      service_(catalog_, metrics_, options_.service) {
+      service_(catalog_, metrics_, withNotices(options_.service, options_.notices)) {
   http_ = std::make_unique<HttpServer>(
       options_.http, [this](const Request& r) { return service_.handle(r); },
       [this](const Exchange& e) { logExchange(e); },
@@ -82,7 +115,8 @@ void TileServer::logExchange(const Exchange& e) {
     std::fwrite(line.data(), 1, line.size(), options_.notices);
   }
   if (!options_.log) return;
-  const std::string line = accessLogLine(e) + "\n";
+  const std::string line =
+      (options_.logFormat == LogFormat::Json ? accessLogJson(e) : accessLogLine(e)) + "\n";
   std::lock_guard lock(logMutex_);
   std::fwrite(line.data(), 1, line.size(), options_.log);
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "server/app/metrics.hpp"
+#include "server/app/server_config.hpp"
 #include "server/app/tile_service.hpp"
 #include "server/app/tileset_catalog.hpp"
 #include "server/http/http_server.hpp"
@@ -25,6 +26,7 @@ struct TileServerOptions {
   ServiceOptions service;
   /// One line per request (access log) to `log`; null: none (--quiet).
   std::FILE* log = stderr;
+  LogFormat logFormat = LogFormat::Text;
   /// How often the stores are checked for a replacement (see
   /// TilesetCatalog::refresh); zero: never.
   std::chrono::milliseconds reloadInterval{2000};
@@ -67,5 +69,10 @@ class TileServer {
 /// "METHOD target", status, bytes, milliseconds, cache; the target's bytes
 /// outside printable ASCII, '"' and '\\' escaped as \xNN, cut at 512 bytes.
 std::string accessLogLine(const Exchange& exchange);
+
+/// The same as one JSON object (no newline): {"peer", "time", "method",
+/// "target" (bytes that are not UTF-8 replaced by U+FFFD, cut at 512),
+/// "status", "bytes", "ms", "cache": "hit"|"miss"|null, "completed"}.
+std::string accessLogJson(const Exchange& exchange);
 
 }  // namespace tinsmith::server

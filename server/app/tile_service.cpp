@@ -13,7 +13,7 @@ namespace tinsmith::server {
 namespace {
 
 constexpr const char* kJson = "application/json";
-constexpr std::size_t kGzipAtLeast = 1024;  // smaller JSON is not worth a deflate
+constexpr std::size_t kGzipAtLeast = 1024;  // smaller JSON is not worth compressing
 
 std::string allowFor(RouteKind route) {
   return routeAllowsPost(route) ? "GET, HEAD, POST, OPTIONS" : "GET, HEAD, OPTIONS";
@@ -84,7 +84,11 @@ std::string normalizeBasePath(std::string_view text) {
 }
 
 TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
-    : catalog_(catalog), metrics_(metrics), options_(std::move(options)), cache_(options_.cacheBytes) {}
+    : catalog_(catalog),
+      metrics_(metrics),
+      options_(std::move(options)),
+      cache_(options_.cacheBytes),
+      onDemand_(cache_, metrics_, options_.notices) {}
 
 std::shared_ptr<const TileService::Listing> TileService::listing() {
   std::lock_guard lock(listingMutex_);
@@ -214,7 +218,8 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
   const auto tileset = catalog_.find(route.tileset);  // held for the whole request
   if (!tileset) return notFound("no tileset '" + route.tileset + "' (see /tilesets)");
   switch (route.kind) {
-    case RouteKind::TilesetJson: return serveStored(request, *tileset, "tileset.json", false);
+    case RouteKind::TilesetJson:
+      return serveStored(request, *tileset, "tileset.json", nullptr);
     case RouteKind::ExternalTileset:
     case RouteKind::Tile: {
       const bool tile = route.kind == RouteKind::Tile;
@@ -224,7 +229,7 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
       const std::string key =
           tile ? tiles::tileContentKey(route.tile)
                : "tilesets/" + route.tile.name() + ".json";
-      return serveStored(request, *tileset, key, tile);
+      return serveStored(request, *tileset, key, tile ? &route.tile : nullptr);
     }
     case RouteKind::Elevation:
     case RouteKind::Profile:
@@ -255,19 +260,24 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
 }
 
 Response TileService::serveStored(const Request& request, const Tileset& tileset,
-                                  const std::string& key, bool tile) {
+                                  const std::string& key, const tiles::TileId* tileId) {
+  const bool tile = tileId != nullptr;
   const std::string cacheKey = std::to_string(tileset.generation()) + '/' + key;
   auto content = cache_.find(cacheKey);
   metrics_.countCache(content != nullptr);
   const bool hit = content != nullptr;
   if (!content) {
     auto bytes = tileset.store().get(key);
-    if (!bytes) {
+    if (!bytes && tile && options_.onDemand) {
+      content = onDemand_.fetch(tileset, *tileId, cacheKey);
+    } else if (bytes) {
+      content = makeContent(std::move(*bytes), !tile);
+      cache_.insert(cacheKey, content);
+    }
+    if (!content) {
       return notFound("tileset '" + tileset.id() + "' has no " + key +
                       (tile ? " (the pyramid is not refined there)" : ""));
     }
-    content = makeContent(std::move(*bytes), !tile);
-    cache_.insert(cacheKey, content);
   }
   Response r = serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
                             tile ? kTileCacheControl : kTilesetCacheControl, tile);
@@ -298,27 +308,32 @@ Response TileService::serveLines(const Request& request, const Tileset& tileset)
 
 Response TileService::serveJson(const Request& request, const std::string& json,
                                 const char* cacheControl) const {
-  const bool compress = json.size() >= kGzipAtLeast && acceptsGzip(request.acceptEncoding);
-  return serveContent(request, *makeContent(json + "\n", compress), kJson, cacheControl, false);
+  const bool big = json.size() >= kGzipAtLeast;
+  const bool brotli = big && acceptsBrotli(request.acceptEncoding);
+  const bool gzip = big && !brotli && acceptsGzip(request.acceptEncoding);
+  return serveContent(request, *makeContent(json + "\n", gzip, brotli), kJson, cacheControl, false);
 }
 
 Response TileService::serveContent(const Request& request, const Content& content,
                                    const char* contentType, const char* cacheControl,
                                    bool ranges) const {
   Response r;
-  const bool gzip = content.gzip && acceptsGzip(request.acceptEncoding);
-  const std::string& etag = gzip ? content.gzipEtag : content.etag;
+  // brotli before gzip when both are accepted: smaller, and as fast to decode.
+  const bool brotli = content.brotli && acceptsBrotli(request.acceptEncoding);
+  const bool gzip = !brotli && content.gzip && acceptsGzip(request.acceptEncoding);
+  const std::string& etag = brotli ? content.brotliEtag : gzip ? content.gzipEtag : content.etag;
   r.addHeader("Content-Type", contentType);
   r.addHeader("ETag", etag);
   r.addHeader("Cache-Control", cacheControl);
-  if (content.gzip) r.addHeader("Vary", "Accept-Encoding");
+  if (content.gzip || content.brotli) r.addHeader("Vary", "Accept-Encoding");
   if (ranges) r.addHeader("Accept-Ranges", "bytes");
   if (!request.ifNoneMatch.empty() && ifNoneMatchMatches(request.ifNoneMatch, etag)) {
     r.status = 304;
     return r;
   }
+  if (brotli) r.addHeader("Content-Encoding", "br");
   if (gzip) r.addHeader("Content-Encoding", "gzip");
-  r.body = gzip ? content.gzip : content.bytes;
+  r.body = brotli ? content.brotli : gzip ? content.gzip : content.bytes;
   if (ranges && !request.range.empty() && (request.ifRange.empty() || request.ifRange == etag)) {
     const auto range = parseRange(request.range, r.body->size());
     const std::string size = std::to_string(r.body->size());

@@ -1,18 +1,20 @@
 // The routes' answers (DESIGN.md "Server"), over a TilesetCatalog: the
 // handler the HTTP server calls for every request. HTTP semantics live here
 // once for every route: Content-Type, strong ETag and If-None-Match → 304,
-// Cache-Control, CORS, gzip for JSON, HEAD, byte ranges for tiles, 405 with
+// Cache-Control, CORS, brotli or gzip for JSON, HEAD, byte ranges for tiles, 405 with
 // Allow, JSON error bodies. handle() never throws: a failure is a response
 // (500 for anything unexpected).
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <string>
 
 #include "server/app/content_cache.hpp"
 #include "server/app/metrics.hpp"
+#include "server/app/on_demand.hpp"
 #include "server/app/tileset_catalog.hpp"
 #include "server/app/viewer_assets.hpp"
 #include "server/http/message.hpp"
@@ -22,6 +24,10 @@ namespace tinsmith::server {
 struct ServiceOptions {
   std::string cors = "*";  ///< Access-Control-Allow-Origin; empty: no CORS headers
   std::size_t cacheBytes = 256u << 20;
+  /// Build tiles the store lacks from its TIN (server/app/on_demand.hpp).
+  bool onDemand = false;
+  /// Where on-demand notices go (a store kept in memory only); null: nowhere.
+  std::FILE* notices = stderr;
   /// The viewer's pages and libraries (/, /three, /viewer/…); null: none,
   /// and "/" lists the stores and says what to install.
   std::shared_ptr<const ViewerAssets> viewer;
@@ -56,8 +62,9 @@ class TileService {
   std::shared_ptr<const Listing> listing();
 
   Response dispatch(const Request& request, const RequestTarget& target, const Route& route);
+  /// `tile`: the tile whose content `key` is; null for a tileset file.
   Response serveStored(const Request& request, const Tileset& tileset, const std::string& key,
-                       bool tile);
+                       const tiles::TileId* tile);
   Response serveContent(const Request& request, const Content& content, const char* contentType,
                         const char* cacheControl, bool ranges) const;
   Response serveViewer(const Request& request, const std::string& asset, bool page);
@@ -69,6 +76,7 @@ class TileService {
   Metrics& metrics_;
   ServiceOptions options_;
   ContentCache cache_;
+  OnDemandTiles onDemand_;
   std::mutex listingMutex_;
   std::shared_ptr<const Listing> listing_;
 };

@@ -6,10 +6,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <optional>
 #include <numbers>
+#include <optional>
 
 #include "core/base/error.hpp"
+#include "core/tiles/tileset_json.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "server/http/route.hpp"
 
@@ -154,7 +155,12 @@ Tileset::Tileset(std::string id, const fs::path& path)
                        {"lines", "/tilesets/" + id_ + "/lines.geojson"}};
 }
 
-Tileset::~Tileset() = default;
+Tileset::~Tileset() {
+  // Readers first: an archive written on demand goes back to a rollback
+  // journal when its writer closes last (see ingest/store/archive_store.cpp).
+  store_.reset();
+  writer_.reset();
+}
 
 const Surface& Tileset::surface() const {
   std::call_once(surfaceOnce_, [this] {
@@ -170,6 +176,85 @@ const Surface& Tileset::surface() const {
     }
   });
   return *surface_;
+}
+
+bool Tileset::references(const tiles::TileId& id) const {
+  std::call_once(referencesOnce_, [this] {
+    // Content URIs in tileset.json and the external tilesets it reaches,
+    // relative to the file ("tiles/…" at the top, "../../../tiles/…" below).
+    std::vector<std::string> files{"tileset.json"}, seen;
+    auto uriKey = [](std::string uri) {
+      while (uri.starts_with("../")) uri.erase(0, 3);
+      if (uri.starts_with("./")) uri.erase(0, 2);
+      return uri;
+    };
+    while (!files.empty() && seen.size() < 100000) {
+      const std::string key = files.back();
+      files.pop_back();
+      seen.push_back(key);
+      const auto json = parseStoredJson(*store_, key);
+      std::vector<const nlohmann::json*> stack;
+      if (json.is_object() && json.contains("root")) stack.push_back(&json["root"]);
+      while (!stack.empty()) {
+        const nlohmann::json& tile = *stack.back();
+        stack.pop_back();
+        if (!tile.is_object()) continue;
+        const nlohmann::json::json_pointer uriAt("/content/uri");
+        if (tile.contains(uriAt) && tile.at(uriAt).is_string()) {
+          const std::string uri = uriKey(tile.at(uriAt).get<std::string>());
+          if (uri.starts_with("tiles/")) referenced_.insert(uri);
+          if (uri.starts_with("tilesets/") && store::isValidKey(uri) &&
+              std::find(seen.begin(), seen.end(), uri) == seen.end())
+            files.push_back(uri);
+        }
+        if (tile.contains("children") && tile["children"].is_array())
+          for (const auto& child : tile["children"]) stack.push_back(&child);
+      }
+    }
+  });
+  return referenced_.contains(tiles::tileContentKey(id));
+}
+
+const ingest::TileRebuilder& Tileset::rebuilder() const {
+  std::call_once(rebuilderOnce_, [this] {
+    try {
+      const auto build = store_->get(kBuildKey);
+      const auto tin = store_->get(kTinKey);
+      if (!build || !tin) {
+        rebuilderError_ = std::string("the store has no ") + (build ? kTinKey : kBuildKey);
+        return;
+      }
+      rebuilder_ = std::make_unique<ingest::TileRebuilder>(*build, *tin, store_->path().string());
+    } catch (const std::exception& e) {
+      rebuilderError_ = e.what();
+    }
+  });
+  if (!rebuilder_)
+    throw ioError("tileset '" + id_ + "' cannot build its missing tiles: " + rebuilderError_, {},
+                  "rebuild the store with tinsmith tile");
+  return *rebuilder_;
+}
+
+bool Tileset::keep(const std::string& key, std::string_view bytes, std::string& why) const {
+  std::lock_guard lock(writerMutex_);
+  if (writerFailed_) return false;
+  try {
+    if (!writer_) {
+      // Said before the opening, which already changes the file (an archive
+      // goes to WAL mode): a refresh in between must not take it for a
+      // replacement.
+      writesInPlace_ = true;
+      writer_ = store::openStoreForWriting(store_->path(), true);
+    }
+    writer_->put(key, bytes);
+    return true;
+  } catch (const std::exception& e) {
+    // A read-only store (or disk): serve from memory, and say so once.
+    writerFailed_ = true;
+    writer_.reset();
+    why = e.what();
+    return false;
+  }
 }
 
 Point2 Tileset::fromLonLat(double lon, double lat) const {
@@ -251,6 +336,13 @@ std::vector<std::string> TilesetCatalog::refresh() {
   for (const auto& e : *entries) {
     const FileStamp now = stampOf(e->path);
     if (now == e->stamp || now == FileStamp{}) continue;  // unchanged, or gone for the moment
+    // The server's own writes (--on-demand) into the archive it serves: the
+    // same file, grown. A replacement is a new file (a new inode).
+    if (now.device == e->stamp.device && now.inode == e->stamp.inode &&
+        e->current.load()->writesInPlace()) {
+      e->stamp = now;
+      continue;
+    }
     try {
       e->current = std::make_shared<const Tileset>(e->id, e->path);
       e->stamp = now;

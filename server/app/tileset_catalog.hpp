@@ -15,19 +15,20 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "core/base/point.hpp"
 #include "core/encode/frames.hpp"
 #include "core/surface/surface.hpp"
+#include "core/tiles/pyramid.hpp"
 #include "ingest/filters/reproject.hpp"
 #include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/tile_rebuild.hpp"
 
 namespace tinsmith::server {
 
@@ -57,6 +58,23 @@ class Tileset {
   /// (thread-safe). Throws inputError when the store carries no TIN, ioError
   /// when it cannot be decoded (the store is damaged: a server-side fault).
   [[nodiscard]] const Surface& surface() const;
+  /// On demand (--on-demand): whether the tileset's files (tileset.json and
+  /// its external tilesets, read on first use) name this tile's content.
+  /// Thread-safe.
+  [[nodiscard]] bool references(const tiles::TileId& id) const;
+  /// The store's tile rebuilder, made on first use from its build record and
+  /// TIN (seconds: it plans the pyramid); a failure is kept and thrown again
+  /// as ioError. Thread-safe.
+  [[nodiscard]] const ingest::TileRebuilder& rebuilder() const;
+  /// Writes a tile built on demand into the store, atomically (an archive:
+  /// one SQLite transaction; a directory: a file renamed into place). Returns
+  /// false, having written nothing, when the store cannot be opened for
+  /// writing (then `why` says why, once). Thread-safe.
+  bool keep(const std::string& key, std::string_view bytes, std::string& why) const;
+  /// Whether keep() has opened (or tried to open) the store for writing: the archive's file
+  /// then changes under its own name (TilesetCatalog::refresh knows).
+  [[nodiscard]] bool writesInPlace() const { return writesInPlace_.load(); }
+
   /// Longitude, latitude (WGS84 degrees) into the project CRS. Thread-safe.
   /// Throws inputError when PROJ cannot transform the point.
   [[nodiscard]] Point2 fromLonLat(double lon, double lat) const;
@@ -76,6 +94,15 @@ class Tileset {
   std::string crs_;
   mutable std::once_flag surfaceOnce_;
   mutable std::unique_ptr<Surface> surface_;
+  mutable std::once_flag referencesOnce_;
+  mutable std::set<std::string> referenced_;  // content keys the tileset files name
+  mutable std::once_flag rebuilderOnce_;
+  mutable std::unique_ptr<ingest::TileRebuilder> rebuilder_;
+  mutable std::string rebuilderError_;
+  mutable std::mutex writerMutex_;
+  mutable std::unique_ptr<store::TileStore> writer_;
+  mutable bool writerFailed_ = false;
+  mutable std::atomic<bool> writesInPlace_{false};
   mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
   mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;
   std::string geoid_;

@@ -1,6 +1,6 @@
 // HTTP representation rules the routes share: strong ETags from content,
 // If-None-Match matching (RFC 9110 13.1.2), single byte ranges (RFC 9110 14),
-// Accept-Encoding for gzip, and gzip itself (zlib).
+// Accept-Encoding, gzip (zlib) and brotli.
 #pragma once
 
 #include <cstddef>
@@ -30,11 +30,18 @@ struct RangeRequest {
 /// Unsatisfiable; `last` is clamped to size - 1.
 RangeRequest parseRange(std::string_view header, std::size_t size);
 
-/// Whether Accept-Encoding accepts gzip (listed, or "*", with q > 0).
-bool acceptsGzip(std::string_view acceptEncoding);
+/// Whether Accept-Encoding accepts the content coding `name` (listed, or
+/// "*", with q > 0; an explicit entry decides over "*").
+bool acceptsCoding(std::string_view acceptEncoding, std::string_view name);
+bool acceptsGzip(std::string_view acceptEncoding);    ///< "gzip"
+bool acceptsBrotli(std::string_view acceptEncoding);  ///< "br"
 
 /// `bytes` compressed as gzip (RFC 1952) at zlib's default level. Throws
 /// internalError when zlib fails.
 std::string gzipCompress(std::string_view bytes);
+
+/// `bytes` compressed as brotli (RFC 7932), quality 5. Throws internalError
+/// when the encoder fails.
+std::string brotliCompress(std::string_view bytes);
 
 }  // namespace tinsmith::server

@@ -57,5 +57,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (range.kind == RangeRequest::Kind::Partial) require(range.first <= range.last && range.last < length);
   (void)ifNoneMatchMatches(text, strongEtag(text.substr(0, size / 2)));
   (void)acceptsGzip(text);
+  (void)acceptsBrotli(text);
   return 0;
 }

@@ -151,5 +151,19 @@ TEST(Representation, GzipFollowsAcceptEncodingAndRoundTrips) {
   EXPECT_EQ(test::gunzip(packed), text);
 }
 
+TEST(Representation, BrotliFollowsAcceptEncodingAndRoundTrips) {
+  EXPECT_TRUE(acceptsBrotli("br"));
+  EXPECT_TRUE(acceptsBrotli("gzip, deflate, BR;q=0.9"));
+  EXPECT_TRUE(acceptsBrotli("*"));
+  EXPECT_FALSE(acceptsBrotli("gzip"));
+  EXPECT_FALSE(acceptsBrotli("br;q=0, *"));
+  EXPECT_FALSE(acceptsBrotli("brotli"));
+  const std::string text(5000, 'z');
+  const std::string packed = brotliCompress(text);
+  ASSERT_LT(packed.size(), 100u);
+  EXPECT_EQ(test::unbrotli(packed), text);
+  EXPECT_EQ(test::unbrotli(brotliCompress("")), "");
+}
+
 }  // namespace
 }  // namespace tinsmith::server

@@ -148,7 +148,8 @@ TEST_F(Routes, RangesGive206OrA416) {
 TEST_F(Routes, JsonIsGzippedWhenAcceptedWithItsOwnEtag) {
   HttpConnection c(port());
   const auto plain = c.request("/tilesets/hill/tileset.json");
-  const auto packed = c.request("/tilesets/hill/tileset.json", "Accept-Encoding: br, gzip\r\n");
+  const auto packed =
+      c.request("/tilesets/hill/tileset.json", "Accept-Encoding: deflate, gzip\r\n");
   ASSERT_EQ(packed.status, 200);
   EXPECT_EQ(packed.header("content-encoding"), "gzip");
   EXPECT_EQ(packed.header("vary"), "Accept-Encoding");
@@ -167,6 +168,47 @@ TEST_F(Routes, JsonIsGzippedWhenAcceptedWithItsOwnEtag) {
   EXPECT_EQ(c.request("/tilesets/hill/" + tileKeys().front(), "Accept-Encoding: gzip\r\n")
                 .header("content-encoding"),
             "");
+}
+
+TEST_F(Routes, JsonIsBrotliWhenAcceptedBeforeGzipWithItsOwnEtag) {
+  HttpConnection c(port());
+  const auto plain = c.request("/tilesets/hill/tileset.json");
+  const auto gz = c.request("/tilesets/hill/tileset.json", "Accept-Encoding: gzip\r\n");
+  const auto br =
+      c.request("/tilesets/hill/tileset.json", "Accept-Encoding: gzip, deflate, br\r\n");
+  ASSERT_EQ(br.status, 200);
+  EXPECT_EQ(br.header("content-encoding"), "br");
+  EXPECT_EQ(br.header("vary"), "Accept-Encoding");
+  EXPECT_EQ(unbrotli(br.body), stored("tileset.json"));
+  EXPECT_LT(br.body.size(), gz.body.size());
+  // Three representations, three tags; each revalidates as itself.
+  EXPECT_NE(br.header("etag"), gz.header("etag"));
+  EXPECT_NE(br.header("etag"), plain.header("etag"));
+  EXPECT_EQ(c.request("/tilesets/hill/tileset.json",
+                      "Accept-Encoding: br\r\nIf-None-Match: " + br.header("etag") + "\r\n")
+                .status,
+            304);
+  // br refused: gzip; the tile stays as stored.
+  EXPECT_EQ(c.request("/tilesets/hill/tileset.json", "Accept-Encoding: br;q=0, gzip\r\n")
+                .header("content-encoding"),
+            "gzip");
+  EXPECT_EQ(c.request("/tilesets/hill/" + tileKeys().front(), "Accept-Encoding: br\r\n")
+                .header("content-encoding"),
+            "");
+  // Made once: the cached tileset is compressed when it is read, not per request.
+  const auto again = c.request("/tilesets/hill/tileset.json", "Accept-Encoding: br\r\n");
+  EXPECT_EQ(again.body, br.body);
+  // A JSON answer made per request (a batch of elevations) is compressed too.
+  std::string points = "{\"points\": [";
+  for (int i = 0; i < 200; ++i)
+    points += (i ? "," : "") + std::string("[") + std::to_string(430100 + i) + ", 4515600]";
+  points += "]}";
+  const auto batch =
+      c.request("/tilesets/hill/elevation",
+                "Accept-Encoding: br\r\nContent-Type: application/json\r\n", "POST", points);
+  ASSERT_EQ(batch.status, 200) << batch.body;
+  EXPECT_EQ(batch.header("content-encoding"), "br");
+  EXPECT_EQ(nlohmann::json::parse(unbrotli(batch.body))["points"].size(), 200u);
 }
 
 TEST_F(Routes, ErrorsAreJsonWithTheRightStatus) {

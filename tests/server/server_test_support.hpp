@@ -6,11 +6,11 @@
 #pragma once
 
 #include <arpa/inet.h>
+#include <brotli/decode.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
 #include <zlib.h>
 
 #include <cmath>
@@ -272,6 +272,24 @@ inline std::string gunzip(const std::string& packed) {
   out.resize(whole ? z.total_out : 0);
   inflateEnd(&z);
   return out;
+}
+
+/// The bytes of a brotli stream (RFC 7932); "" when it is not one.
+inline std::string unbrotli(const std::string& packed) {
+  std::string out;
+  BrotliDecoderState* state = BrotliDecoderCreateInstance(nullptr, nullptr, nullptr);
+  std::size_t availableIn = packed.size();
+  const auto* next = reinterpret_cast<const std::uint8_t*>(packed.data());
+  BrotliDecoderResult result = BROTLI_DECODER_RESULT_NEEDS_MORE_OUTPUT;
+  while (result == BROTLI_DECODER_RESULT_NEEDS_MORE_OUTPUT) {
+    std::uint8_t chunk[65536];
+    std::size_t availableOut = sizeof chunk;
+    std::uint8_t* to = chunk;
+    result = BrotliDecoderDecompressStream(state, &availableIn, &next, &availableOut, &to, nullptr);
+    out.append(reinterpret_cast<const char*>(chunk), sizeof chunk - availableOut);
+  }
+  BrotliDecoderDestroyInstance(state);
+  return result == BROTLI_DECODER_RESULT_SUCCESS ? out : std::string();
 }
 
 /// One request on a fresh connection.

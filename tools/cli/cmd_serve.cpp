@@ -1,7 +1,10 @@
 // `tinsmith serve`: serve tile stores over HTTP: tilesets, tiles, elevation,
 // break lines, the viewer pages, health and metrics (DESIGN.md "Server").
-//   tinsmith serve STORE|FOLDER [MORE…] [--host H] [--port P] [--cors ORIGIN|off]
-//                  [--cache-mb N] [--threads N] [--viewer DIR] [--base-path /P] [--quiet]
+//   tinsmith serve STORE|FOLDER [MORE…] [--config FILE] [--host H] [--port P]
+//                  [--cors ORIGIN|off] [--cache-mb N] [--threads N] [--viewer DIR]
+//                  [--base-path /P] [--quiet] [--log-format text|json] [--on-demand] …
+// Every flag is also a key of a config file's [server] table
+// (server/app/server_config.hpp); flags given win over the file.
 // The viewer's files are looked for, when --viewer is not given, beside the
 // executable (../share/tinsmith/viewer), in /usr/share/tinsmith/viewer and in
 // the source tree it was built from (server/viewer, after tools/setup.sh).
@@ -12,13 +15,16 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "server/app/server_config.hpp"
 #include "server/app/tile_server.hpp"
 #include "tools/cli/commands.hpp"
 
@@ -26,19 +32,20 @@ namespace tinsmith::cli {
 
 namespace {
 
-struct ServeOptions {
-  std::vector<std::string> stores;
-  std::string host = "127.0.0.1";
-  int port = 8080;
-  std::string cors = "*";
-  std::size_t cacheMb = 256;
-  int threads = 0;
-  int maxConnections = 10000;
-  double readTimeout = 10, idleTimeout = 30, reloadSeconds = 2;
-  bool quiet = false;
-  std::string viewer;
-  std::string basePath;
+using server::ServerSettings;
+
+/// Copies one setting from the flags into the settings when its flag was
+/// given on the command line (flags win over the config file).
+struct FlagOverride {
+  const CLI::Option* option;
+  std::function<void(ServerSettings& to, const ServerSettings& from)> copy;
 };
+
+template <typename T>
+FlagOverride overrides(const CLI::Option* option, T ServerSettings::*member) {
+  return {option,
+          [member](ServerSettings& to, const ServerSettings& from) { to.*member = from.*member; }};
+}
 
 /// The viewer folder: --viewer as given, else the first usable default;
 /// null when there is none (the server then says what to install).
@@ -84,46 +91,86 @@ void serveUntilSignalled(server::TileServer& server) {
 }  // namespace
 
 void addServeCommand(CLI::App& app) {
-  auto opt = std::make_shared<ServeOptions>();
+  // Flags land in `flags`; the callback starts from the defaults, applies
+  // the config file's [server], then every flag that was given. A new flag
+  // needs a member of ServerSettings, a key in server/app/server_config.cpp
+  // and an `overrides` line here.
+  auto flags = std::make_shared<ServerSettings>();
+  auto configFile = std::make_shared<std::string>();
+  auto given = std::make_shared<std::vector<FlagOverride>>();
   auto* cmd = app.add_subcommand("serve", "Serve tile stores over HTTP: tilesets, tiles, elevation, viewer");
-  cmd->add_option("stores", opt->stores,
-                  "Tile stores (.3dtiles archives or store directories), or folders of them")
-      ->required();
-  cmd->add_option("--host", opt->host, "Address to listen on")->capture_default_str();
-  cmd->add_option("--port", opt->port, "Port to listen on (0: any free port)")
-      ->check(CLI::Range(0, 65535))
-      ->capture_default_str();
-  cmd->add_option("--cors", opt->cors,
-                  "Access-Control-Allow-Origin for every response: * , one origin, or off")
-      ->capture_default_str();
-  cmd->add_option("--cache-mb", opt->cacheMb, "Memory for hot tiles and tileset files, MiB (0: none)")
-      ->check(CLI::Range(0, 1 << 20))
-      ->capture_default_str();
-  cmd->add_option("--threads", opt->threads, "I/O threads (0: one per core)")
-      ->check(CLI::Range(0, 256))
-      ->capture_default_str();
-  cmd->add_option("--max-connections", opt->maxConnections,
-                  "Open connections at most; more get 503 and are closed")
-      ->check(CLI::Range(1, 1000000))
-      ->capture_default_str();
-  cmd->add_option("--read-timeout", opt->readTimeout,
-                  "Seconds a new connection has to send its first request whole")
-      ->check(CLI::Range(0.1, 3600.0))
-      ->capture_default_str();
-  cmd->add_option("--idle-timeout", opt->idleTimeout,
-                  "Seconds a keep-alive connection has to send its next request whole")
-      ->check(CLI::Range(0.1, 3600.0))
-      ->capture_default_str();
-  cmd->add_option("--reload", opt->reloadSeconds,
-                  "Seconds between checks for stores replaced on disk or new in a served folder (0: never)")
-      ->check(CLI::Range(0.0, 86400.0))
-      ->capture_default_str();
-  cmd->add_option("--viewer", opt->viewer,
-                  "Folder of the viewer's pages and libraries (default: beside the executable, "
-                  "/usr/share/tinsmith/viewer, or the source tree's server/viewer)");
-  cmd->add_option("--base-path", opt->basePath,
-                  "Answer under this path prefix (e.g. /terrain, behind a reverse proxy)");
-  cmd->add_flag("-q,--quiet", opt->quiet, "No access log (one line per request on stderr)");
+  auto add = [&](CLI::Option* option, auto member) {
+    given->push_back(overrides(option, member));
+    return option;
+  };
+  add(cmd->add_option("stores", flags->stores,
+                      "Tile stores (.3dtiles archives or store directories), or folders of them"),
+      &ServerSettings::stores);
+  cmd->add_option("--config", *configFile,
+                  "TOML file whose [server] table sets any of these options (keys: the flags' "
+                  "names with _ for -, e.g. cache_mb; stores = [paths] relative to the file). "
+                  "A whole build config works; flags given here win over it")
+      ->check(CLI::ExistingFile);
+  add(cmd->add_option("--host", flags->host, "Address to listen on")->capture_default_str(),
+      &ServerSettings::host);
+  add(cmd->add_option("--port", flags->port, "Port to listen on (0: any free port)")
+          ->check(CLI::Range(0, 65535))
+          ->capture_default_str(),
+      &ServerSettings::port);
+  add(cmd->add_option("--cors", flags->cors,
+                      "Access-Control-Allow-Origin for every response: * , one origin, or off")
+          ->capture_default_str(),
+      &ServerSettings::cors);
+  add(cmd->add_option("--cache-mb", flags->cacheMb,
+                      "Memory for hot tiles and tileset files, MiB (0: none)")
+          ->check(CLI::Range(0, 1 << 20))
+          ->capture_default_str(),
+      &ServerSettings::cacheMb);
+  add(cmd->add_option("--threads", flags->threads, "I/O threads (0: one per core)")
+          ->check(CLI::Range(0, 256))
+          ->capture_default_str(),
+      &ServerSettings::threads);
+  add(cmd->add_option("--max-connections", flags->maxConnections,
+                      "Open connections at most; more get 503 and are closed")
+          ->check(CLI::Range(1, 1000000))
+          ->capture_default_str(),
+      &ServerSettings::maxConnections);
+  add(cmd->add_option("--read-timeout", flags->readTimeout,
+                      "Seconds a new connection has to send its first request whole")
+          ->check(CLI::Range(0.1, 3600.0))
+          ->capture_default_str(),
+      &ServerSettings::readTimeout);
+  add(cmd->add_option("--idle-timeout", flags->idleTimeout,
+                      "Seconds a keep-alive connection has to send its next request whole")
+          ->check(CLI::Range(0.1, 3600.0))
+          ->capture_default_str(),
+      &ServerSettings::idleTimeout);
+  add(cmd->add_option("--reload", flags->reloadSeconds,
+                      "Seconds between checks for stores replaced on disk or new in a served "
+                      "folder (0: never)")
+          ->check(CLI::Range(0.0, 86400.0))
+          ->capture_default_str(),
+      &ServerSettings::reloadSeconds);
+  add(cmd->add_flag("-q,--quiet", flags->quiet, "No access log (one line per request on stderr)"),
+      &ServerSettings::quiet);
+  add(cmd->add_option("--log-format", flags->logFormat,
+                      "Access log lines: text, or json (one JSON object per line)")
+          ->transform(CLI::CheckedTransformer(std::map<std::string, server::LogFormat>{
+              {"text", server::LogFormat::Text}, {"json", server::LogFormat::Json}}))
+          ->option_text("text|json (default: text)"),
+      &ServerSettings::logFormat);
+  add(cmd->add_flag("--on-demand", flags->onDemand,
+                    "Build tiles the tileset references but the store lacks from the store's "
+                    "TIN (once per tile; kept in memory and written into a writable store)"),
+      &ServerSettings::onDemand);
+  add(cmd->add_option(
+          "--viewer", flags->viewer,
+          "Folder of the viewer's pages and libraries (default: beside the "
+          "executable, /usr/share/tinsmith/viewer, or the source tree's server/viewer)"),
+      &ServerSettings::viewer);
+  add(cmd->add_option("--base-path", flags->basePath,
+                      "Answer under this path prefix (e.g. /terrain, behind a reverse proxy)"),
+      &ServerSettings::basePath);
   cmd->footer(
       "Routes: / (the CesiumJS viewer), /three (three.js viewer), /viewer/… (their\n"
       "files), /health, /metrics (Prometheus), /tilesets,\n"
@@ -132,37 +179,56 @@ void addServeCommand(CLI::App& app) {
       "{\"points\": [[x, y], …]}), /tilesets/ID/profile?line=x,y;x,y&spacing=S (or\n"
       "lonlat=; POST {\"line\": …}), /tilesets/ID/lines.geojson (break lines, GeoJSON).\n"
       "ID is a store's file name without .3dtiles.\n"
+      "Config: --config FILE reads FILE's [server] table, e.g.\n"
+      "  [server]\n"
+      "  stores = [\"../out/red-butte.3dtiles\"]\n"
+      "  port = 8080\n"
+      "  cors = \"off\"\n"
+      "  cache_mb = 512\n"
+      "  log_format = \"json\"\n"
       "SIGTERM/SIGINT: requests in flight finish, then exit 0.\n\n" +
       cmd->get_footer());
-  cmd->callback([opt] {
+  cmd->callback([flags, configFile, given] {
+    ServerSettings opt;
+    if (!configFile->empty()) server::applyServerConfig(*configFile, opt);
+    for (const auto& g : *given)
+      if (g.option->count() > 0) g.copy(opt, *flags);
+    if (opt.stores.empty())
+      throw usageError("no stores to serve",
+                       "name .3dtiles files or folders, or set stores = [...] in [server] of "
+                       "the --config file");
     server::TileServerOptions o;
-    for (const auto& s : opt->stores) o.stores.emplace_back(s);
-    o.http.host = opt->host;
-    o.http.port = static_cast<unsigned short>(opt->port);
-    o.http.threads = opt->threads;
-    o.http.limits.maxConnections = static_cast<std::size_t>(opt->maxConnections);
-    o.http.limits.readTimeout = seconds(opt->readTimeout);
-    o.http.limits.idleTimeout = seconds(opt->idleTimeout);
-    o.service.cors = opt->cors == "off" ? "" : opt->cors;
-    o.service.cacheBytes = opt->cacheMb << 20;
-    o.log = opt->quiet ? nullptr : stderr;
-    o.reloadInterval = seconds(opt->reloadSeconds);
-    o.service.basePath = server::normalizeBasePath(opt->basePath);
-    o.service.viewer = viewerAssets(opt->viewer);
+    for (const auto& s : opt.stores) o.stores.emplace_back(s);
+    o.http.host = opt.host;
+    o.http.port = static_cast<unsigned short>(opt.port);
+    o.http.threads = opt.threads;
+    o.http.limits.maxConnections = static_cast<std::size_t>(opt.maxConnections);
+    o.http.limits.readTimeout = seconds(opt.readTimeout);
+    o.http.limits.idleTimeout = seconds(opt.idleTimeout);
+    o.service.cors = opt.cors == "off" ? "" : opt.cors;
+    o.service.cacheBytes = opt.cacheMb << 20;
+    o.service.onDemand = opt.onDemand;
+    o.log = opt.quiet ? nullptr : stderr;
+    o.logFormat = opt.logFormat;
+    o.reloadInterval = seconds(opt.reloadSeconds);
+    o.service.basePath = server::normalizeBasePath(opt.basePath);
+    o.service.viewer = viewerAssets(opt.viewer);
     const auto viewer = o.service.viewer;
     const std::string base = o.service.basePath;
     server::TileServer server(std::move(o));
     std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
-              << " tileset(s) on http://" << opt->host << ":" << server.port() << base << "/" << std::endl;
+              << " tileset(s) on http://" << opt.host << ":" << server.port() << base << "/"
+              << std::endl;
     if (!viewer || !viewer->hasCesium())
-      std::cerr << "tinsmith serve: the viewer is not installed (run tools/setup.sh, or give --viewer DIR); "
+      std::cerr << "tinsmith serve: the viewer is not installed (run tools/setup.sh, or give "
+                   "--viewer DIR); "
                    "/ lists the stores"
                 << std::endl;
     else
-      std::cerr << "tinsmith serve: viewer from " << viewer->root().string() << " (" << viewer->size()
-                << " files)" << std::endl;
+      std::cerr << "tinsmith serve: viewer from " << viewer->root().string() << " ("
+                << viewer->size() << " files)" << std::endl;
     serveUntilSignalled(server);
-    if (!opt->quiet) std::cerr << "tinsmith serve: stopped" << std::endl;
+    if (!opt.quiet) std::cerr << "tinsmith serve: stopped" << std::endl;
   });
 }
 

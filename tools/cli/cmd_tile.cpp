@@ -3,6 +3,8 @@
 //   tinsmith tile SITE.tin -o PART.3dtiles --subtree Z/X/Y     (one shard)
 //   tinsmith tile SITE.tin -o TOP.3dtiles --until-zoom Z       (the tiles above the shards)
 //   tinsmith merge TOP.3dtiles PART*.3dtiles -o SITE.3dtiles
+//   tinsmith tile SITE.tin -o SITE.3dtiles --store-until-zoom Z (deeper tiles
+//                                                 for serve --on-demand)
 // A summary goes to stderr (or JSON to stdout with --json); a progress bar
 // when stderr is a terminal.
 #include <filesystem>
@@ -28,6 +30,7 @@ struct TileCliOptions {
   TileFlags flags;
   std::string subtree;
   std::optional<int> untilZoom;
+  std::optional<int> storeUntilZoom;
 };
 
 struct MergeCliOptions {
@@ -50,8 +53,12 @@ void addTileCommand(CLI::App& app) {
                   "Build only this tile and its descendants (Z/X/Y): a shard");
   cmd->add_option("--until-zoom", opt->untilZoom,
                   "Build only the tiles above this zoom: the shards' top");
+  cmd->add_option("--store-until-zoom", opt->storeUntilZoom,
+                  "Plan every tile (tileset.json lists them all) but store only those above "
+                  "this zoom; tinsmith serve --on-demand builds the rest from the store's TIN");
   cmd->callback([opt] {
     ingest::TileJobOptions o;
+    o.storeUntilZoom = opt->storeUntilZoom;
     if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
     o.untilZoom = opt->untilZoom;
     o = withTileFlags(o, opt->flags);
