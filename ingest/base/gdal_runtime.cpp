@@ -1,5 +1,6 @@
 #include "ingest/base/gdal_runtime.hpp"
 
+#include <cpl_error.h>
 #include <gdal.h>
 #include <ogr_srs_api.h>
 
@@ -23,6 +24,11 @@ std::string gdalVersionString() {
   return std::string("GDAL ") + GDALVersionInfo("RELEASE_NAME") + ", PROJ " +
          std::to_string(projMajor) + "." + std::to_string(projMinor) + "." +
          std::to_string(projPatch);
+}
+
+std::string lastGdalError() {
+  const char* msg = CPLGetLastErrorMsg();
+  return msg && *msg ? std::string(" (GDAL: ") + msg + ")" : std::string();
 }
 
 }  // namespace tinsmith::ingest

@@ -10,6 +10,9 @@ namespace tinsmith::ingest {
 /// GDAL use. Idempotent and cheap after the first call.
 void ensureGdalReady();
 
+/// GDAL's last error message as " (GDAL: …)" to append to ours, or "".
+std::string lastGdalError();
+
 /// "GDAL 3.6.2, PROJ 9.1.1" — for `tinsmith --version` and reports.
 std::string gdalVersionString();
 

@@ -1,4 +1,4 @@
-// The seam between the ingest front half (filters/load_layers.hpp) and the
+// The seam between the ingest front half (pipeline/load_layers.hpp) and the
 // TIN builder: IngestedLayers → BuildLayers, and the ingest stages' counts
 // and timings into the BuildReport.
 #pragma once
@@ -8,7 +8,7 @@
 
 #include "ingest/build/build_report.hpp"
 #include "ingest/build/tin_builder.hpp"
-#include "ingest/filters/load_layers.hpp"
+#include "ingest/pipeline/load_layers.hpp"
 
 namespace tinsmith::ingest {
 

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/base/error.hpp"
+#include "ingest/config/toml_nodes.hpp"
 #include "ingest/base/gdal_runtime.hpp"
 
 namespace tinsmith::ingest {
@@ -119,29 +120,6 @@ struct Context {
     throw inputError(problem, where, hint);
   }
 };
-
-std::int64_t lineOf(const toml::node& node) {
-  return static_cast<std::int64_t>(node.source().begin.line);
-}
-
-const char* typeName(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a number";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "an array";
-    default:
-      return "a date/time";
-  }
-}
 
 /// A value as the config wrote it, for messages: 0, -2.5, "zstd".
 std::string written(const toml::node& node) {

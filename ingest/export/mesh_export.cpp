@@ -3,7 +3,7 @@
 #include <charconv>
 #include <cstdio>
 
-#include "ingest/tinfile/atomic_file.hpp"
+#include "ingest/base/atomic_file.hpp"
 
 namespace tinsmith::ingest {
 

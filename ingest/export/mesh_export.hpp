@@ -2,7 +2,7 @@
 // Coordinates are printed as printf's "%.17g" does, so every double
 // round-trips exactly; x, y in the TIN's CRS, z in metres. Triangles keep the
 // TIN's counter-clockwise order. Output is deterministic and written
-// atomically (ingest/tinfile/atomic_file.hpp): a failure leaves no file.
+// atomically (ingest/base/atomic_file.hpp): a failure leaves no file.
 #pragma once
 
 #include <filesystem>

@@ -4,6 +4,7 @@
 
 #include "core/base/error.hpp"
 #include "core/surface/surface.hpp"
+#include "ingest/export/raster_writer.hpp"
 
 namespace tinsmith::ingest {
 

@@ -12,7 +12,7 @@
 #include <filesystem>
 
 #include "core/tin/tin_data.hpp"
-#include "ingest/readers/raster_io.hpp"
+#include "ingest/base/height_grid.hpp"
 
 namespace tinsmith::ingest {
 

@@ -13,7 +13,7 @@
 
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
-#include "ingest/readers/raster_io.hpp"
+#include "ingest/readers/raster_reader.hpp"
 #include "ingest/readers/text_points.hpp"
 
 namespace tinsmith::ingest {
@@ -33,11 +33,6 @@ SourceLocation layerLocation(const LayerConfig& config, std::optional<std::int64
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string lastGdalError() {
-  const char* msg = CPLGetLastErrorMsg();
-  return msg && *msg ? std::string(" (GDAL: ") + msg + ")" : std::string();
-}
 
 std::string crsString(const OGRSpatialReference* srs) {
   if (!srs) return {};

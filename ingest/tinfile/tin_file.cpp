@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/base/error.hpp"
-#include "ingest/tinfile/atomic_file.hpp"
+#include "ingest/base/atomic_file.hpp"
 #include "ingest/tinfile/tin_view.hpp"
 
 namespace tinsmith::ingest {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/base/error.hpp"
+#include "ingest/config/toml_nodes.hpp"
 
 namespace tinsmith::server {
 
@@ -27,32 +28,12 @@ bool parseLogFormat(std::string_view name, LogFormat& out) {
 
 namespace {
 
+using ingest::lineOf;
+using ingest::typeName;
+
 /// Top-level tables of a build config (ingest/config): allowed beside
 /// [server] and not read here.
 constexpr const char* kBuildTables[] = {"project", "layer", "tin", "fit", "tiles"};
-
-std::int64_t lineOf(const toml::node& node) {
-  return static_cast<std::int64_t>(node.source().begin.line);
-}
-
-const char* typeName(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a number";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "an array";
-    default:
-      return "a date/time";
-  }
-}
 
 struct Reader {
   fs::path file;

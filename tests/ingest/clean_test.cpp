@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "core/base/error.hpp"
-#include "ingest/filters/load_layers.hpp"
+#include "ingest/pipeline/load_layers.hpp"
 
 namespace tinsmith::ingest {
 namespace {

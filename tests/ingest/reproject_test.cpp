@@ -11,7 +11,7 @@
 
 #include "core/base/error.hpp"
 #include "ingest/config/project_config.hpp"
-#include "ingest/filters/load_layers.hpp"
+#include "ingest/pipeline/load_layers.hpp"
 #include "ingest/readers/layer_reader.hpp"
 #include "tests/support/run_command.hpp"
 

@@ -15,7 +15,7 @@
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/build/tin_builder.hpp"
 #include "ingest/config/project_config.hpp"
-#include "ingest/filters/load_layers.hpp"
+#include "ingest/pipeline/load_layers.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tests/support/run_command.hpp"
 

@@ -16,8 +16,8 @@
 
 #include "core/base/error.hpp"
 #include "core/fit/multilevel_fit.hpp"
-#include "ingest/readers/raster_io.hpp"
-#include "ingest/tinfile/atomic_file.hpp"
+#include "ingest/readers/raster_reader.hpp"
+#include "ingest/base/atomic_file.hpp"
 #include "ingest/readers/text_points.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"

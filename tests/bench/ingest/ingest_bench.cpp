@@ -49,7 +49,7 @@
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/build/tin_builder.hpp"
 #include "ingest/filters/clean.hpp"
-#include "ingest/filters/load_layers.hpp"
+#include "ingest/pipeline/load_layers.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 namespace {

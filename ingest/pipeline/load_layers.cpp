@@ -1,4 +1,4 @@
-#include "ingest/filters/load_layers.hpp"
+#include "ingest/pipeline/load_layers.hpp"
 
 #include <chrono>
 

@@ -1,11 +1,10 @@
-#include "ingest/readers/raster_io.hpp"
+#include "ingest/readers/raster_reader.hpp"
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfMatrixAttribute.h>
-#include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <cpl_conv.h>
 #include <cpl_error.h>
@@ -16,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
 
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
@@ -29,11 +29,6 @@ SourceLocation at(const std::filesystem::path& path) {
   return where;
 }
 
-std::string lastGdalError() {
-  const char* msg = CPLGetLastErrorMsg();
-  return msg && *msg ? std::string(" (GDAL: ") + msg + ")" : std::string();
-}
-
 bool isExr(const std::filesystem::path& path) {
   auto ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -41,41 +36,7 @@ bool isExr(const std::filesystem::path& path) {
   return ext == ".exr";
 }
 
-void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
-  if (grid.width <= 0 || grid.height <= 0 ||
-      grid.z.size() !=
-          static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height)) {
-    throw ioError("height grid is malformed: " + std::to_string(grid.width) + " x " +
-                      std::to_string(grid.height) + " with " + std::to_string(grid.z.size()) +
-                      " values",
-                  at(path));
-  }
-}
-
-// A temporary sibling path; renamed over `path` once complete.
-std::filesystem::path partPath(const std::filesystem::path& path) {
-  auto tmp = path;
-  tmp += ".part";
-  return tmp;
-}
-
-void commit(const std::filesystem::path& tmp, const std::filesystem::path& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw ioError("cannot move the finished file into place: " + ec.message(), at(path));
-  }
-}
-
 }  // namespace
-
-Point2 HeightGrid::cellCentre(int col, int row) const {
-  const double c = col + 0.5;
-  const double r = row + 0.5;
-  const auto& g = geotransform;
-  return {g[0] + c * g[1] + r * g[2], g[3] + c * g[4] + r * g[5]};
-}
 
 HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOptions& options) {
   std::error_code ec;
@@ -147,83 +108,6 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
     if (!std::isfinite(v)) v = nan;  // infinities are never heights
   }
   return grid;
-}
-
-void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
-  checkGrid(grid, path);
-  ensureGdalReady();
-  auto* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
-  if (!driver) throw internalError("GDAL has no GTiff driver");
-  const auto tmp = partPath(path);
-  char** options = nullptr;
-  options = CSLSetNameValue(options, "COMPRESS", "DEFLATE");
-  options = CSLSetNameValue(options, "PREDICTOR", "3");
-  if (grid.width >= 512 && grid.height >= 512) options = CSLSetNameValue(options, "TILED", "YES");
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset> ds(
-      driver->Create(tmp.string().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
-  CSLDestroy(options);
-  if (!ds)
-    throw ioError("cannot create the GeoTIFF" + lastGdalError(), at(path),
-                  "check the folder exists and is writable");
-  auto fail = [&](const std::string& what) {
-    ds.reset();
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw ioError(what + lastGdalError(), at(path));
-  };
-  auto gt = grid.geotransform;
-  if (ds->SetGeoTransform(gt.data()) != CE_None) fail("cannot write the geotransform");
-  if (!grid.crs.empty()) {
-    OGRSpatialReference srs;
-    if (srs.SetFromUserInput(grid.crs.c_str()) != OGRERR_NONE)
-      fail("unknown CRS '" + grid.crs + "'");
-    if (ds->SetSpatialRef(&srs) != CE_None) fail("cannot write the CRS");
-  }
-  auto* band = ds->GetRasterBand(1);
-  band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
-  if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, const_cast<float*>(grid.z.data()),
-                     grid.width, grid.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
-    fail("cannot write the cells");
-  }
-  CPLErrorReset();
-  ds->FlushCache(true);
-  if (CPLGetLastErrorType() >= CE_Failure) fail("cannot finish the GeoTIFF");
-  CPLErrorReset();
-  ds.reset();  // closes the file
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw ioError("cannot finish the GeoTIFF" + lastGdalError(), at(path));
-  }
-  commit(tmp, path);
-}
-
-void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
-  checkGrid(grid, path);
-  const auto tmp = partPath(path);
-  try {
-    Imf::Header header(grid.width, grid.height);
-    header.compression() = Imf::ZIP_COMPRESSION;
-    header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
-    const auto& g = grid.geotransform;
-    header.insert("geoTransform",
-                  Imf::M33dAttribute(Imath::M33d(g[1], g[2], g[0], g[4], g[5], g[3], 0, 0, 1)));
-    if (!grid.crs.empty()) header.insert("crs", Imf::StringAttribute(grid.crs));
-    Imf::OutputFile file(tmp.string().c_str(), header);
-    Imf::FrameBuffer frame;
-    frame.insert("Z",
-                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(grid.z.data())),
-                            sizeof(float), sizeof(float) * static_cast<std::size_t>(grid.width)));
-    file.setFrameBuffer(frame);
-    file.writePixels(grid.height);
-  } catch (const std::exception& e) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw ioError(std::string("cannot write the EXR heightmap (OpenEXR: ") + e.what() + ")",
-                  at(path), "check the folder exists and is writable");
-  }
-  commit(tmp, path);
 }
 
 HeightGrid readExr(const std::filesystem::path& path) {

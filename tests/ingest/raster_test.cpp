@@ -1,6 +1,7 @@
 // readers.raster / writers.raster: GeoTIFF and EXR round trips with
 // georeferencing and nodata, DEM layers as points, the real dem.tif and SRTM.
-#include "ingest/readers/raster_io.hpp"
+#include "ingest/export/raster_writer.hpp"
+#include "ingest/readers/raster_reader.hpp"
 
 #include <gtest/gtest.h>
 

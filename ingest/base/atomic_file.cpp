@@ -1,4 +1,4 @@
-#include "ingest/tinfile/atomic_file.hpp"
+#include "ingest/base/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

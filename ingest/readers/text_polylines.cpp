@@ -1,4 +1,4 @@
-#include "ingest/build/text_polylines.hpp"
+#include "ingest/readers/text_polylines.hpp"
 
 #include <charconv>
 #include <cmath>
