@@ -25,6 +25,7 @@
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/output_paths.hpp"
 #include "tools/cli/progress_bar.hpp"
 #include "tools/cli/tile_options.hpp"
@@ -135,7 +136,7 @@ void addBuildCommand(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("build", "Run the whole job from a config: ingest → TIN → tiles → store");
   cmd->add_option("config", opt->config, "Project config (TOML), see config/README.md")->required();
-  cmd->add_option("-o,--output", opt->output,
+  addOutputOption(*cmd, opt->output,
                   "Tile store to write, a .3dtiles archive or a directory (default: [tiles] "
                   "output). The TIN is kept beside it as STEM.tin");
   addTileFlags(*cmd, opt->flags, true);

@@ -10,6 +10,7 @@
 #include "ingest/export/rasterise.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 
 namespace tinsmith::cli {
 
@@ -27,7 +28,7 @@ void addExportCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("export", "Export a TIN: OBJ, PLY, EXR or GeoTIFF heightmap, single glb");
   cmd->add_option("tin", opt->tin, "The .tin file")->required();
   cmd->add_option("--format", opt->format, "obj | ply | exr | tif | glb")->required();
-  cmd->add_option("-o,--output", opt->output, "File to write")->required();
+  addOutputOption(*cmd, opt->output, "File to write")->required();
   cmd->add_option("--cell", opt->cell, "Raster cell size in metres (exr, tif)");
   cmd->callback([opt] {
     const std::string& f = opt->format;

@@ -21,6 +21,7 @@
 #include "ingest/readers/text_points.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 
 namespace tinsmith::cli {
 
@@ -266,18 +267,18 @@ void addFitCommand(CLI::App& app) {
   cmd->add_option("--lambda-abs", o->lambdaAbs, "Absolute smoothing weight (overrides --lambda)");
   cmd->add_option("--smoothing", o->smoothing, "thin-plate (default) | membrane | umbrella | umbrella-weighted | none");
   cmd->add_option("--criterion", o->criterion, "error, count:N, curvature:T, or a comma-separated combination (all must hold)");
-  cmd->add_option("-o,--output", o->output, "The .tin file to write")->required();
+  addOutputOption(*cmd, o->output, "The .tin file to write")->required();
   cmd->add_option("--stats", o->stats, "Per-level statistics as JSON");
   cmd->add_option("--solver", o->solver, "gs (Gauss-Seidel, default) | cg | direct, on the levels after --direct-levels");
   cmd->add_option("--max-level", o->maxLevel, "The finest grid level whose cells may be refined (1..29, default 20)");
   cmd->add_option("--direct-levels", o->directLevels, "Levels solved by the direct solver first (default 3)");
-  cmd->add_option("--threads", o->threads, "Worker threads (default: all cores)");
-  cmd->add_option("--crs", o->crs, "CRS to record in the .tin (e.g. EPSG:32619)");
+  addThreadsOption(*cmd, o->threads, "Worker threads", "the same fit for any count");
+  addCrsOption(*cmd, o->crs, "CRS to record in the .tin");
   cmd->add_option("--domain", o->domain,
                   "The square to fit over, as X0,Y0,SIZE: lower-left corner and side in the "
                   "points' units (default: the bounding square of the points); every point must "
                   "lie in it");
-  cmd->add_flag("-q,--quiet", o->quiet, "No progress and no summary on stderr");
+  addQuietFlag(*cmd, o->quiet, "No progress and no summary on stderr");
   cmd->add_option("--weights-column", o->weightsColumn,
                   "Column of the point file (0-based index or header name) holding a weight w > 0 for each point "
                   "(weighted least squares, 8.8)");

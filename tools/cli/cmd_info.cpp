@@ -11,6 +11,7 @@
 #include "ingest/tinfile/tin_summary.hpp"
 #include "ingest/tiles/tile_job.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/tile_summary.hpp"
 
 namespace tinsmith::cli {
@@ -26,7 +27,7 @@ void addInfoCommand(CLI::App& app) {
   auto opt = std::make_shared<InfoOptions>();
   auto* cmd = app.add_subcommand("info", "Describe a .tin file or a tile store");
   cmd->add_option("file", opt->file, "A .tin file or a tile store")->required();
-  cmd->add_flag("--json", opt->json, "Print JSON");
+  addJsonFlag(*cmd, opt->json);
   cmd->callback([opt] {
     const std::filesystem::path path(opt->file);
     const std::string ext = path.extension().string();

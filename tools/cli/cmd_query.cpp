@@ -19,6 +19,7 @@
 #include "ingest/export/mesh_export.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 
 namespace tinsmith::cli {
 
@@ -93,7 +94,7 @@ void addQueryCommand(CLI::App& app) {
   cmd->add_option("x", opt->x, "Easting in the TIN's CRS");
   cmd->add_option("y", opt->y, "Northing in the TIN's CRS");
   cmd->add_option("--points", opt->points, "A file of query points, x y per line");
-  cmd->add_flag("--json", opt->json, "Print JSON");
+  addJsonFlag(*cmd, opt->json);
   cmd->footer(
       "A single point outside the TIN is an input error (exit 3), also with --json, which\n"
       "still prints its record (z, normal and slope null) to stdout. With --points, points\n"

@@ -27,6 +27,7 @@
 #include "server/app/server_config.hpp"
 #include "server/app/tile_server.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 
 namespace tinsmith::cli {
 
@@ -126,10 +127,7 @@ void addServeCommand(CLI::App& app) {
           ->check(CLI::Range(0, 1 << 20))
           ->capture_default_str(),
       &ServerSettings::cacheMb);
-  add(cmd->add_option("--threads", flags->threads, "I/O threads (0: one per core)")
-          ->check(CLI::Range(0, 256))
-          ->capture_default_str(),
-      &ServerSettings::threads);
+  add(addThreadsOption(*cmd, flags->threads, "I/O threads", {}, 256), &ServerSettings::threads);
   add(cmd->add_option("--max-connections", flags->maxConnections,
                       "Open connections at most; more get 503 and are closed")
           ->check(CLI::Range(1, 1000000))
@@ -151,7 +149,7 @@ void addServeCommand(CLI::App& app) {
           ->check(CLI::Range(0.0, 86400.0))
           ->capture_default_str(),
       &ServerSettings::reloadSeconds);
-  add(cmd->add_flag("-q,--quiet", flags->quiet, "No access log (one line per request on stderr)"),
+  add(addQuietFlag(*cmd, flags->quiet, "No access log (one line per request on stderr)"),
       &ServerSettings::quiet);
   add(cmd->add_option("--log-format", flags->logFormat,
                       "Access log lines: text, or json (one JSON object per line)")

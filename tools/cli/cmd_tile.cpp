@@ -17,6 +17,7 @@
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/progress_bar.hpp"
 #include "tools/cli/tile_options.hpp"
 
@@ -46,7 +47,7 @@ void addTileCommand(CLI::App& app) {
   auto opt = std::make_shared<TileCliOptions>();
   auto* cmd = app.add_subcommand("tile", "Cut a TIN into level-of-detail 3D Tiles (Draco glTF)");
   cmd->add_option("tin", opt->tin, "The .tin file to tile")->required();
-  cmd->add_option("-o,--output", opt->output, "Tile store: a .3dtiles archive, or a directory")
+  addOutputOption(*cmd, opt->output, "Tile store: a .3dtiles archive, or a directory")
       ->required();
   addTileFlags(*cmd, opt->flags, false);
   cmd->add_option("--subtree", opt->subtree,
@@ -75,10 +76,10 @@ void addTileCommand(CLI::App& app) {
   mcmd->add_option("stores", merge->inputs,
                    "Shard stores (from tinsmith tile --subtree / --until-zoom)")
       ->required();
-  mcmd->add_option("-o,--output", merge->output, "The joined store (.3dtiles or a directory)")
+  addOutputOption(*mcmd, merge->output, "The joined store (.3dtiles or a directory)")
       ->required();
-  mcmd->add_flag("-q,--quiet", merge->quiet, "No summary");
-  mcmd->add_flag("--json", merge->json, "Print the summary as JSON on stdout");
+  addQuietFlag(*mcmd, merge->quiet, "No summary");
+  addJsonFlag(*mcmd, merge->json, "Print the summary as JSON on stdout");
   mcmd->callback([merge] {
     std::vector<std::filesystem::path> inputs(merge->inputs.begin(), merge->inputs.end());
     const auto summary = ingest::mergeTileStores(inputs, merge->output);

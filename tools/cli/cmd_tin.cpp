@@ -32,6 +32,7 @@
 #include "ingest/base/atomic_file.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/output_paths.hpp"
 #include "tools/cli/progress_bar.hpp"
 
@@ -203,10 +204,10 @@ void addTinCommand(CLI::App& app) {
   cmd->add_option("--breaklines", opt->breaklines,
                   "Break lines (plain mode): GeoJSON (Multi)LineString with 3D coordinates, or text "
                   "polylines (.txt/.xyz: x y z per line, a blank line between polylines)");
-  cmd->add_option("-o,--output", opt->output, "The .tin file to write")->required();
+  addOutputOption(*cmd, opt->output, "The .tin file to write")->required();
   cmd->add_option("--report", opt->report, "Also write the build report as JSON to this file");
   cmd->add_option("--snap", opt->snap, "Plain mode: merge points closer than this (metres; default 0)");
-  cmd->add_option("--crs", opt->crs, "Plain mode: the CRS to record in the TIN (e.g. EPSG:26912)");
+  addCrsOption(*cmd, opt->crs, "Plain mode: the CRS to record in the TIN");
   cmd->add_flag("--strict", opt->strict, "Config mode: crossing contours are fatal, not just reported");
   cmd->add_flag("--no-flat-repair", opt->noFlatRepair, "Config mode: keep flat triangles");
   cmd->add_option("--trim-hull", opt->trimHull,
@@ -216,10 +217,8 @@ void addTinCommand(CLI::App& app) {
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
-  cmd->add_option("--threads", opt->threads,
-                  "Threads for the triangulation (default 0: all cores; the TIN is the same for "
-                  "any count)");
-  cmd->add_flag("-q,--quiet", opt->quiet, "No summary and no progress on stderr");
+  addThreadsOption(*cmd, opt->threads, "Threads for the triangulation", "the TIN is the same for any count");
+  addQuietFlag(*cmd, opt->quiet, "No summary and no progress on stderr");
   cmd->callback([opt] { run(*opt); });
 }
 

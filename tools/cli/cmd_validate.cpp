@@ -12,6 +12,7 @@
 #include "ingest/tinfile/tin_file.hpp"
 #include "ingest/tinfile/tin_summary.hpp"
 #include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/exit_codes.hpp"
 
 namespace tinsmith::cli {
@@ -28,7 +29,7 @@ void addValidateCommand(CLI::App& app) {
   auto opt = std::make_shared<ValidateOptions>();
   auto* cmd = app.add_subcommand("validate", "Check a TIN: topology, orientation, constraints, Delaunay property");
   cmd->add_option("tin", opt->tin, "The .tin file")->required();
-  cmd->add_flag("--json", opt->json, "Print JSON");
+  addJsonFlag(*cmd, opt->json);
   cmd->add_flag("--no-delaunay", opt->noDelaunay, "Skip the Delaunay check of unconstrained edges");
   cmd->callback([opt] {
     const TinData tin = ingest::readTinFile(opt->tin);

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "core/base/error.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/tile_summary.hpp"
 
 namespace tinsmith::cli {
@@ -28,13 +29,12 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig) {
                  "ecef (3D Tiles on the globe) or local (ENU metres)" + dflt("frame", "ecef"));
   cmd.add_option("--geoid", flags.geoid,
                  "egm96: the TIN's z are EGM96 heights; \"\": ellipsoidal" + dflt("geoid", "\"\""));
-  cmd.add_option("--threads", flags.threads,
-                 "Worker threads (default 0: all cores); the same bytes for any");
+  addThreadsOption(cmd, flags.threads, "Worker threads", "the same bytes for any count");
   cmd.add_flag("--resume", flags.resume,
                "Keep tiles already in the store (or its .partial staging archive) and build only "
                "the missing ones");
-  cmd.add_flag("-q,--quiet", flags.quiet, "No summary, no progress bar");
-  cmd.add_flag("--json", flags.json, "Print the summary as JSON on stdout");
+  addQuietFlag(cmd, flags.quiet, "No summary, no progress bar");
+  addJsonFlag(cmd, flags.json, "Print the summary as JSON on stdout");
 }
 
 ingest::TileJobOptions withTileFlags(ingest::TileJobOptions o, const TileFlags& flags) {
