@@ -52,15 +52,28 @@ function load(id) {
   tiles.registerPlugin(new ReorientationPlugin({ up: '+y', recenter: true }));
   tiles.setCamera(camera);
   tiles.setResolutionFromRenderer(camera, renderer);
+  // Ready once framed, at least one tile drawn and nothing loading: checked
+  // on both events, as a tile's 'load-model' can come after the queue's
+  // 'tiles-load-end' (which also fires between the root tileset and its
+  // first content).
+  let framed = false;
+  let idle = false;
+  const maybeReady = () => {
+    if (!framed || !idle || api.loadedModels === 0) return;
+    status(`${id}: ${api.loadedModels} tile${api.loadedModels === 1 ? "" : "s"} loaded. Drag to orbit, right-drag to pan, wheel to zoom.`);
+    // Two more frames so the last tiles are drawn before anyone looks.
+    requestAnimationFrame(() => requestAnimationFrame(() => resolveReady(api)));
+  };
   tiles.addEventListener('load-model', ({ scene: model }) => {
     api.loadedModels += 1;
     model.traverse((o) => { if (o.isMesh) o.material = material; });
+    maybeReady();
   });
+  tiles.addEventListener('tiles-load-start', () => { idle = false; });
   tiles.addEventListener('load-error', ({ error, url: where }) => {
     api.errors.push(`${where}: ${error && error.message}`);
     status(`Failed to load ${where}: ${error && error.message}`, true);
   });
-  let framed = false;
   tiles.addEventListener('load-root-tileset', () => {
     const sphere = new THREE.Sphere();
     if (!tiles.getBoundingSphere(sphere)) return;
@@ -76,12 +89,8 @@ function load(id) {
     framed = true;
   });
   tiles.addEventListener('tiles-load-end', () => {
-    // The queue also empties between the root tileset and its first content
-    // (the content is requested on a later update): ready means a tile drawn.
-    if (!framed || api.loadedModels === 0) return;
-    status(`${id}: ${api.loadedModels} tile${api.loadedModels === 1 ? "" : "s"} loaded. Drag to orbit, right-drag to pan, wheel to zoom.`);
-    // Two more frames so the last tiles are drawn before anyone looks.
-    requestAnimationFrame(() => requestAnimationFrame(() => resolveReady(api)));
+    idle = true;
+    maybeReady();
   });
   scene.add(tiles.group);
   api.tiles = tiles;
