@@ -1,124 +1,119 @@
 // The mesh validator (see validate.hpp).
+//
+// Every check is a linear pass over the mesh's arrays, in storage order: the
+// triangles (orientation, and each corner's share of its vertex's star), the
+// half-edges (twins, constraint flags, features, and the Delaunay test), then
+// the few boundary half-edges (loops). No pass walks a vertex's star, whose
+// random hops through the arrays cost more than all the rest together on a
+// million-vertex TIN. The triangle and half-edge passes run in parts
+// (parallelParts); the problems each part finds are merged in part order, so
+// the report is the same for any thread count.
 #include "core/mesh/validate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <unordered_map>
 #include <vector>
 
+#include "core/base/parallel.hpp"
 #include "core/geometry/predicates.hpp"
 
 namespace tinsmith {
 namespace {
 
-class Collector {
+/// The problems one part of a pass found, the first `max` of them in text.
+class Problems {
  public:
-  Collector(ValidationReport& r, std::size_t max) : r_(r), max_(max) {}
+  explicit Problems(std::size_t max) : max_(max) {}
   void add(const std::string& s) {
-    r_.ok = false;
-    ++r_.problemCount;
-    if (r_.problems.size() < max_) r_.problems.push_back(s);
+    ++count_;
+    if (listed_.size() < max_) listed_.push_back(s);
+  }
+  /// Appends another part's problems (the parts are merged in order).
+  void add(Problems&& part) {
+    count_ += part.count_;
+    for (auto& s : part.listed_)
+      if (listed_.size() < max_) listed_.push_back(std::move(s));
+  }
+  void writeTo(ValidationReport& r) && {
+    r.ok = count_ == 0;
+    r.problemCount = count_;
+    r.problems = std::move(listed_);
   }
 
  private:
-  ValidationReport& r_;
   std::size_t max_;
+  std::size_t count_ = 0;
+  std::vector<std::string> listed_;
 };
+
+/// Loops of at least this many items run in parts.
+constexpr std::size_t kSerialBelow = 1 << 16;
+/// Parts of a pass (fixed, so the merge order does not depend on threads).
+constexpr unsigned kParts = 64;
+
+/// Runs pass(begin, end, problems, partResult) over [0, n) in parts and
+/// merges the parts' problems into `problems` and their results with
+/// `combine`, both in part order.
+template <class Result, class Pass, class Combine>
+void inParts(std::size_t n, unsigned threads, std::size_t maxProblems, Problems& problems,
+             Pass&& pass, Combine&& combine) {
+  std::vector<Problems> found(kParts, Problems(maxProblems));
+  std::vector<Result> results(kParts);
+  parallelParts(
+      n, kParts, threads,
+      [&](std::size_t b, std::size_t e, unsigned part) { pass(b, e, found[part], results[part]); },
+      kSerialBelow);
+  for (unsigned part = 0; part < kParts; ++part) {
+    problems.add(std::move(found[part]));
+    combine(results[part]);
+  }
+}
 
 std::string edgeName(const Mesh& m, HalfedgeId h) {
   return std::to_string(m.origin(h).value) + "-" + std::to_string(m.target(h).value);
 }
 
-}  // namespace
+/// Triangles ahead of the one being checked whose corners are prefetched
+/// (the vertices of a triangle are anywhere in the point array).
+constexpr std::size_t kPrefetch = 16;
 
-std::string ValidationReport::summary() const {
-  std::ostringstream s;
-  s << (ok ? "ok" : "FAILED") << ": " << vertices << " vertices, " << triangles << " triangles, "
-    << edges << " edges (" << boundaryEdges << " on the boundary in " << boundaryLoops
-    << (boundaryLoops == 1 ? " loop), " : " loops), ") << constrainedEdges << " constrained edges";
-  if (!ok) {
-    s << "; " << problemCount << " problems";
-    for (const auto& p : problems) s << "\n  " << p;
-    if (problems.size() < problemCount) s << "\n  …";
-  }
-  return s.str();
+void prefetchCorners(const Mesh& m, std::size_t t) {
+  for (VertexId v : m.vertices(TriangleId(static_cast<std::uint32_t>(t))))
+    __builtin_prefetch(&m.point(v));
 }
 
-ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
-  ValidationReport r;
-  Collector problems(r, options.maxProblems);
-  for (const auto& p : m.buildProblems()) problems.add(p);
+/// Is w in the half-plane "above" c: [0, π) measured from c (y greater, or
+/// equal y and x greater)?
+bool upperOf(const Point2& c, const Point2& w) {
+  return w.y > c.y || (w.y == c.y && w.x > c.x);
+}
 
-  const std::size_t nt = m.triangleCount(), nh = m.halfedgeCount();
-  r.triangles = nt;
-  std::vector<std::uint32_t> cornersAt(m.vertexCount(), 0);
-
-  for (std::size_t v = 0; v < m.vertexCount(); ++v) {
-    const Point3& p = m.point(VertexId(static_cast<std::uint32_t>(v)));
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      problems.add("vertex " + std::to_string(v) + " has a non-finite coordinate");
-    }
-  }
-
-  // Orientation.
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    const auto v = m.vertices(TriangleId(t));
-    for (VertexId x : v) ++cornersAt[x.value];
-    if (geometry::orient2d(m.xy(v[0]), m.xy(v[1]), m.xy(v[2])) <= 0) {
-      problems.add("triangle " + std::to_string(t) + " (" + std::to_string(v[0].value) + ", " +
-                   std::to_string(v[1].value) + ", " + std::to_string(v[2].value) +
-                   ") is not strictly counter-clockwise");
-    }
-  }
-
-  // Twins and constraint flags.
-  std::size_t boundary = 0, interiorHalf = 0, constrained = 0;
-  for (std::uint32_t i = 0; i < nh; ++i) {
-    const HalfedgeId h(i);
-    const HalfedgeId t = m.twin(h);
-    if (!t.valid()) {
-      ++boundary;
-      if (m.isConstrained(h)) ++constrained;
-    } else {
-      ++interiorHalf;
-      if (t.value >= nh || m.twin(t) != h || m.origin(t) != m.target(h) ||
-          m.target(t) != m.origin(h)) {
-        problems.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
-                     ") and its twin are not symmetric");
-        continue;
-      }
-      const auto fa = m.edgeFeatures(h), fb = m.edgeFeatures(t);
-      if (!std::equal(fa.begin(), fa.end(), fb.begin(), fb.end())) {
-        problems.add("edge " + edgeName(m, h) + " has different constraint features on its sides");
-      }
-      if (i < t.value && m.isConstrained(h)) ++constrained;
-    }
-    for (std::uint32_t f : m.edgeFeatures(h)) {
-      if (f >= m.features().size()) {
-        problems.add("edge " + edgeName(m, h) + " names unknown feature " + std::to_string(f));
-      }
-    }
-  }
-  r.boundaryEdges = boundary;
-  r.edges = boundary + interiorHalf / 2;
-  r.constrainedEdges = constrained;
-
-  // Boundary loops, their orientation, and pinched vertices.
-  std::vector<bool> seen(nh, false);
-  long long loopSum = 0;
+/// The boundary loops: how many, and Σ of their orientations (+1 CCW, −1 CW).
+struct BoundaryLoops {
   std::size_t loops = 0;
-  for (std::uint32_t i = 0; i < nh; ++i) {
-    if (m.twin(HalfedgeId(i)).valid() || seen[i]) continue;
-    ++loops;
-    const Point2 o = m.xy(m.origin(HalfedgeId(i)));
+  long long orientationSum = 0;
+};
+
+BoundaryLoops traceBoundaryLoops(const Mesh& m, const std::vector<HalfedgeId>& boundary,
+                                 Problems& problems) {
+  BoundaryLoops result;
+  const std::size_t nh = m.halfedgeCount();
+  std::vector<bool> seen(nh, false);
+  for (HalfedgeId start : boundary) {
+    if (seen[start.value]) continue;
+    ++result.loops;
+    const Point2 o = m.xy(m.origin(start));
     double area = 0;
-    HalfedgeId h(i);
+    HalfedgeId h = start;
     bool broken = false;
     bool haveMin = false;
     Point2 minV;
     int minVisits = 0;  // a loop through a pinched vertex may pass it twice
     int turn = 0;
-    for (std::size_t steps = 0; !seen[h.value]; ++steps) {
+    for (std::size_t steps = 0;; ++steps) {
+      if (seen[h.value]) break;
       seen[h.value] = true;
       const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
       area += geometry::orient2dInexact(o, a, b);
@@ -144,75 +139,204 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
       h = g;
     }
     if (broken) {
-      problems.add("boundary loop through half-edge " + std::to_string(i) + " does not close");
+      problems.add("boundary loop through half-edge " + std::to_string(start.value) +
+                   " does not close");
       continue;
     }
     // At a vertex the loop passes twice (two holes touching there) the
     // local turn says nothing about the loop: take the area's sign.
     if (turn == 0 || minVisits > 1) turn = area > 0 ? 1 : -1;
-    loopSum += turn;
+    result.orientationSum += turn;
   }
-  r.boundaryLoops = loops;
+  return result;
+}
 
-  // Boundary half-edges leaving each boundary vertex (few: a map, not a
-  // vertex-sized array).
-  std::unordered_map<std::uint32_t, std::uint32_t> boundaryOutOf;
-  for (std::uint32_t i = 0; i < nh; ++i) {
-    if (!m.twin(HalfedgeId(i)).valid()) ++boundaryOutOf[m.origin(HalfedgeId(i)).value];
+}  // namespace
+
+std::string ValidationReport::summary() const {
+  std::ostringstream s;
+  s << (ok ? "ok" : "FAILED") << ": " << vertices << " vertices, " << triangles << " triangles, "
+    << edges << " edges (" << boundaryEdges << " on the boundary in " << boundaryLoops
+    << (boundaryLoops == 1 ? " loop), " : " loops), ") << constrainedEdges << " constrained edges";
+  if (!ok) {
+    s << "; " << problemCount << " problems";
+    for (const auto& p : problems) s << "\n  " << p;
+    if (problems.size() < problemCount) s << "\n  …";
+  }
+  return s.str();
+}
+
+ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
+  ValidationReport r;
+  const std::size_t maxProblems = options.maxProblems;
+  const unsigned threads = resolveThreads(options.threads);
+  Problems problems(maxProblems);
+  for (const auto& p : m.buildProblems()) problems.add(p);
+
+  const std::size_t nv = m.vertexCount(), nt = m.triangleCount(), nh = m.halfedgeCount();
+  r.triangles = nt;
+
+  for (std::size_t v = 0; v < nv; ++v) {
+    const Point3& p = m.point(VertexId(static_cast<std::uint32_t>(v)));
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      problems.add("vertex " + std::to_string(v) + " has a non-finite coordinate");
+    }
+  }
+
+  // Orientation, triangle by triangle, and each corner's share of its
+  // vertex's star: going counter-clockwise around a vertex, corner by corner,
+  // each corner turns by less than π, so a closed fan of strictly CCW
+  // triangles crosses from the lower half-plane around the vertex into the
+  // upper one once per turn it winds. A corner "crosses" when its outgoing
+  // edge points below and its incoming edge comes from above; the crossings
+  // summed over a vertex's corners equal its winding number when its corners
+  // form one fan, and exceed 1 when they form several (every closed fan
+  // winds at least once).
+  std::vector<std::uint8_t> crosses(nh);
+  struct NoResult {};
+  inParts<NoResult>(
+      nt, threads, maxProblems, problems,
+      [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
+        for (std::size_t t = b; t < e; ++t) {
+          if (t + kPrefetch < e) prefetchCorners(m, t + kPrefetch);
+          const auto v = m.vertices(TriangleId(static_cast<std::uint32_t>(t)));
+          const Point2 p[3] = {m.xy(v[0]), m.xy(v[1]), m.xy(v[2])};
+          if (geometry::orient2d(p[0], p[1], p[2]) <= 0) {
+            found.add("triangle " + std::to_string(t) + " (" + std::to_string(v[0].value) + ", " +
+                      std::to_string(v[1].value) + ", " + std::to_string(v[2].value) +
+                      ") is not strictly counter-clockwise");
+          }
+          for (int i = 0; i < 3; ++i)
+            crosses[3 * t + i] = !upperOf(p[i], p[(i + 1) % 3]) && upperOf(p[i], p[(i + 2) % 3]);
+        }
+      },
+      [](NoResult&) {});
+
+  // Per vertex: its corners and crossings. Each part owns a range of vertices
+  // and reads every corner (a sequential read; the counters it updates at
+  // random are its own), so parts never write to the same counter.
+  std::vector<std::uint32_t> cornersAt(nv, 0), crossingsAt(nv, 0);
+  const unsigned vertexParts = std::max(1u, std::min(threads, 8u));
+  parallelParts(nv, vertexParts, threads, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t h = 0; h < nh; ++h) {
+      const std::uint32_t v = m.origin(HalfedgeId(static_cast<std::uint32_t>(h))).value;
+      if (v < b || v >= e) continue;
+      ++cornersAt[v];
+      crossingsAt[v] += crosses[h];
+    }
+  });
+  std::vector<std::uint8_t>().swap(crosses);
+
+  // Twins, constraint flags and features, half-edge by half-edge; the
+  // boundary half-edges are collected for the loops.
+  struct HalfedgeCounts {
+    std::size_t boundary = 0, interiorHalf = 0, constrained = 0;
+    std::vector<HalfedgeId> boundaryHalfedges;
+  };
+  HalfedgeCounts counts;
+  inParts<HalfedgeCounts>(
+      nh, threads, maxProblems, problems,
+      [&](std::size_t b, std::size_t e, Problems& found, HalfedgeCounts& c) {
+        for (std::size_t i = b; i < e; ++i) {
+          const HalfedgeId h(static_cast<std::uint32_t>(i));
+          const HalfedgeId t = m.twin(h);
+          if (!t.valid()) {
+            ++c.boundary;
+            c.boundaryHalfedges.push_back(h);
+            if (m.isConstrained(h)) ++c.constrained;
+          } else {
+            ++c.interiorHalf;
+            if (t.value >= nh || m.twin(t) != h || m.origin(t) != m.target(h) ||
+                m.target(t) != m.origin(h)) {
+              found.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
+                        ") and its twin are not symmetric");
+              continue;
+            }
+            const auto fa = m.edgeFeatures(h), fb = m.edgeFeatures(t);
+            if (!std::equal(fa.begin(), fa.end(), fb.begin(), fb.end())) {
+              found.add("edge " + edgeName(m, h) + " has different constraint features on its sides");
+            }
+            if (i < t.value && m.isConstrained(h)) ++c.constrained;
+          }
+          for (std::uint32_t f : m.edgeFeatures(h)) {
+            if (f >= m.features().size()) {
+              found.add("edge " + edgeName(m, h) + " names unknown feature " + std::to_string(f));
+            }
+          }
+        }
+      },
+      [&](HalfedgeCounts& c) {
+        counts.boundary += c.boundary;
+        counts.interiorHalf += c.interiorHalf;
+        counts.constrained += c.constrained;
+        counts.boundaryHalfedges.insert(counts.boundaryHalfedges.end(),
+                                        c.boundaryHalfedges.begin(), c.boundaryHalfedges.end());
+      });
+  r.boundaryEdges = counts.boundary;
+  r.edges = counts.boundary + counts.interiorHalf / 2;
+  r.constrainedEdges = counts.constrained;
+
+  // Boundary loops, their orientation, and pinched vertices.
+  const BoundaryLoops loops = traceBoundaryLoops(m, counts.boundaryHalfedges, problems);
+  r.boundaryLoops = loops.loops;
+
+  // Boundary half-edges leaving and entering each boundary vertex (few: a
+  // map, not vertex-sized arrays).
+  std::unordered_map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> boundaryOutIn;
+  for (HalfedgeId h : counts.boundaryHalfedges) {
+    ++boundaryOutIn[m.origin(h).value].first;
+    ++boundaryOutIn[m.target(h).value].second;
   }
   long long pinch = 0;
   std::size_t usedVertices = 0;
-  for (std::uint32_t v = 0; v < m.vertexCount(); ++v) {
+  for (std::uint32_t v = 0; v < nv; ++v) {
     if (cornersAt[v] == 0) continue;
     ++usedVertices;
-    const auto out = boundaryOutOf.find(v);
-    const std::uint32_t boundaryOut = out == boundaryOutOf.end() ? 0 : out->second;
-    if (boundaryOut > 1) pinch += boundaryOut - 1;
-    // An interior vertex's fan must wind exactly once around it.
-    if (boundaryOut == 0) {
-      // Winding number, exactly: each CCW step turns by less than π, so count
-      // the steps from the lower half-plane [π, 2π) into the upper [0, π).
-      std::size_t fan = 0, winding = 0;
-      const Point2 c = m.xy(VertexId(v));
-      auto upper = [&c](const Point2& w) { return w.y > c.y || (w.y == c.y && w.x > c.x); };
-      const HalfedgeId start = m.outgoing(VertexId(v));
-      HalfedgeId h = start;
-      do {
-        ++fan;
-        if (!upper(m.xy(m.target(h))) && upper(m.xy(m.origin(Mesh::prev(h))))) ++winding;
-        h = m.twin(Mesh::prev(h));
-      } while (h.valid() && h != start && fan <= cornersAt[v]);
-      if (fan != cornersAt[v]) {
-        problems.add("vertex " + std::to_string(v) + " has " + std::to_string(cornersAt[v]) +
-                     " triangles but its star has " + std::to_string(fan) + " (non-manifold)");
-      } else if (winding != 1) {
-        problems.add("the star of interior vertex " + std::to_string(v) +
-                     " does not wind once around it (folded triangles)");
-      }
+    const auto at = boundaryOutIn.find(v);
+    const auto [out, in] = at == boundaryOutIn.end() ? std::pair<std::uint32_t, std::uint32_t>{}
+                                                      : at->second;
+    if (out > 1) pinch += out - 1;
+    if (out != in) {
+      problems.add("vertex " + std::to_string(v) + " has " + std::to_string(out) +
+                   " boundary edges out but " + std::to_string(in) + " in (non-manifold)");
+    } else if (out == 0 && crossingsAt[v] != 1) {
+      // An interior vertex's star must be one fan winding exactly once.
+      problems.add("the star of interior vertex " + std::to_string(v) +
+                   (crossingsAt[v] == 0 ? " does not close around it"
+                                        : " winds " + std::to_string(crossingsAt[v]) +
+                                              " times around it (folded triangles, or several "
+                                              "fans: non-manifold)"));
     }
   }
   r.vertices = usedVertices;
 
   const long long euler = static_cast<long long>(usedVertices) - static_cast<long long>(r.edges) +
                           static_cast<long long>(nt);
-  if (nt > 0 && euler != loopSum - pinch) {
+  const long long expected = loops.orientationSum - pinch;
+  if (nt > 0 && euler != expected) {
     problems.add("Euler characteristic V - E + F = " + std::to_string(euler) + ", expected " +
-                 std::to_string(loopSum - pinch) + " from " + std::to_string(loops) +
+                 std::to_string(expected) + " from " + std::to_string(loops.loops) +
                  " boundary loops");
   }
 
   if (options.checkDelaunay) {
-    for (std::uint32_t i = 0; i < nh; ++i) {
-      const HalfedgeId h(i);
-      const HalfedgeId t = m.twin(h);
-      if (!t.valid() || t.value < i || m.isConstrained(h) || m.twin(t) != h) continue;
-      const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
-      const Point2 c = m.xy(m.origin(Mesh::prev(h))), d = m.xy(m.origin(Mesh::prev(t)));
-      if (geometry::incircle(a, b, c, d) > 0) {
-        problems.add("edge " + edgeName(m, h) + " is not locally Delaunay");
-      }
-    }
+    inParts<NoResult>(
+        nh, threads, maxProblems, problems,
+        [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
+          for (std::size_t i = b; i < e; ++i) {
+            const HalfedgeId h(static_cast<std::uint32_t>(i));
+            const HalfedgeId t = m.twin(h);
+            if (!t.valid() || t.value < i || m.isConstrained(h) || m.twin(t) != h) continue;
+            const Point2 a = m.xy(m.origin(h)), b2 = m.xy(m.target(h));
+            const Point2 c = m.xy(m.origin(Mesh::prev(h))), d = m.xy(m.origin(Mesh::prev(t)));
+            if (geometry::incircle(a, b2, c, d) > 0) {
+              found.add("edge " + edgeName(m, h) + " is not locally Delaunay");
+            }
+          }
+        },
+        [](NoResult&) {});
   }
+  std::move(problems).writeTo(r);
   return r;
 }
 

@@ -17,6 +17,9 @@ struct ValidationOptions {
   bool checkDelaunay = true;
   /// Stop listing problems after this many (counting continues).
   std::size_t maxProblems = 50;
+  /// Threads for the passes over triangles and half-edges (0: every core).
+  /// The report is the same for any count.
+  unsigned threads = 1;
 };
 
 struct ValidationReport {

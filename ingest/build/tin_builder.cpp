@@ -147,7 +147,7 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   auto tick = [&](std::string_view detail, std::uint64_t done, std::uint64_t total) {
     reportProgress(progress, "builders.tin", detail, done, total);
   };
-  constexpr std::uint64_t kSteps = 6;
+  constexpr std::uint64_t kSteps = 7;
   tick("preparing", 0, kSteps);
 
   // Lakes first: their shores decide which input is dropped.
@@ -423,11 +423,11 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
         break;
       case BuildValidation::Structural:
         report.validation = "structural";
-        v = validate(cdt.mesh(), {.checkDelaunay = false});
+        v = validate(cdt.mesh(), {.checkDelaunay = false, .threads = options.threads});
         break;
       case BuildValidation::Full:
         report.validation = "full";
-        v = cdt.validate();
+        v = cdt.validate({.threads = options.threads});
         break;
     }
     report.valid = v.ok && options.validation != BuildValidation::Off;
@@ -437,15 +437,19 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   }
   endStage("validate");
 
-  // The result, made once: either the mesh goes to the consumer, or a
-  // TinData copy of it — the last big allocation while the Cdt lives (the Cdt
-  // is freed on return).
+  // The result, made once: either the mesh goes to the consumer (timed as
+  // the stage "write": it writes the .tin), or a TinData copy of it — the
+  // last big allocation while the Cdt lives (the Cdt is freed on return).
   releaseFreeMemory();
-  static_cast<TinCounts&>(report) = summariseTin(cdt.mesh());
+  static_cast<TinCounts&>(report) = countTin(cdt.mesh());
   if (out) *out = cdt.toTinData();
+  if (consume) {
+    tick("writing", 6, kSteps);
+    (*consume)(cdt.mesh());
+    endStage("write");
+  }
   report.totalSeconds = secondsSince(start);
   tick("done", kSteps, kSteps);
-  if (consume) (*consume)(cdt.mesh());
   return report;
 }
 

@@ -90,7 +90,7 @@ struct BuildOptions {
   double roadSpikeThreshold = 2.0;  ///< metres
   int flatPasses = 4;
   BuildValidation validation = defaultBuildValidation();
-  unsigned threads = 0;  ///< for the triangulation; 0 = every core (same TIN for any value)
+  unsigned threads = 0;  ///< for the triangulation and its check; 0 = every core (same TIN for any value)
 };
 
 struct BuildResult {

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "core/base/error.hpp"
+#include "core/base/parallel.hpp"
 
 namespace tinsmith::ingest {
 namespace {
@@ -148,19 +149,85 @@ const char* delimiterName(TextDelimiter d) {
 
 }  // namespace
 
-TextPointTable parseTextPoints(std::string_view text, const std::string& sourceName,
-                               const TextPointOptions& options) {
-  TextPointTable table;
-  table.delimiter = options.delimiter;
-  bool first = true;
-  std::int64_t lineNo = 0;
+namespace {
+
+/// The columns chosen from the first data line (and the header, if any).
+struct Columns {
+  int x = 0, y = 1, z = 2;  ///< z is -1 with a fixed z
+  int needed = 0;           ///< fields a data line must have
+};
+
+/// Reads the first content line: the delimiter, whether it is a header, the
+/// columns. Returns whether the line is a header (else it holds data).
+bool setUpColumns(std::string_view line, std::int64_t lineNo, const std::string& sourceName,
+                  const TextPointOptions& options, TextPointTable& table, Columns& c) {
   std::vector<std::string_view> fields;
   int xi = 0, yi = 1, zi = options.fixedZ ? -1 : 2;
-  int needed = 0;
+  if (table.delimiter == TextDelimiter::Auto) table.delimiter = detectDelimiter(line);
+  splitFields(line, table.delimiter, fields);
+  bool isHeader = false;
+  if (options.header == TextHeader::Present) {
+    isHeader = true;
+  } else if (options.header == TextHeader::Auto) {
+    double dummy = 0.0;
+    isHeader = std::any_of(fields.begin(), fields.end(), [&](std::string_view f) {
+      return parseNumber(f, dummy) == NumberStatus::NotANumber;
+    });
+  }
+  if (isHeader) {
+    table.hasHeader = true;
+    for (const auto f : fields) table.columnNames.push_back(lower(unquote(f)));
+    const auto& n = table.columnNames;
+    const int gx = findColumn(n, {"lon", "lng", "long", "longitude"});
+    const int gy = findColumn(n, {"lat", "latitude"});
+    const int px = findColumn(n, {"x", "easting", "east", "e"});
+    const int py = findColumn(n, {"y", "northing", "north", "n"});
+    const int pz = findColumn(n, {"z", "elevation", "elev", "height", "h", "alt", "altitude",
+                                  "ele", "ellipsoidal_height", "ortho_height"});
+    if (px >= 0 && py >= 0) {
+      xi = px;
+      yi = py;
+    } else if (gx >= 0 && gy >= 0) {
+      xi = gx;
+      yi = gy;
+      table.geographicNames = true;
+    }
+    if (!options.fixedZ && pz >= 0) zi = pz;
+    if (!options.xColumn.empty()) xi = namedColumn(n, options.xColumn, "x", sourceName, lineNo);
+    if (!options.yColumn.empty()) yi = namedColumn(n, options.yColumn, "y", sourceName, lineNo);
+    if (!options.zColumn.empty()) zi = namedColumn(n, options.zColumn, "z", sourceName, lineNo);
+  } else if (!options.xColumn.empty() || !options.yColumn.empty() || !options.zColumn.empty()) {
+    throw inputError("columns are chosen by name but the file has no header line",
+                     atLine(sourceName, lineNo), "add a header line or choose columns by index");
+  }
+  if (options.xIndex) xi = *options.xIndex;
+  if (options.yIndex) yi = *options.yIndex;
+  if (options.zIndex && !options.fixedZ) zi = *options.zIndex;
+  if (xi < 0 || yi < 0 || (zi < 0 && !options.fixedZ)) {
+    throw inputError("a column index is negative", atLine(sourceName, lineNo));
+  }
+  if (xi == yi || xi == zi || yi == zi) {
+    throw inputError("x, y and z must be different columns (got " + std::to_string(xi) + ", " +
+                         std::to_string(yi) + ", " + std::to_string(zi) + ")",
+                     atLine(sourceName, lineNo), "name the columns in the layer's options");
+  }
+  table.xIndex = c.x = xi;
+  table.yIndex = c.y = yi;
+  table.zIndex = c.z = zi;
+  c.needed = std::max({xi, yi, zi}) + 1;
+  return isHeader;
+}
 
-  // Strip a UTF-8 byte-order mark.
-  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
-
+/// The data lines of `text`, whose first line is line `firstLine` of the
+/// file: appends their points and line numbers. Returns the number of lines
+/// (counting blank and comment lines). Throws on the first bad line.
+std::int64_t parseDataLines(std::string_view text, std::int64_t firstLine,
+                            const std::string& sourceName, const TextPointOptions& options,
+                            TextDelimiter delimiter, const Columns& c,
+                            std::vector<Point3>& points, std::vector<std::int64_t>& lines) {
+  std::vector<std::string_view> fields;
+  const std::array<const char*, 3> role{"x", "y", "z"};
+  std::int64_t lineNo = firstLine - 1;
   std::size_t pos = 0;
   while (pos < text.size()) {
     std::size_t end = text.find('\n', pos);
@@ -169,75 +236,15 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
     pos = end + 1;
     ++lineNo;
     if (line.empty() || line.front() == '#') continue;
-
-    if (first) {
-      first = false;
-      if (table.delimiter == TextDelimiter::Auto) table.delimiter = detectDelimiter(line);
-      splitFields(line, table.delimiter, fields);
-      bool isHeader = false;
-      if (options.header == TextHeader::Present) {
-        isHeader = true;
-      } else if (options.header == TextHeader::Auto) {
-        double dummy = 0.0;
-        isHeader = std::any_of(fields.begin(), fields.end(), [&](std::string_view f) {
-          return parseNumber(f, dummy) == NumberStatus::NotANumber;
-        });
-      }
-      if (isHeader) {
-        table.hasHeader = true;
-        for (const auto f : fields) table.columnNames.push_back(lower(unquote(f)));
-        const auto& n = table.columnNames;
-        const int gx = findColumn(n, {"lon", "lng", "long", "longitude"});
-        const int gy = findColumn(n, {"lat", "latitude"});
-        const int px = findColumn(n, {"x", "easting", "east", "e"});
-        const int py = findColumn(n, {"y", "northing", "north", "n"});
-        const int pz = findColumn(n, {"z", "elevation", "elev", "height", "h", "alt", "altitude",
-                                      "ele", "ellipsoidal_height", "ortho_height"});
-        if (px >= 0 && py >= 0) {
-          xi = px;
-          yi = py;
-        } else if (gx >= 0 && gy >= 0) {
-          xi = gx;
-          yi = gy;
-          table.geographicNames = true;
-        }
-        if (!options.fixedZ && pz >= 0) zi = pz;
-        if (!options.xColumn.empty()) xi = namedColumn(n, options.xColumn, "x", sourceName, lineNo);
-        if (!options.yColumn.empty()) yi = namedColumn(n, options.yColumn, "y", sourceName, lineNo);
-        if (!options.zColumn.empty()) zi = namedColumn(n, options.zColumn, "z", sourceName, lineNo);
-      } else if (!options.xColumn.empty() || !options.yColumn.empty() || !options.zColumn.empty()) {
-        throw inputError("columns are chosen by name but the file has no header line",
-                         atLine(sourceName, lineNo),
-                         "add a header line or choose columns by index");
-      }
-      if (options.xIndex) xi = *options.xIndex;
-      if (options.yIndex) yi = *options.yIndex;
-      if (options.zIndex && !options.fixedZ) zi = *options.zIndex;
-      if (xi < 0 || yi < 0 || (zi < 0 && !options.fixedZ)) {
-        throw inputError("a column index is negative", atLine(sourceName, lineNo));
-      }
-      if (xi == yi || xi == zi || yi == zi) {
-        throw inputError("x, y and z must be different columns (got " + std::to_string(xi) + ", " +
-                             std::to_string(yi) + ", " + std::to_string(zi) + ")",
-                         atLine(sourceName, lineNo), "name the columns in the layer's options");
-      }
-      table.xIndex = xi;
-      table.yIndex = yi;
-      table.zIndex = zi;
-      needed = std::max({xi, yi, zi}) + 1;
-      if (isHeader) continue;
-    }
-
-    splitFields(line, table.delimiter, fields);
-    if (static_cast<int>(fields.size()) < needed) {
-      throw inputError("expected at least " + std::to_string(needed) + " " +
-                           delimiterName(table.delimiter) + "-separated fields, found " +
+    splitFields(line, delimiter, fields);
+    if (static_cast<int>(fields.size()) < c.needed) {
+      throw inputError("expected at least " + std::to_string(c.needed) + " " +
+                           delimiterName(delimiter) + "-separated fields, found " +
                            std::to_string(fields.size()),
                        atLine(sourceName, lineNo), "fix or remove the line");
     }
     Point3 p;
-    const std::array<std::pair<int, double*>, 3> wanted{{{xi, &p.x}, {yi, &p.y}, {zi, &p.z}}};
-    const std::array<const char*, 3> role{"x", "y", "z"};
+    const std::array<std::pair<int, double*>, 3> wanted{{{c.x, &p.x}, {c.y, &p.y}, {c.z, &p.z}}};
     for (std::size_t k = 0; k < 3; ++k) {
       if (wanted[k].first < 0) continue;
       const auto field = fields[static_cast<std::size_t>(wanted[k].first)];
@@ -254,8 +261,101 @@ TextPointTable parseTextPoints(std::string_view text, const std::string& sourceN
       }
     }
     if (options.fixedZ) p.z = *options.fixedZ;
-    table.points.push_back(p);
-    table.lines.push_back(lineNo);
+    points.push_back(p);
+    lines.push_back(lineNo);
+  }
+  return lineNo - firstLine + 1;
+}
+
+/// Texts shorter than this are parsed on the calling thread.
+constexpr std::size_t kParallelBytes = std::size_t{1} << 20;
+/// The pieces a long text is cut into (at line ends) for parallel parsing.
+constexpr unsigned kPieces = 32;
+
+/// Where the line holding offset `at` - 1 ends, plus one: the start of the
+/// first line that begins at or after `at` (0 for 0; text.size() if none).
+std::size_t nextLineStart(std::string_view text, std::size_t at) {
+  if (at == 0) return 0;
+  const std::size_t nl = text.find('\n', at - 1);
+  return nl == std::string_view::npos ? text.size() : nl + 1;
+}
+
+}  // namespace
+
+TextPointTable parseTextPoints(std::string_view text, const std::string& sourceName,
+                               const TextPointOptions& options) {
+  TextPointTable table;
+  table.delimiter = options.delimiter;
+
+  // Strip a UTF-8 byte-order mark.
+  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+
+  // Up to the first content line: the columns; the data lines after it.
+  Columns columns;
+  std::int64_t lineNo = 0;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view line = trim(text.substr(pos, end - pos));
+    ++lineNo;
+    if (!line.empty() && line.front() != '#') {
+      if (setUpColumns(line, lineNo, sourceName, options, table, columns))
+        pos = end + 1;  // a header: the data starts on the next line
+      else
+        --lineNo;  // data: this line is the data's first
+      break;
+    }
+    pos = end + 1;
+  }
+  const std::string_view data = pos < text.size() ? text.substr(pos) : std::string_view{};
+
+  // The data in pieces cut at line ends, parsed in parallel with line numbers
+  // counted from each piece's start, then joined in order. A piece that fails
+  // is parsed again from its true first line, so the error (the first in the
+  // file: pieces before it parsed cleanly) names the right line.
+  struct Piece {
+    std::size_t begin = 0, end = 0;
+    std::vector<Point3> points;
+    std::vector<std::int64_t> lines;
+    std::int64_t lineCount = 0;
+    bool failed = false;
+  };
+  const unsigned pieces = data.size() < kParallelBytes ? 1 : kPieces;
+  std::vector<Piece> parts(pieces);
+  parallelParts(data.size(), pieces, resolveThreads(options.threads),
+                [&](std::size_t b, std::size_t e, unsigned k) {
+                  Piece& piece = parts[k];
+                  piece.begin = nextLineStart(data, b);
+                  piece.end = std::max(piece.begin, nextLineStart(data, e));
+                  const std::string_view slice = data.substr(piece.begin, piece.end - piece.begin);
+                  piece.points.reserve(slice.size() / 24);
+                  piece.lines.reserve(slice.size() / 24);
+                  try {
+                    piece.lineCount = parseDataLines(slice, 1, sourceName, options, table.delimiter,
+                                                     columns, piece.points, piece.lines);
+                  } catch (const Error&) {
+                    piece.failed = true;
+                  }
+                });
+  std::size_t total = 0;
+  for (const Piece& piece : parts) total += piece.points.size();
+  table.points.reserve(total);
+  table.lines.reserve(total);
+  for (Piece& piece : parts) {
+    const std::int64_t firstLine = lineNo + 1;
+    if (piece.failed) {
+      std::vector<Point3> points;
+      std::vector<std::int64_t> lines;
+      parseDataLines(data.substr(piece.begin, piece.end - piece.begin), firstLine, sourceName,
+                     options, table.delimiter, columns, points, lines);
+      throw internalError("a text point piece failed once and parsed cleanly the second time");
+    }
+    table.points.insert(table.points.end(), piece.points.begin(), piece.points.end());
+    for (const std::int64_t l : piece.lines) table.lines.push_back(l + lineNo);
+    lineNo += piece.lineCount;
+    std::vector<Point3>().swap(piece.points);
+    std::vector<std::int64_t>().swap(piece.lines);
   }
   if (table.points.empty()) {
     throw inputError("the file holds no points", atLine(sourceName),

@@ -41,6 +41,8 @@ struct TextPointOptions {
   std::optional<int> xIndex, yIndex, zIndex;
   /// When set, the file has only x and y and every point gets this z.
   std::optional<double> fixedZ;
+  /// Threads parsing a long file (0: every core); the result is the same for any count.
+  unsigned threads = 1;
 };
 
 /// A text point file with where each point came from.

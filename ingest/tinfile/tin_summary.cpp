@@ -15,35 +15,55 @@ namespace tinsmith::ingest {
 
 namespace {
 
-// Extent, z range and area: the part of the summary that reads only the
-// vertices and triangles, from either view (tin_view.hpp).
+// Counts, extent and z range: the part of the summary that reads only the
+// vertices, from either view (tin_view.hpp).
 template <class View>
-void summariseGeometry(TinSummary& s, const View& tin) {
+void countGeometry(TinCounts& s, const View& tin) {
   const auto& vertices = tin.points();
   s.vertices = vertices.size();
   s.triangles = tin.triangleCount();
-  s.empty = vertices.empty();
-  if (!s.empty) {
-    const auto& v0 = vertices.front();
-    s.minX = s.maxX = v0.x;
-    s.minY = s.maxY = v0.y;
-    s.minZ = s.maxZ = v0.z;
-    for (const auto& v : vertices) {
-      s.minX = std::min(s.minX, v.x);
-      s.maxX = std::max(s.maxX, v.x);
-      s.minY = std::min(s.minY, v.y);
-      s.maxY = std::max(s.maxY, v.y);
-      s.minZ = std::min(s.minZ, v.z);
-      s.maxZ = std::max(s.maxZ, v.z);
-    }
+  if (vertices.empty()) return;
+  const auto& v0 = vertices.front();
+  s.minX = s.maxX = v0.x;
+  s.minY = s.maxY = v0.y;
+  s.minZ = s.maxZ = v0.z;
+  for (const auto& v : vertices) {
+    s.minX = std::min(s.minX, v.x);
+    s.maxX = std::max(s.maxX, v.x);
+    s.minY = std::min(s.minY, v.y);
+    s.maxY = std::max(s.maxY, v.y);
+    s.minZ = std::min(s.minZ, v.z);
+    s.maxZ = std::max(s.maxZ, v.z);
   }
+}
+
+// The above, the area, and whether the TIN is empty.
+template <class View>
+void summariseGeometry(TinSummary& s, const View& tin) {
+  countGeometry(s, tin);
+  const auto& vertices = tin.points();
+  s.empty = vertices.empty();
   for (std::size_t i = 0; i < s.triangles; ++i) {
     const auto t = tin.triangle(i);
-    const auto& a = vertices[t[0]];
-    const auto& b = vertices[t[1]];
-    const auto& c = vertices[t[2]];
-    s.area += 0.5 * geometry::orient2dInexact(a, b, c);
+    s.area += 0.5 * geometry::orient2dInexact(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
   }
+}
+
+/// Distinct constrained edges of a mesh, and the edges of each feature kind.
+std::size_t countConstrainedEdges(const Mesh& mesh, std::vector<std::size_t>* edgesOfKind) {
+  const auto& features = mesh.features();
+  std::size_t edges = 0;
+  for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
+    const HalfedgeId he(h);
+    if (!mesh.isConstrained(he)) continue;
+    const HalfedgeId tw = mesh.twin(he);
+    if (tw.valid() && tw.value < h) continue;  // each edge once
+    ++edges;
+    if (edgesOfKind)
+      for (const std::uint32_t f : mesh.edgeFeatures(he))
+        if (f < features.size()) ++(*edgesOfKind)[static_cast<std::uint8_t>(features[f].kind)];
+  }
+  return edges;
 }
 
 }  // namespace
@@ -79,17 +99,17 @@ TinSummary summariseTin(const Mesh& mesh) {
   s.features = features.size();
   for (const auto& f : features) ++s.kinds[std::string(featureKindName(f.kind))].features;
   std::vector<std::size_t> edgesOfKind(256, 0);
-  for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
-    const HalfedgeId he(h);
-    if (!mesh.isConstrained(he)) continue;
-    const HalfedgeId tw = mesh.twin(he);
-    if (tw.valid() && tw.value < h) continue;  // each edge once
-    ++s.constrainedEdges;
-    for (const std::uint32_t f : mesh.edgeFeatures(he))
-      if (f < features.size()) ++edgesOfKind[static_cast<std::uint8_t>(features[f].kind)];
-  }
+  s.constrainedEdges = countConstrainedEdges(mesh, &edgesOfKind);
   for (std::size_t k = 0; k < edgesOfKind.size(); ++k)
     if (edgesOfKind[k]) s.kinds[std::string(featureKindName(static_cast<FeatureKind>(k)))].edges = edgesOfKind[k];
+  return s;
+}
+
+TinCounts countTin(const Mesh& mesh) {
+  TinCounts s;
+  countGeometry(s, MeshView{mesh});
+  s.features = mesh.features().size();
+  s.constrainedEdges = countConstrainedEdges(mesh, nullptr);
   return s;
 }
 

@@ -31,5 +31,8 @@ struct TinSummary : TinCounts {
 TinSummary summariseTin(const TinData& tin);
 /// The same as summariseTin(mesh.toTinData()), without the copy.
 TinSummary summariseTin(const Mesh& mesh);
+/// The counts and extents of summariseTin(mesh), without the area (a pass
+/// over every triangle).
+TinCounts countTin(const Mesh& mesh);
 
 }  // namespace tinsmith::ingest

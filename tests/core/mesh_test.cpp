@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <utility>
+
 #include "core/mesh/validate.hpp"
 
 namespace tinsmith {
@@ -118,6 +121,58 @@ TEST(Validator, FindsFoldedStar) {
   tin.triangles = {{0, 1, 2}, {1, 0, 3}};  // (1,0,3) is clockwise
   const ValidationReport r = validate(tin);
   EXPECT_FALSE(r.ok);
+}
+
+TEST(Validator, FindsAStarThatWindsTwice) {
+  // Five CCW triangles around a centre whose rim steps 144° at a time: every
+  // triangle is fine and every spoke has its twin, but the star goes twice
+  // around the centre (a double cover, which no plane TIN can be).
+  TinData tin;
+  tin.vertices = {{0, 0, 0}};
+  for (int i = 0; i < 5; ++i) {
+    const double a = i * 144.0 * 3.14159265358979323846 / 180.0;
+    tin.vertices.push_back({std::cos(a), std::sin(a), 0});
+  }
+  for (std::uint32_t i = 0; i < 5; ++i) tin.triangles.push_back({0, 1 + i, 1 + (i + 1) % 5});
+  const ValidationReport r = validate(tin);
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(mentions(r, "winds 2 times around it")) << r.summary();
+}
+
+// A grid of n × n squares, two triangles each.
+TinData grid(std::uint32_t n) {
+  TinData tin;
+  for (std::uint32_t j = 0; j <= n; ++j)
+    for (std::uint32_t i = 0; i <= n; ++i) tin.vertices.push_back({double(i), double(j), 0});
+  for (std::uint32_t j = 0; j < n; ++j) {
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      tin.triangles.push_back({a, b, c});
+      tin.triangles.push_back({a, c, d});
+    }
+  }
+  return tin;
+}
+
+TEST(Validator, TheReportIsTheSameForAnyThreadCount) {
+  // Large enough for the passes to run in parts; broken in many places, so
+  // that which problems are listed depends on the order they are merged in.
+  TinData tin = grid(200);
+  for (std::size_t t = 7; t < tin.triangles.size(); t += 997) std::swap(tin.triangles[t][1], tin.triangles[t][2]);
+  tin.vertices[5000].x = std::nan("");
+  const Mesh m = Mesh::fromTinData(tin);
+  const ValidationReport one = validate(m, {.threads = 1});
+  EXPECT_FALSE(one.ok);
+  EXPECT_GT(one.problemCount, one.problems.size());
+  for (unsigned threads : {2u, 3u, 8u}) {
+    const ValidationReport r = validate(m, {.threads = threads});
+    EXPECT_EQ(r.problemCount, one.problemCount) << threads;
+    EXPECT_EQ(r.problems, one.problems) << threads;
+    EXPECT_EQ(r.summary(), one.summary()) << threads;
+  }
+  const ValidationReport good = validate(grid(200), {.threads = 2});
+  EXPECT_TRUE(good.ok) << good.summary();
+  EXPECT_EQ(good.vertices, 201u * 201u);
 }
 
 TEST(Validator, AcceptsPolygonWithHoleAndCountsLoops) {

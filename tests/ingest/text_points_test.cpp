@@ -116,6 +116,56 @@ TEST(TextPoints, ErrorsNameTheLine) {
   EXPECT_NE(std::string(e.what()).find("no points"), std::string::npos) << e.what();
 }
 
+// A text long enough to be parsed in pieces: blank and comment lines, CRLF
+// line ends, a header, and lines of different lengths.
+std::string longText(std::size_t points) {
+  std::string text = "# survey\r\nE N H\r\n";
+  for (std::size_t i = 0; i < points; ++i) {
+    if (i % 997 == 0) text += "\n# a comment\n";
+    text += std::to_string(430000 + i % 1000) + "." + std::to_string(i % 7) + " " +
+            std::to_string(4510000 + i / 1000) + " " + std::to_string(1500.25 + i % 300) +
+            (i % 3 ? "\r\n" : "\n");
+  }
+  return text;
+}
+
+TEST(TextPoints, PiecesParsedInParallelGiveTheSameTable) {
+  const std::string text = longText(120000);  // ~3 MB: parsed in pieces
+  TextPointOptions one, four;
+  one.threads = 1;
+  four.threads = 4;
+  const auto a = parseTextPoints(text, "long.xyz", one);
+  const auto b = parseTextPoints(text, "long.xyz", four);
+  ASSERT_EQ(a.points.size(), 120000u);
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.lines, b.lines);
+  // Line numbers count the header, the blank and the comment lines.
+  EXPECT_EQ(a.lines.front(), 5);  // comment block before the first point: lines 3 and 4
+  EXPECT_EQ(a.points.back(), (Point3{430999.5, 4510119, 1500.25 + 119999 % 300}));
+  EXPECT_EQ(a.lines.back(), static_cast<std::int64_t>(2 + 120000 + 2 * (119999 / 997 + 1)));
+}
+
+TEST(TextPoints, AnErrorDeepInALongFileNamesItsLineForAnyThreads) {
+  std::string text = longText(120000);
+  // Break the 100 000th point's height, and a later one: the first is reported.
+  const auto lineStart = [&](std::int64_t line) {
+    std::size_t pos = 0;
+    for (std::int64_t l = 1; l < line; ++l) pos = text.find('\n', pos) + 1;
+    return pos;
+  };
+  const auto table = parseTextPoints(text, "long.xyz");
+  const std::int64_t bad = table.lines[99999], later = table.lines[110000];
+  text.insert(text.find('\n', lineStart(later)) - 1, "x");
+  text.insert(text.find('\n', lineStart(bad)) - 1, "x");
+  for (unsigned threads : {1u, 2u, 4u}) {
+    TextPointOptions options;
+    options.threads = threads;
+    const auto e = expectError([&] { parseTextPoints(text, "long.xyz", options); });
+    EXPECT_EQ(e.where().line, bad) << threads << " threads: " << e.what();
+    EXPECT_NE(std::string(e.what()).find("is not a number"), std::string::npos) << e.what();
+  }
+}
+
 TEST(TextPoints, FileErrors) {
   auto e = expectError([] { readTextPoints("/nonexistent/points.csv"); });
   EXPECT_EQ(e.kind(), ErrorKind::Input);

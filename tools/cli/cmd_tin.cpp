@@ -72,7 +72,9 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
     layer.kind = FeatureKind::Other;
     layer.source = file;
     if (ingest::isTextPointFile(file)) {
-      layer.points = ingest::readTextPoints(file);
+      ingest::TextPointOptions text;
+      text.threads = o.threads;
+      layer.points = ingest::readTextPoints(file, text);
     } else {
       ingest::LayerConfig config;
       config.name = layer.name;
@@ -217,7 +219,7 @@ void addTinCommand(CLI::App& app) {
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
-  addThreadsOption(*cmd, opt->threads, "Threads for the triangulation", "the TIN is the same for any count");
+  addThreadsOption(*cmd, opt->threads, "Threads for the triangulation and its check", "the TIN is the same for any count");
   addQuietFlag(*cmd, opt->quiet, "No summary and no progress on stderr");
   cmd->callback([opt] { run(*opt); });
 }

@@ -22,6 +22,7 @@ struct ValidateOptions {
   std::string tin;
   bool json = false;
   bool noDelaunay = false;
+  unsigned threads = 0;
 };
 }  // namespace
 
@@ -31,10 +32,12 @@ void addValidateCommand(CLI::App& app) {
   cmd->add_option("tin", opt->tin, "The .tin file")->required();
   addJsonFlag(*cmd, opt->json);
   cmd->add_flag("--no-delaunay", opt->noDelaunay, "Skip the Delaunay check of unconstrained edges");
+  addThreadsOption(*cmd, opt->threads, "Threads for the checks", "the same report for any count");
   cmd->callback([opt] {
     const TinData tin = ingest::readTinFile(opt->tin);
     ValidationOptions options;
     options.checkDelaunay = !opt->noDelaunay;
+    options.threads = opt->threads;
     const ValidationReport report = validate(tin, options);
     if (opt->json) {
       const nlohmann::ordered_json out = {
