@@ -137,14 +137,13 @@ TinData Mesh::toTinData() const {
 
 std::vector<TinData::ConstrainedEdge> Mesh::constrainedEdges() const {
   std::vector<TinData::ConstrainedEdge> edges;
-  for (std::uint32_t h = 0; h < corners_.size(); ++h) {
-    const HalfedgeId he(h);
-    const HalfedgeId tw(twins_[h]);
-    if (tw.valid() && tw.value < h) continue;
-    std::uint32_t a = corners_[h], b = corners_[next(he).value];
+  forEachConstrained([&](HalfedgeId h) {
+    const HalfedgeId tw(twins_[h.value]);
+    if (tw.valid() && tw.value < h.value) return;  // each edge once
+    std::uint32_t a = corners_[h.value], b = corners_[next(h).value];
     if (a > b) std::swap(a, b);
-    for (std::uint32_t f : edgeFeatures(he)) edges.push_back({a, b, f});
-  }
+    for (std::uint32_t f : edgeFeatures(h)) edges.push_back({a, b, f});
+  });
   std::sort(edges.begin(), edges.end(), [](const auto& l, const auto& r) {
     return std::tie(l.a, l.b, l.feature) < std::tie(r.a, r.b, r.feature);
   });

@@ -101,6 +101,8 @@ class Mesh {
   [[nodiscard]] Point2 xy(VertexId v) const { return points_[v.value].xy(); }
   [[nodiscard]] double z(VertexId v) const { return points_[v.value].z; }
   [[nodiscard]] const std::vector<Point3>& points() const { return points_; }
+  /// The triangles' vertex indices, three per triangle (CCW), as stored.
+  [[nodiscard]] std::span<const std::uint32_t> cornerIndices() const { return corners_; }
 
   // --- topology ----------------------------------------------------------
   [[nodiscard]] static HalfedgeId halfedge(TriangleId t, int corner) {
@@ -148,6 +150,14 @@ class Mesh {
         consRank_[h.value / 64] +
         static_cast<std::uint32_t>(std::popcount(consBits_[h.value / 64] & below));
     return {featureIds_.data() + featureBegin_[r], featureIds_.data() + featureBegin_[r + 1]};
+  }
+  /// Calls f(h) for every constrained half-edge, in increasing id order
+  /// (reads only the constraint bitset, not every half-edge).
+  template <class F>
+  void forEachConstrained(F&& f) const {
+    for (std::size_t w = 0; w < consBits_.size(); ++w)
+      for (std::uint64_t bits = consBits_[w]; bits != 0; bits &= bits - 1)
+        f(HalfedgeId(static_cast<std::uint32_t>(w * 64 + static_cast<std::size_t>(std::countr_zero(bits)))));
   }
   [[nodiscard]] const std::vector<TinFeature>& features() const { return features_; }
   [[nodiscard]] const std::string& crs() const { return crs_; }

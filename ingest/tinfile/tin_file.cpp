@@ -129,14 +129,24 @@ std::uint32_t writePayload(const Source& tin, Sink& sink) {
   PayloadWriter<Sink> w(sink);
   w.putString(tin.crs());
   w.put(static_cast<std::uint64_t>(tin.points().size()));
-  for (const auto& v : tin.points()) {
-    w.put(v.x);
-    w.put(v.y);
-    w.put(v.z);
+  // The file is little-endian: on such a host the vertex and triangle arrays
+  // are the file's bytes already and go out whole.
+  if constexpr (std::endian::native == std::endian::little && sizeof(Point3) == 24) {
+    w.append(reinterpret_cast<const std::uint8_t*>(tin.points().data()), 24 * tin.points().size());
+  } else {
+    for (const auto& v : tin.points()) {
+      w.put(v.x);
+      w.put(v.y);
+      w.put(v.z);
+    }
   }
   w.put(static_cast<std::uint64_t>(tin.triangleCount()));
-  for (std::size_t t = 0; t < tin.triangleCount(); ++t)
-    for (auto i : tin.triangle(t)) w.put(i);
+  const std::span<const std::uint32_t> corners = tin.cornerIndices();
+  if constexpr (std::endian::native == std::endian::little) {
+    w.append(reinterpret_cast<const std::uint8_t*>(corners.data()), 4 * corners.size());
+  } else {
+    for (const std::uint32_t i : corners) w.put(i);
+  }
   w.put(static_cast<std::uint64_t>(tin.features().size()));
   for (const auto& f : tin.features()) {
     w.put(static_cast<std::uint8_t>(f.kind));

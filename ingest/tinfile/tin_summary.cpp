@@ -53,16 +53,14 @@ void summariseGeometry(TinSummary& s, const View& tin) {
 std::size_t countConstrainedEdges(const Mesh& mesh, std::vector<std::size_t>* edgesOfKind) {
   const auto& features = mesh.features();
   std::size_t edges = 0;
-  for (std::uint32_t h = 0; h < mesh.halfedgeCount(); ++h) {
-    const HalfedgeId he(h);
-    if (!mesh.isConstrained(he)) continue;
-    const HalfedgeId tw = mesh.twin(he);
-    if (tw.valid() && tw.value < h) continue;  // each edge once
+  mesh.forEachConstrained([&](HalfedgeId h) {
+    const HalfedgeId tw = mesh.twin(h);
+    if (tw.valid() && tw.value < h.value) return;  // each edge once
     ++edges;
     if (edgesOfKind)
-      for (const std::uint32_t f : mesh.edgeFeatures(he))
+      for (const std::uint32_t f : mesh.edgeFeatures(h))
         if (f < features.size()) ++(*edgesOfKind)[static_cast<std::uint8_t>(features[f].kind)];
-  }
+  });
   return edges;
 }
 

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,11 @@ struct TinDataView {
   [[nodiscard]] const std::vector<Point3>& points() const { return tin.vertices; }
   [[nodiscard]] std::size_t triangleCount() const { return tin.triangles.size(); }
   [[nodiscard]] const TinData::Triangle& triangle(std::size_t t) const { return tin.triangles[t]; }
+  /// All triangles' vertex indices, three per triangle.
+  [[nodiscard]] std::span<const std::uint32_t> cornerIndices() const {
+    static_assert(sizeof(TinData::Triangle) == 3 * sizeof(std::uint32_t));
+    return {reinterpret_cast<const std::uint32_t*>(tin.triangles.data()), 3 * tin.triangles.size()};
+  }
   [[nodiscard]] const std::vector<TinFeature>& features() const { return tin.features; }
 };
 
@@ -32,6 +38,7 @@ struct MeshView {
     const auto v = mesh.vertices(TriangleId(static_cast<std::uint32_t>(t)));
     return {v[0].value, v[1].value, v[2].value};
   }
+  [[nodiscard]] std::span<const std::uint32_t> cornerIndices() const { return mesh.cornerIndices(); }
   [[nodiscard]] const std::vector<TinFeature>& features() const { return mesh.features(); }
 };
 
