@@ -103,6 +103,8 @@ class Mesh {
   [[nodiscard]] const std::vector<Point3>& points() const { return points_; }
   /// The triangles' vertex indices, three per triangle (CCW), as stored.
   [[nodiscard]] std::span<const std::uint32_t> cornerIndices() const { return corners_; }
+  /// The twin of every half-edge as stored (HalfedgeId values; kInvalid on the boundary).
+  [[nodiscard]] std::span<const std::uint32_t> twinIndices() const { return twins_; }
 
   // --- topology ----------------------------------------------------------
   [[nodiscard]] static HalfedgeId halfedge(TriangleId t, int corner) {

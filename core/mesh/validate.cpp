@@ -75,14 +75,10 @@ std::string edgeName(const Mesh& m, HalfedgeId h) {
   return std::to_string(m.origin(h).value) + "-" + std::to_string(m.target(h).value);
 }
 
-/// Triangles ahead of the one being checked whose corners are prefetched
-/// (the vertices of a triangle are anywhere in the point array).
+/// Items (triangles, half-edges) ahead of the one being checked whose data
+/// is prefetched: a triangle's vertices are anywhere in the point array, a
+/// half-edge's twin anywhere in the half-edge arrays.
 constexpr std::size_t kPrefetch = 16;
-
-void prefetchCorners(const Mesh& m, std::size_t t) {
-  for (VertexId v : m.vertices(TriangleId(static_cast<std::uint32_t>(t))))
-    __builtin_prefetch(&m.point(v));
-}
 
 /// Is w in the half-plane "above" c: [0, π) measured from c (y greater, or
 /// equal y and x greater)?
@@ -197,8 +193,14 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   inParts<NoResult>(
       nt, threads, maxProblems, problems,
       [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
+        const std::uint32_t* corners = m.cornerIndices().data();
+        const Point3* points = m.points().data();
         for (std::size_t t = b; t < e; ++t) {
-          if (t + kPrefetch < e) prefetchCorners(m, t + kPrefetch);
+          // In the loop, not in a function: GCC drops calls to a function
+          // that only prefetches (it counts as having no effect).
+          if (t + kPrefetch < e)
+            for (std::size_t k = 3 * (t + kPrefetch); k < 3 * (t + kPrefetch) + 3; ++k)
+              __builtin_prefetch(points + corners[k]);
           const auto v = m.vertices(TriangleId(static_cast<std::uint32_t>(t)));
           const Point2 p[3] = {m.xy(v[0]), m.xy(v[1]), m.xy(v[2])};
           if (geometry::orient2d(p[0], p[1], p[2]) <= 0) {
@@ -212,32 +214,51 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
       },
       [](NoResult&) {});
 
-  // Per vertex: its corners and crossings. Each part owns a range of vertices
-  // and reads every corner (a sequential read; the counters it updates at
-  // random are its own), so parts never write to the same counter.
-  std::vector<std::uint32_t> cornersAt(nv, 0), crossingsAt(nv, 0);
+  // Per vertex, one byte (a million vertices fit in a core's cache): whether
+  // a triangle uses it (kUsed) and its crossings, counted up to kMostCrossings.
+  // Each part owns a range of vertices and reads every corner (a sequential
+  // read), so parts never write to the same byte.
+  constexpr std::uint8_t kUsed = 0x80, kMostCrossings = 0x7f;
+  std::vector<std::uint8_t> star(nv, 0);
   const unsigned vertexParts = std::max(1u, std::min(threads, 8u));
   parallelParts(nv, vertexParts, threads, [&](std::size_t b, std::size_t e, unsigned) {
+    const std::uint32_t* corners = m.cornerIndices().data();
     for (std::size_t h = 0; h < nh; ++h) {
-      const std::uint32_t v = m.origin(HalfedgeId(static_cast<std::uint32_t>(h))).value;
+      const std::uint32_t v = corners[h];
       if (v < b || v >= e) continue;
-      ++cornersAt[v];
-      crossingsAt[v] += crosses[h];
+      std::uint8_t& s = star[v];
+      s |= kUsed;
+      if (crosses[h] && (s & kMostCrossings) < kMostCrossings) ++s;
     }
   });
   std::vector<std::uint8_t>().swap(crosses);
 
   // Twins, constraint flags and features, half-edge by half-edge; the
-  // boundary half-edges are collected for the loops.
+  // boundary half-edges are collected for the loops. Each pair of twins is
+  // checked once, from its lower half-edge h (twin t > h): twin(t) == h, the
+  // same two vertices, the same features. A half-edge whose twin is lower is
+  // not looked at again, so `pairs` counts what was verified: every
+  // half-edge with a twin is in at most one verified pair, and twin() is an
+  // involution exactly when the pairs cover them all (2 · pairs ==
+  // interiorHalf). When they do not, a second pass names the culprits.
   struct HalfedgeCounts {
-    std::size_t boundary = 0, interiorHalf = 0, constrained = 0;
+    std::size_t boundary = 0, interiorHalf = 0, pairs = 0, constrained = 0;
     std::vector<HalfedgeId> boundaryHalfedges;
   };
   HalfedgeCounts counts;
+  const std::uint32_t* twins = m.twinIndices().data();
+  const std::uint32_t* corners = m.cornerIndices().data();
   inParts<HalfedgeCounts>(
       nh, threads, maxProblems, problems,
       [&](std::size_t b, std::size_t e, Problems& found, HalfedgeCounts& c) {
         for (std::size_t i = b; i < e; ++i) {
+          if (i + kPrefetch < e) {
+            const std::uint32_t ahead = twins[i + kPrefetch];
+            if (ahead > i + kPrefetch && ahead < nh) {
+              __builtin_prefetch(twins + ahead);
+              __builtin_prefetch(corners + ahead);
+            }
+          }
           const HalfedgeId h(static_cast<std::uint32_t>(i));
           const HalfedgeId t = m.twin(h);
           if (!t.valid()) {
@@ -246,17 +267,20 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
             if (m.isConstrained(h)) ++c.constrained;
           } else {
             ++c.interiorHalf;
-            if (t.value >= nh || m.twin(t) != h || m.origin(t) != m.target(h) ||
-                m.target(t) != m.origin(h)) {
-              found.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
-                        ") and its twin are not symmetric");
-              continue;
+            if (t.value > i && t.value < nh && m.twin(t) == h) {
+              ++c.pairs;
+              if (m.origin(t) != m.target(h) || m.target(t) != m.origin(h)) {
+                found.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
+                          ") and its twin " + edgeName(m, t) + " do not join the same vertices");
+                continue;
+              }
+              const auto fa = m.edgeFeatures(h), fb = m.edgeFeatures(t);
+              if (!std::equal(fa.begin(), fa.end(), fb.begin(), fb.end())) {
+                found.add("edge " + edgeName(m, h) +
+                          " has different constraint features on its sides");
+              }
+              if (m.isConstrained(h)) ++c.constrained;
             }
-            const auto fa = m.edgeFeatures(h), fb = m.edgeFeatures(t);
-            if (!std::equal(fa.begin(), fa.end(), fb.begin(), fb.end())) {
-              found.add("edge " + edgeName(m, h) + " has different constraint features on its sides");
-            }
-            if (i < t.value && m.isConstrained(h)) ++c.constrained;
           }
           for (std::uint32_t f : m.edgeFeatures(h)) {
             if (f >= m.features().size()) {
@@ -268,10 +292,25 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
       [&](HalfedgeCounts& c) {
         counts.boundary += c.boundary;
         counts.interiorHalf += c.interiorHalf;
+        counts.pairs += c.pairs;
         counts.constrained += c.constrained;
         counts.boundaryHalfedges.insert(counts.boundaryHalfedges.end(),
                                         c.boundaryHalfedges.begin(), c.boundaryHalfedges.end());
       });
+  if (2 * counts.pairs != counts.interiorHalf) {
+    inParts<NoResult>(
+        nh, threads, maxProblems, problems,
+        [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
+          for (std::size_t i = b; i < e; ++i) {
+            const HalfedgeId h(static_cast<std::uint32_t>(i));
+            const HalfedgeId t = m.twin(h);
+            if (t.valid() && (t.value >= nh || t == h || m.twin(t) != h))
+              found.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
+                        ") and its twin are not symmetric");
+          }
+        },
+        [](NoResult&) {});
+  }
   r.boundaryEdges = counts.boundary;
   r.edges = counts.boundary + counts.interiorHalf / 2;
   r.constrainedEdges = counts.constrained;
@@ -290,8 +329,9 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   long long pinch = 0;
   std::size_t usedVertices = 0;
   for (std::uint32_t v = 0; v < nv; ++v) {
-    if (cornersAt[v] == 0) continue;
+    if (!(star[v] & kUsed)) continue;
     ++usedVertices;
+    const std::uint32_t crossings = star[v] & kMostCrossings;
     const auto at = boundaryOutIn.find(v);
     const auto [out, in] = at == boundaryOutIn.end() ? std::pair<std::uint32_t, std::uint32_t>{}
                                                       : at->second;
@@ -299,13 +339,14 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
     if (out != in) {
       problems.add("vertex " + std::to_string(v) + " has " + std::to_string(out) +
                    " boundary edges out but " + std::to_string(in) + " in (non-manifold)");
-    } else if (out == 0 && crossingsAt[v] != 1) {
+    } else if (out == 0 && crossings != 1) {
       // An interior vertex's star must be one fan winding exactly once.
       problems.add("the star of interior vertex " + std::to_string(v) +
-                   (crossingsAt[v] == 0 ? " does not close around it"
-                                        : " winds " + std::to_string(crossingsAt[v]) +
-                                              " times around it (folded triangles, or several "
-                                              "fans: non-manifold)"));
+                   (crossings == 0 ? " does not close around it"
+                                   : " winds " + std::string(crossings == kMostCrossings ? "at least " : "") +
+                                         std::to_string(crossings) +
+                                         " times around it (folded triangles, or several "
+                                         "fans: non-manifold)"));
     }
   }
   r.vertices = usedVertices;

@@ -139,6 +139,24 @@ TEST(Validator, FindsAStarThatWindsTwice) {
   EXPECT_TRUE(mentions(r, "winds 2 times around it")) << r.summary();
 }
 
+TEST(Validator, FindsTwinsThatAreNotEachOthers) {
+  // Twins are checked once per pair, from the lower half-edge; a twin link
+  // that is not returned must still be found, from either side.
+  for (const bool lowerSide : {true, false}) {
+    MeshStorage storage = Mesh::fromTinData(square()).release();
+    // The diagonal: half-edge 2 (2→0) and its twin 3 (0→2). Point one of them
+    // at a boundary half-edge of the other triangle instead.
+    ASSERT_EQ(storage.twins[2], 3u);
+    if (lowerSide)
+      storage.twins[2] = 4;
+    else
+      storage.twins[3] = 1;
+    const ValidationReport r = validate(Mesh::adopt(std::move(storage)));
+    EXPECT_FALSE(r.ok);
+    EXPECT_TRUE(mentions(r, "not symmetric")) << r.summary();
+  }
+}
+
 // A grid of n × n squares, two triangles each.
 TinData grid(std::uint32_t n) {
   TinData tin;
