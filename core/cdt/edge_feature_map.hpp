@@ -10,13 +10,18 @@
 #include <vector>
 
 #include "core/cdt/cdt.hpp"
+#include "core/cdt/ids.hpp"
 
 namespace tinsmith::cdt {
 
 /// The key of the undirected edge a–b.
-inline std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
+inline std::uint64_t edgeKey(VertexId a, VertexId b) {
   if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(a) << 32) | b;
+  return (static_cast<std::uint64_t>(a.value) << 32) | b.value;
+}
+/// The vertices of the edge of key k (the smaller id first).
+inline std::pair<VertexId, VertexId> edgeOfKey(std::uint64_t k) {
+  return {VertexId(static_cast<std::uint32_t>(k >> 32)), VertexId(static_cast<std::uint32_t>(k))};
 }
 
 /// Features of constrained edges, keyed by edgeKey. Most edges carry one
