@@ -156,7 +156,8 @@ class ConstrainedTriangulation : public Triangulation {
   /// DT(S) that fill the hole between them. `right` has the right half in local ids
   /// (rightGlobal maps them); unsafeLeft/unsafeRight flag each half's
   /// triangles (unsafeTriangles()). Frees right's triangle arrays as it
-  /// copies them.
+  /// copies them. In three steps (two_halves.cpp): collectSeam (S and the
+  /// hole's border), fillHole (DT(S) inside the hole), stitch (copy and link).
   void mergeHalves(ConstrainedTriangulation& right, const IdVector<VertexId, VertexId>& rightGlobal,
                    const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
                    const IdVector<TriangleId, std::uint8_t>& unsafeRight);

@@ -288,16 +288,28 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<VertexId>& order) {
   return true;
 }
 
-void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
-                                           const IdVector<VertexId, VertexId>& rightGlobal,
-                                           const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
-                                           const IdVector<TriangleId, std::uint8_t>& unsafeRight) {
-  // The seam set S (corners of unsafe triangles), numbered in input order,
-  // and the border edges of the hole.
-  std::unordered_map<std::uint32_t, VertexId> seamOf;  // global vertex (value) → seam vertex
-  IdVector<VertexId, VertexId> seamGlobal;             // seam vertex → global vertex
+namespace {
+
+/// The seam between the two halves: the set S of the unsafe triangles'
+/// corners (global ids, ascending — input order), the border edges of the
+/// hole they leave, and the constrained edges inside the hole.
+struct Seam {
+  IdVector<VertexId, VertexId> global;                // seam vertex → global vertex
+  std::unordered_map<std::uint32_t, VertexId> local;  // global vertex (value) → seam vertex
   std::vector<SeamBorder> borders;
-  std::vector<std::pair<VertexId, VertexId>> inner;  // constrained edges in the hole
+  std::vector<std::pair<VertexId, VertexId>> inner;  // global ids
+  [[nodiscard]] VertexId vertex(VertexId g) { return local[g.value]; }
+};
+
+/// Part 1 of the merge. The seam of the two halves, from the unsafe
+/// triangles of each (`left` in global ids; `right` in local ids, which
+/// rightGlobal maps). Borders and inner edges come in triangle order, the
+/// left half's first. Changes nothing.
+Seam collectSeam(const TriangleStore& left, const TriangleStore& right,
+                 const IdVector<VertexId, VertexId>& rightGlobal,
+                 const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+                 const IdVector<TriangleId, std::uint8_t>& unsafeRight) {
+  Seam seam;
   auto collect = [&](const TriangleStore& half, const IdVector<TriangleId, std::uint8_t>& unsafe,
                      bool rightHalf) {
     auto global = [&](VertexId v) { return rightHalf && v != kInfinite ? rightGlobal[v] : v; };
@@ -308,54 +320,74 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
         const HalfedgeId h = halfedgeOf(t, i), g = half.twin(h);
         if (half.origin(h) == kInfinite) continue;
         const VertexId v = global(half.origin(h));
-        if (seamOf.try_emplace(v.value, VertexId(0)).second) seamGlobal.push_back(v);
+        if (seam.local.try_emplace(v.value, VertexId(0)).second) seam.global.push_back(v);
         const VertexId w = global(half.origin(nxt(h)));
         if (!unsafe[triangleOf(g)]) {
-          borders.push_back({v, w, g, rightHalf});
+          seam.borders.push_back({v, w, g, rightHalf});
         } else if (half.cons[h] && h < g) {
-          inner.emplace_back(v, w);
+          seam.inner.emplace_back(v, w);
         }
       }
     }
   };
-  collect(*this, unsafeLeft, false);
+  collect(left, unsafeLeft, false);
   collect(right, unsafeRight, true);
-  std::sort(seamGlobal.begin(), seamGlobal.end());
-  for (std::uint32_t j = 0; j < seamGlobal.size(); ++j) {
-    seamOf[seamGlobal[VertexId(j)].value] = VertexId(j);
+  std::sort(seam.global.begin(), seam.global.end());
+  for (std::uint32_t j = 0; j < seam.global.size(); ++j) {
+    seam.local[seam.global[VertexId(j)].value] = VertexId(j);
   }
-  auto seamVertex = [&](VertexId g) { return seamOf[g.value]; };
+  return seam;
+}
 
-  // DT(S) with the border edges (feature 0) and the constrained edges in the
-  // hole (feature 1) as constraints.
+/// The triangles that fill the hole between the halves' safe triangles:
+/// DT(S) in seam ids, which of its triangles lie in the hole, and per border
+/// edge (in Seam::borders' order) its half-edge in DT(S), the hole on its left.
+struct HoleFill {
+  ConstrainedTriangulation dt;
+  IdVector<TriangleId, std::uint8_t> inHole;
+  std::vector<HalfedgeId> borderHalfedge;
+};
+
+/// Part 2 of the merge. DT(S), with the border edges (feature 0) and the
+/// constrained edges in the hole (feature 1) as constraints, on `xy` (the
+/// global points); the hole is what is reachable from the border without
+/// crossing it (with no border, no safe triangle at all: everything).
+/// Throws internalError when DT(S) had to change its input (merge, split or
+/// drop), lacks a border edge, or the border does not close the hole.
+HoleFill fillHole(Seam& seam, const IdVector<VertexId, Point2>& xy) {
   std::vector<Point2> seamXy;
-  seamXy.reserve(seamGlobal.size());
-  for (VertexId g : seamGlobal) seamXy.push_back(xy[g]);
-  std::vector<Segment> seamSegments;
-  seamSegments.reserve(borders.size() + inner.size());
-  for (const SeamBorder& b : borders) seamSegments.push_back({seamVertex(b.u), seamVertex(b.v), 0});
-  for (const auto& [u, w] : inner) seamSegments.push_back({seamVertex(u), seamVertex(w), 1});
-  ConstrainedTriangulation seam(
-      0.0, kRerouteDepthLimit,
-      {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}}, std::move(seamXy),
-      std::vector<double>(seamGlobal.size(), 0.0),
-      std::vector<FeatureId>(seamGlobal.size(), kNoFeature), std::move(seamSegments));
-  seam.insertPendingPoints();
-  seam.insertPendingSegments();
-  if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
-      !seam.report.dropped.empty() || !seam.bend.empty()) {
+  seamXy.reserve(seam.global.size());
+  for (VertexId g : seam.global) seamXy.push_back(xy[g]);
+  std::vector<Segment> segments;
+  segments.reserve(seam.borders.size() + seam.inner.size());
+  for (const SeamBorder& b : seam.borders) {
+    segments.push_back({seam.vertex(b.u), seam.vertex(b.v), 0});
+  }
+  for (const auto& [u, w] : seam.inner) segments.push_back({seam.vertex(u), seam.vertex(w), 1});
+  HoleFill fill{ConstrainedTriangulation(
+                    0.0, kRerouteDepthLimit,
+                    {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}},
+                    std::move(seamXy), std::vector<double>(seam.global.size(), 0.0),
+                    std::vector<FeatureId>(seam.global.size(), kNoFeature), std::move(segments)),
+                {},
+                {}};
+  ConstrainedTriangulation& dt = fill.dt;
+  dt.insertPendingPoints();
+  dt.insertPendingSegments();
+  if (!dt.report.merges.empty() || !dt.report.intersections.empty() || !dt.report.dropped.empty() ||
+      !dt.bend.empty()) {
     throw internalError("the seam between the two halves changed its input");
   }
 
-  // The hole: DT(S) triangles reachable from the border without crossing it.
-  // (With no safe triangle at all, DT(S) is the whole triangulation.)
-  IdVector<TriangleId, std::uint8_t> inHole(seam.triCount(), borders.empty() ? 1 : 0);
-  std::vector<HalfedgeId> seamHalfedge(borders.size());
+  IdVector<TriangleId, std::uint8_t>& inHole = fill.inHole;
+  inHole.assign(dt.triCount(), seam.borders.empty() ? 1 : 0);
+  fill.borderHalfedge.resize(seam.borders.size());
   std::vector<TriangleId> todo;
-  for (std::size_t k = 0; k < borders.size(); ++k) {
-    const HalfedgeId h = seam.findHalfedge(seamVertex(borders[k].u), seamVertex(borders[k].v));
+  for (std::size_t k = 0; k < seam.borders.size(); ++k) {
+    const HalfedgeId h =
+        dt.findHalfedge(seam.vertex(seam.borders[k].u), seam.vertex(seam.borders[k].v));
     if (!h.valid()) throw internalError("a seam border edge is missing");
-    seamHalfedge[k] = h;
+    fill.borderHalfedge[k] = h;
     if (!inHole[triangleOf(h)]) {
       inHole[triangleOf(h)] = 1;
       todo.push_back(triangleOf(h));
@@ -366,21 +398,62 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
     todo.pop_back();
     for (std::uint32_t i = 0; i < 3; ++i) {
       const HalfedgeId h = halfedgeOf(t, i);
-      if (seam.cons[h]) {
-        const auto fs = seam.edgeFeatures.find(edgeKey(seam.origin(h), seam.origin(nxt(h))));
+      if (dt.cons[h]) {
+        const auto fs = dt.edgeFeatures.find(edgeKey(dt.origin(h), dt.origin(nxt(h))));
         if (std::find(fs.begin(), fs.end(), FeatureId{0}) != fs.end()) continue;  // border
       }
-      const TriangleId n = seam.neighbour(h);
+      const TriangleId n = dt.neighbour(h);
       if (!inHole[n]) {
         inHole[n] = 1;
         todo.push_back(n);
       }
     }
   }
-  for (HalfedgeId h : seamHalfedge) {
-    if (inHole[seam.neighbour(h)]) throw internalError("the seam hole is not closed");
+  for (HalfedgeId h : fill.borderHalfedge) {
+    if (inHole[dt.neighbour(h)]) throw internalError("the seam hole is not closed");
   }
+  return fill;
+}
 
+/// Moves the last triangles of `store` into its free slots freeSlots[from..]
+/// (ascending; a free slot has an invalid first corner) and drops the free
+/// slots left at the end, so that the triangles are contiguous again.
+void closeFreeSlots(TriangleStore& store, const std::vector<TriangleId>& freeSlots,
+                    std::size_t from) {
+  auto isFree = [&](TriangleId t) { return !store.corner(t, 0).valid(); };
+  std::uint32_t end = store.triCount();
+  for (std::size_t k = from; k < freeSlots.size(); ++k) {
+    const TriangleId f = freeSlots[k];
+    while (end > 0 && isFree(TriangleId(end - 1))) --end;
+    if (f.value >= end) break;
+    const TriangleId t(--end);
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const HalfedgeId to = halfedgeOf(f, i), moved = halfedgeOf(t, i);
+      store.tv[to.value] = store.tv[moved.value];
+      store.cons[to] = store.cons[moved];
+      store.link(to, store.twin(moved));
+    }
+    store.tv[halfedgeOf(t, 0).value] = VertexId::kInvalid;
+  }
+  while (end > 0 && isFree(TriangleId(end - 1))) --end;
+  store.tv.resize(3 * static_cast<std::size_t>(end));
+  store.opp.resize(3 * static_cast<std::size_t>(end));
+  store.cons.resize(3 * static_cast<std::size_t>(end));
+}
+
+/// Part 3 of the merge. The left half's unsafe triangles make way for the
+/// right half's safe ones and the hole's (fill): both are copied into
+/// `left`, into the freed slots first, then appended, their ids made global
+/// (the hole's edges constrained where `left.edgeFeatures` has the edge),
+/// linked to the safe triangles along the border, and the slots left free
+/// are closed. Frees the triangle arrays of `right` and `fill.dt` as it
+/// copies them. Throws internalError when a copied triangle is left without
+/// a twin.
+void stitch(ConstrainedTriangulation& left, ConstrainedTriangulation& right,
+            const IdVector<VertexId, VertexId>& rightGlobal,
+            const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+            const IdVector<TriangleId, std::uint8_t>& unsafeRight, const Seam& seam,
+            HoleFill& fill) {
   // New slots: freed left slots first, then appended. A freed slot is marked
   // by an invalid first corner.
   std::vector<TriangleId> freeSlots;
@@ -388,11 +461,11 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
     const TriangleId t(k);
     if (unsafeLeft[t]) {
       freeSlots.push_back(t);
-      tv[halfedgeOf(t, 0).value] = VertexId::kInvalid;
+      left.tv[halfedgeOf(t, 0).value] = VertexId::kInvalid;
     }
   }
   std::size_t used = 0;
-  std::uint32_t appended = triCount();
+  std::uint32_t appended = left.triCount();
   auto takeSlot = [&] {
     return used < freeSlots.size() ? freeSlots[used++] : TriangleId(appended++);
   };
@@ -400,9 +473,9 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
   for (std::uint32_t k = 0; k < right.triCount(); ++k) {
     if (!unsafeRight[TriangleId(k)]) rightSlot[TriangleId(k)] = takeSlot();
   }
-  IdVector<TriangleId, TriangleId> seamSlot(seam.triCount(), TriangleId::invalid());
-  for (std::uint32_t k = 0; k < seam.triCount(); ++k) {
-    if (inHole[TriangleId(k)]) seamSlot[TriangleId(k)] = takeSlot();
+  IdVector<TriangleId, TriangleId> holeSlot(fill.dt.triCount(), TriangleId::invalid());
+  for (std::uint32_t k = 0; k < fill.dt.triCount(); ++k) {
+    if (fill.inHole[TriangleId(k)]) holeSlot[TriangleId(k)] = takeSlot();
   }
   // Copies the kept triangles of another triangulation array by array, freeing each
   // source array once copied (two full copies of the right half's arrays
@@ -413,7 +486,7 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
                       const IdVector<VertexId, VertexId>& global) {
     auto each = [&](const auto& f) {
       parallelParts(
-          slot.size(), threadCount(), threadCount(),
+          slot.size(), left.threadCount(), left.threadCount(),
           [&](std::size_t b, std::size_t e, unsigned) {
             for (std::size_t k = b; k < e; ++k) {
               const TriangleId t(static_cast<std::uint32_t>(k));
@@ -423,72 +496,63 @@ void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
           },
           kSerialBelow);
     };
-    tv.resize(size);
+    left.tv.resize(size);
     each([&](HalfedgeId h, HalfedgeId out) {
       const VertexId v = from.origin(h);
-      tv[out.value] = (v == kInfinite ? kInfinite : global[v]).value;
+      left.tv[out.value] = (v == kInfinite ? kInfinite : global[v]).value;
     });
     std::vector<std::uint32_t>().swap(from.tv);
-    opp.resize(size);
+    left.opp.resize(size);
     each([&](HalfedgeId h, HalfedgeId out) {
       const HalfedgeId g = from.twin(h);
       const TriangleId s = slot[triangleOf(g)];
-      opp[out.value] = s.valid() ? halfedgeOf(s, cornerOf(g)).value : HalfedgeId::kInvalid;
+      left.opp[out.value] = s.valid() ? halfedgeOf(s, cornerOf(g)).value : HalfedgeId::kInvalid;
     });
     std::vector<std::uint32_t>().swap(from.opp);
-    cons.resize(size);
-    each([&](HalfedgeId h, HalfedgeId out) { cons[out] = from.cons[h]; });
+    left.cons.resize(size);
+    each([&](HalfedgeId h, HalfedgeId out) { left.cons[out] = from.cons[h]; });
     std::vector<std::uint8_t>().swap(from.cons);
   };
   copyKept(right, rightSlot, rightGlobal);
-  copyKept(seam, seamSlot, seamGlobal);
-  // The seam's constraints include the hole's border: take the flags from
-  // the real constrained edges instead.
-  for (const TriangleId t : seamSlot) {
+  copyKept(fill.dt, holeSlot, seam.global);
+  // DT(S)'s constraints include the hole's border: take the flags from the
+  // real constrained edges instead.
+  for (const TriangleId t : holeSlot) {
     if (!t.valid()) continue;
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const VertexId u = corner(t, i), w = corner(t, (i + 1) % 3);
-      cons[halfedgeOf(t, i)] =
-          u != kInfinite && w != kInfinite && !edgeFeatures.find(edgeKey(u, w)).empty();
+      const VertexId u = left.corner(t, i), w = left.corner(t, (i + 1) % 3);
+      left.cons[halfedgeOf(t, i)] =
+          u != kInfinite && w != kInfinite && !left.edgeFeatures.find(edgeKey(u, w)).empty();
     }
   }
-  for (std::size_t k = 0; k < borders.size(); ++k) {
-    const SeamBorder& b = borders[k];
-    const HalfedgeId h = seamHalfedge[k];
+  for (std::size_t k = 0; k < seam.borders.size(); ++k) {
+    const SeamBorder& b = seam.borders[k];
+    const HalfedgeId h = fill.borderHalfedge[k];
     const HalfedgeId safe =
         b.rightHalf ? halfedgeOf(rightSlot[triangleOf(b.safe)], cornerOf(b.safe)) : b.safe;
-    link(safe, halfedgeOf(seamSlot[triangleOf(h)], cornerOf(h)));
+    left.link(safe, halfedgeOf(holeSlot[triangleOf(h)], cornerOf(h)));
   }
-  for (const TriangleId t : seamSlot) {
+  for (const TriangleId t : holeSlot) {
     if (!t.valid()) continue;
     for (std::uint32_t i = 0; i < 3; ++i) {
       const HalfedgeId h = halfedgeOf(t, i);
-      if (opp[h.value] >= opp.size() || twin(twin(h)) != h) {
+      if (left.opp[h.value] >= left.opp.size() || left.twin(left.twin(h)) != h) {
         throw internalError("merging the two halves left a broken triangle");
       }
     }
   }
+  closeFreeSlots(left, freeSlots, used);
+}
 
-  // Close the gaps the unused freed slots left: the last triangles move in.
-  auto isFree = [&](TriangleId t) { return !corner(t, 0).valid(); };
-  std::uint32_t end = triCount();
-  for (std::size_t k = used; k < freeSlots.size(); ++k) {
-    const TriangleId f = freeSlots[k];
-    while (end > 0 && isFree(TriangleId(end - 1))) --end;
-    if (f.value >= end) break;
-    const TriangleId t(--end);
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      const HalfedgeId to = halfedgeOf(f, i), from = halfedgeOf(t, i);
-      tv[to.value] = tv[from.value];
-      cons[to] = cons[from];
-      link(to, twin(from));
-    }
-    tv[halfedgeOf(t, 0).value] = VertexId::kInvalid;
-  }
-  while (end > 0 && isFree(TriangleId(end - 1))) --end;
-  tv.resize(3 * static_cast<std::size_t>(end));
-  opp.resize(3 * static_cast<std::size_t>(end));
-  cons.resize(3 * static_cast<std::size_t>(end));
+}  // namespace
+
+void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
+                                           const IdVector<VertexId, VertexId>& rightGlobal,
+                                           const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+                                           const IdVector<TriangleId, std::uint8_t>& unsafeRight) {
+  Seam seam = collectSeam(*this, right, rightGlobal, unsafeLeft, unsafeRight);
+  HoleFill fill = fillHole(seam, xy);
+  stitch(*this, right, rightGlobal, unsafeLeft, unsafeRight, seam, fill);
   lastTriangle = TriangleId(0);
 }
 
