@@ -11,7 +11,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "core/mesh/mesh.hpp"
@@ -49,8 +48,6 @@ class IdVector : public std::vector<T> {
  public:
   using std::vector<T>::vector;
   using std::vector<T>::operator=;
-  IdVector() = default;
-  IdVector(std::vector<T>&& v) : std::vector<T>(std::move(v)) {}  // NOLINT: adopts a vector
 
   T& operator[](Id i) { return std::vector<T>::operator[](i.value); }
   const T& operator[](Id i) const { return std::vector<T>::operator[](i.value); }
