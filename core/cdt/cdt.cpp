@@ -28,7 +28,6 @@
 namespace tinsmith {
 
 using cdt::kDomainFeature;
-using cdt::kNone;
 using cdt::Role;
 
 Cdt::Cdt(CdtOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
@@ -73,7 +72,7 @@ void Cdt::insertConstraintSegment(VertexId a, VertexId b, FeatureId feature) {
   if (a.value >= m.xy.size() || b.value >= m.xy.size()) {
     throw usageError("constraint segment names a vertex that was not inserted");
   }
-  m.segments.push_back({a.value, b.value, feature});
+  m.segments.push_back({a, b, feature});
   m.inputAdded();
 }
 
@@ -114,7 +113,7 @@ void Cdt::finalize() {
   // Vertex half-edges serve constraint insertion only: recomputed when more
   // constraints come.
   m.trackVhe = false;
-  std::vector<std::uint32_t>().swap(m.vhe);
+  std::vector<HalfedgeId>().swap(m.vhe);
   m.finalized = true;
   m.changed = false;
   m.meshBuilt = false;
@@ -124,9 +123,10 @@ void Cdt::Impl::unpackMesh() {
   if (!packed) return;
   MeshStorage storage = std::move(mesh).release();
   // Mesh vertex → working vertex (live roots only have mesh vertices).
-  std::vector<std::uint32_t> workingVertex(storage.points.size(), kNone);
-  for (std::uint32_t v = 0; v < rep.size(); ++v) {
-    if (rep[v] == v && meshOf[v] != kNone) workingVertex[meshOf[v]] = v;
+  std::vector<VertexId> workingVertex(storage.points.size());
+  for (std::uint32_t k = 0; k < rep.size(); ++k) {
+    const VertexId v(k);
+    if (rep[v] == v && meshOf[v].valid()) workingVertex[meshOf[v].value] = v;
   }
   std::vector<std::uint32_t> corners = std::move(storage.corners);
   std::vector<std::uint32_t> twins = std::move(storage.twins);
@@ -144,7 +144,7 @@ void Cdt::buildMesh() const {
   // are compacted in place (their order kept) and moved into the Mesh; ghosts
   // and triangles outside the domain are set aside so that unpack() can restore
   // the working triangulation exactly if more input comes.
-  std::vector<std::uint32_t> used;
+  cdt::IdVector<VertexId, VertexId> used;
   MeshStorage storage = m.pack(m.domain.classify(m), m.z, m.features.size(), m.threadCount(), used);
   storage.crs = m.options.crs;
   storage.features = m.features;
@@ -157,10 +157,10 @@ void Cdt::buildMesh() const {
                                         }),
                          m.report.dropped.end());
   // used becomes meshOf: roots keep their entry, merged vertices take their root's.
-  for (std::uint32_t v = 0; v < m.xy.size(); ++v) {
-    const std::uint32_t r = m.find(v);
+  for (std::uint32_t k = 0; k < m.xy.size(); ++k) {
+    const VertexId v(k), r = m.find(v);
     if (r != v) used[v] = used[r];
-    if (r == v && used[v] == kNone) {
+    if (r == v && !used[v].valid()) {
       m.report.dropped.push_back(
           {CdtReport::Dropped::What::PointOutsideDomain, m.vfeat[v], m.xy[v]});
     }
@@ -186,8 +186,7 @@ VertexId Cdt::meshVertex(VertexId input) const {
   if (!impl_->finalized) return {};
   buildMesh();
   if (input.value >= impl_->meshOf.size()) return {};
-  const std::uint32_t v = impl_->meshOf[input.value];
-  return v == kNone ? VertexId() : VertexId(v);
+  return impl_->meshOf[input];
 }
 
 std::size_t Cdt::inputVertexCount() const {
@@ -239,7 +238,8 @@ Cdt Cdt::fromTinData(const TinData& tin, CdtOptions options) {
   const Mesh mesh = Mesh::fromTinData(tin);
   bool any = false;
   for (HalfedgeId h : mesh.boundaryHalfedges()) {
-    cdt.impl_->segments.push_back({mesh.origin(h).value, mesh.target(h).value, kDomainFeature});
+    // (The loaded mesh's vertex ids are the input vertex ids.)
+    cdt.impl_->segments.push_back({mesh.origin(h), mesh.target(h), kDomainFeature});
     any = true;
   }
   // Every TIN gets them, a convex one too (its hull): by parity, triangles

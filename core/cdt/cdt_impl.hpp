@@ -21,7 +21,7 @@ struct Cdt::Impl : cdt::ConstrainedTriangulation {
   cdt::Domain domain;
   // After buildMesh() the triangle arrays live in `mesh` (TriangleStore::pack).
   Mesh mesh;
-  std::vector<std::uint32_t> meshOf;  // input vertex → mesh vertex (kNone if none)
+  cdt::IdVector<VertexId, VertexId> meshOf;  // input vertex → mesh vertex (invalid if none)
   // finalize() has run and no input came after it: the mesh may be read.
   bool finalized = false;
   // Input (points, constraints, domain rings) came since the last finalize().

@@ -24,12 +24,12 @@ ConstrainedTriangulation::ConstrainedTriangulation(double snapTolerance, std::si
   xy = std::move(points);
   z = std::move(heights);
   vfeat = std::move(vertexFeatures);
-  rep.assign(xy.size(), kNone);
+  rep.assign(xy.size(), VertexId::invalid());
 }
 
 void ConstrainedTriangulation::insertPendingPoints() {
   if (insertedUpTo >= xy.size()) return;
-  std::vector<std::uint32_t> order = insertionOrder();
+  std::vector<VertexId> order = insertionOrder();
   trackVhe = false;
   insertedUpTo = xy.size();
   if (order.empty()) return;
@@ -81,7 +81,7 @@ void ConstrainedTriangulation::insertSegments(const std::vector<std::uint32_t>& 
     const std::size_t end = r + 1 < runStart.size() ? runStart[r + 1] : which.size();
     for (std::size_t k = runStart[r]; k < end; ++k) {
       const Segment sg = segments[which[k]];
-      const std::uint32_t a = find(sg.a), b = find(sg.b);
+      const VertexId a = find(sg.a), b = find(sg.b);
       if (a == b) {
         report.dropped.push_back({CdtReport::Dropped::What::ZeroLengthSegment, sg.feature, xy[a]});
         continue;
@@ -91,56 +91,57 @@ void ConstrainedTriangulation::insertSegments(const std::vector<std::uint32_t>& 
   }
 }
 
-void ConstrainedTriangulation::addEdgeFeature(std::uint32_t p, std::uint32_t q, FeatureId f) {
-  const std::uint32_t h = findHalfedge(p, q);
-  if (h == kNone) throw internalError("constraint edge missing after insertion");
-  cons[h] = cons[opp[h]] = 1;
+void ConstrainedTriangulation::addEdgeFeature(VertexId p, VertexId q, FeatureId f) {
+  const HalfedgeId h = findHalfedge(p, q);
+  if (!h.valid()) throw internalError("constraint edge missing after insertion");
+  cons[h] = cons[twin(h)] = 1;
   edgeFeatures.add(edgeKey(p, q), f);
 }
 
-bool ConstrainedTriangulation::onRay(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+bool ConstrainedTriangulation::onRay(VertexId a, VertexId b, VertexId c) const {
   const Point2 &pa = xy[a], &pb = xy[b], &pc = xy[c];
   if (pb.x > pa.x) return pc.x > pa.x;
   if (pb.x < pa.x) return pc.x < pa.x;
   return pb.y > pa.y ? pc.y > pa.y : pc.y < pa.y;
 }
 
-bool ConstrainedTriangulation::onInputSegment(std::uint32_t a0, std::uint32_t b0, std::uint32_t cur,
-                                              std::uint32_t tgt, std::uint32_t u,
-                                              const std::vector<std::uint32_t>& passed) const {
-  if (u == kInf || u == cur || u == tgt || orient(a0, b0, u) != 0) return false;
+bool ConstrainedTriangulation::onInputSegment(VertexId a0, VertexId b0, VertexId cur, VertexId tgt,
+                                              VertexId u,
+                                              const std::vector<VertexId>& passed) const {
+  if (u == kInfinite || u == cur || u == tgt || orient(a0, b0, u) != 0) return false;
   if (std::find(passed.begin(), passed.end(), u) != passed.end()) return false;
   const Point2 &pc = xy[cur], &pt = xy[tgt], &pu = xy[u];
   return (pu.x - pc.x) * (pt.x - pc.x) + (pu.y - pc.y) * (pt.y - pc.y) > 0 &&
          (pu.x - pt.x) * (pc.x - pt.x) + (pu.y - pt.y) * (pc.y - pt.y) > 0;
 }
 
-void ConstrainedTriangulation::insertSegment(std::uint32_t a, std::uint32_t b, FeatureId f) {
-  const std::uint32_t a0 = a, b0 = b;
-  std::vector<std::uint32_t> passed{a};  // vertices this segment already runs through
-  std::vector<std::uint32_t> targets{b};
-  std::uint32_t cur = a;
+void ConstrainedTriangulation::insertSegment(VertexId a, VertexId b, FeatureId f) {
+  const VertexId a0 = a, b0 = b;
+  std::vector<VertexId> passed{a};  // vertices this segment already runs through
+  std::vector<VertexId> targets{b};
+  VertexId cur = a;
   const std::size_t guardLimit = 64 + 8 * xy.size();
   std::size_t guard = 0;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> crossed;
+  std::vector<std::pair<VertexId, VertexId>> crossed;
   while (!targets.empty()) {
     if (++guard > guardLimit) {
       throw internalError("constraint insertion did not terminate");
     }
-    const std::uint32_t tgt = targets.back();
+    const VertexId tgt = targets.back();
     if (cur == tgt) {
       targets.pop_back();
       continue;
     }
     // Find the wedge at cur that holds the direction to tgt.
-    std::uint32_t firstCross = kNone, onLine = kNone;
+    HalfedgeId firstCross;
+    VertexId onLine;
     {
-      const std::uint32_t start = vhe[cur];
-      std::uint32_t h = start;
+      const HalfedgeId start = vhe[cur];
+      HalfedgeId h = start;
       std::size_t turns = 0;
       do {
-        const std::uint32_t u = tv[nxt(h)], w = tv[prv(h)];
-        if (u != kInf) {
+        const VertexId u = origin(nxt(h)), w = origin(prv(h));
+        if (u != kInfinite) {
           if (u == tgt) {
             onLine = u;
             break;
@@ -150,7 +151,7 @@ void ConstrainedTriangulation::insertSegment(std::uint32_t a, std::uint32_t b, F
             onLine = u;
             break;
           }
-          if (w != kInf && ou < 0 && orient(cur, tgt, w) > 0) {
+          if (w != kInfinite && ou < 0 && orient(cur, tgt, w) > 0) {
             if (onInputSegment(a0, b0, cur, tgt, w, passed)) {
               onLine = w;
             } else {
@@ -159,31 +160,31 @@ void ConstrainedTriangulation::insertSegment(std::uint32_t a, std::uint32_t b, F
             break;
           }
         }
-        h = opp[prv(h)];
+        h = twin(prv(h));
       } while (h != start && ++turns < 1u << 30);
     }
-    if (onLine != kNone) {
+    if (onLine.valid()) {
       addEdgeFeature(cur, onLine, f);
       cur = onLine;
       passed.push_back(cur);
       continue;
     }
-    if (firstCross == kNone) throw internalError("constraint direction found in no triangle");
+    if (!firstCross.valid()) throw internalError("constraint direction found in no triangle");
 
     // Walk the crossed edges.
     crossed.clear();
-    std::uint32_t e = firstCross;
-    std::uint32_t end = kNone, onInput = kNone;
+    HalfedgeId e = firstCross;
+    VertexId end, onInput;
     bool hitConstraint = false;
     for (;;) {
       if (cons[e]) {
         hitConstraint = true;
         break;
       }
-      crossed.emplace_back(tv[e], tv[nxt(e)]);
-      const std::uint32_t g = opp[e];
-      const std::uint32_t x = tv[prv(g)];
-      if (x == kInf) throw internalError("constraint leaves the convex hull");
+      crossed.emplace_back(origin(e), origin(nxt(e)));
+      const HalfedgeId g = twin(e);
+      const VertexId x = origin(prv(g));
+      if (x == kInfinite) throw internalError("constraint leaves the convex hull");
       if (x == tgt) {
         end = tgt;
         break;
@@ -199,13 +200,13 @@ void ConstrainedTriangulation::insertSegment(std::uint32_t a, std::uint32_t b, F
       }
       e = ox > 0 ? nxt(g) : prv(g);
     }
-    if (onInput != kNone) {
+    if (onInput.valid()) {
       targets.push_back(onInput);
       continue;
     }
     if (hitConstraint) {
-      const std::uint32_t v = crossingVertex(cur, tgt, e, f);
-      if (v != kNone) targets.push_back(v);
+      const VertexId v = crossingVertex(cur, tgt, e, f);
+      if (v.valid()) targets.push_back(v);
       continue;
     }
     removeCrossings(cur, end, crossed, f);
@@ -215,19 +216,19 @@ void ConstrainedTriangulation::insertSegment(std::uint32_t a, std::uint32_t b, F
 }
 
 void ConstrainedTriangulation::removeCrossings(
-    std::uint32_t a, std::uint32_t b,
-    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed, FeatureId f) {
-  std::deque<std::pair<std::uint32_t, std::uint32_t>> queue(crossed.begin(), crossed.end());
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> fresh;
+    VertexId a, VertexId b, const std::vector<std::pair<VertexId, VertexId>>& crossed,
+    FeatureId f) {
+  std::deque<std::pair<VertexId, VertexId>> queue(crossed.begin(), crossed.end());
+  std::vector<std::pair<VertexId, VertexId>> fresh;
   std::size_t guard = 0;
   const std::size_t limit = 64 + 16 * crossed.size() * crossed.size();
   while (!queue.empty()) {
     if (++guard > limit) throw internalError("constraint edge recovery did not terminate");
     const auto [p, q] = queue.front();
     queue.pop_front();
-    const std::uint32_t h = findHalfedge(p, q);
-    if (h == kNone) throw internalError("crossing edge vanished");
-    const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
+    const HalfedgeId h = findHalfedge(p, q);
+    if (!h.valid()) throw internalError("crossing edge vanished");
+    const VertexId c = origin(prv(h)), d = origin(prv(twin(h)));
     if (orient(c, d, p) * orient(c, d, q) >= 0) {  // not strictly convex
       queue.emplace_back(p, q);
       continue;

@@ -26,7 +26,7 @@ inline constexpr std::size_t kRerouteDepthLimit = 256;
 
 /// An input constraint segment between input vertices.
 struct Segment {
-  std::uint32_t a, b;
+  VertexId a, b;
   FeatureId feature;
 };
 
@@ -62,9 +62,9 @@ inline constexpr std::size_t kCrossingSteps = 8;
 struct CrossingPlacement {
   CrossingStep step = CrossingStep::SplitEdge;
   // The existing vertex used (SegmentEnd, NearVertex, SliverApex, NearestVertex).
-  std::uint32_t vertex = kNone;
+  VertexId vertex;
   // The triangle the new vertex goes into (BesideEdge, Nudged, BeyondSliver).
-  std::uint32_t triangle = kNone;
+  TriangleId triangle;
   // The new vertex (SplitEdge, BesideEdge, Nudged, BeyondSliver).
   Point2 at;
   // SliverApex: how far the crossed constraint bends.
@@ -73,11 +73,13 @@ struct CrossingPlacement {
 
 /// One crossing under resolution: the segment cur→tgt being inserted meets
 /// the constrained edge e = R→L (the half-edge on cur's side), with apex c
-/// beside e on cur's side and d on the other (kInf for a ghost's). X is the
+/// beside e on cur's side and d on the other (kInfinite for a ghost's). X is the
 /// rounded intersection of the two lines; a vertex within `tol` of X is taken
 /// to be at X; `nearest` is the nearest of R, L, c and d to X.
 struct Crossing {
-  std::uint32_t cur, tgt, e, R, L, c, d, nearest;
+  VertexId cur, tgt;
+  HalfedgeId e;
+  VertexId R, L, c, d, nearest;
   Point2 X;
   double tol;
 };
@@ -134,66 +136,66 @@ class ConstrainedTriangulation : public Triangulation {
   /// triangles in conflict with any one point of the other half (outside this
   /// half's hull) form a connected set holding a ghost, so the unsafe set is
   /// connected too, and a triangle never reached is safe.
-  [[nodiscard]] std::vector<std::uint8_t> unsafeTriangles(bool leftHalf, double leftMax,
-                                                          double rightMin) const;
+  [[nodiscard]] IdVector<TriangleId, std::uint8_t> unsafeTriangles(bool leftHalf, double leftMax,
+                                                                   double rightMin) const;
 
   /// The x value that splits the pending points `order` into a left part
   /// (x < split) and a right part (x >= split) of comparable size, with every
   /// left–right pair farther apart than the snap tolerance (so no merge can
   /// span the seam). NaN when there is none.
-  [[nodiscard]] double splitValue(const std::vector<std::uint32_t>& order) const;
+  [[nodiscard]] double splitValue(const std::vector<VertexId>& order) const;
 
   /// Triangulates the pending points `order` (first bulk, nothing triangulated
   /// yet) as two halves and merges them, emptying `order`; false, with
   /// nothing changed, when the points do not split well (then the caller
   /// inserts them in one go).
-  bool insertAsTwoHalves(std::vector<std::uint32_t>& order);
+  bool insertAsTwoHalves(std::vector<VertexId>& order);
 
   /// Replaces this triangulation's triangles (the left half, global ids) by
   /// the union of the safe triangles of both halves and the triangles of
   /// DT(S) that fill the hole between them. `right` has the right half in local ids
   /// (rightGlobal maps them); unsafeLeft/unsafeRight flag each half's
   /// triangles (unsafeTriangles()). Frees right's triangle arrays as it
-  /// copies them.
-  void mergeHalves(ConstrainedTriangulation& right, const std::vector<std::uint32_t>& rightGlobal,
-                   const std::vector<std::uint8_t>& unsafeLeft,
-                   const std::vector<std::uint8_t>& unsafeRight);
+  /// copies them. In three steps (two_halves.cpp): collectSeam (S and the
+  /// hole's border), fillHole (DT(S) inside the hole), stitch (copy and link).
+  void mergeHalves(ConstrainedTriangulation& right, const IdVector<VertexId, VertexId>& rightGlobal,
+                   const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+                   const IdVector<TriangleId, std::uint8_t>& unsafeRight);
 
   // --------------------------------------------- constraint insertion
   /// Marks the edge p–q constrained, carrying f; throws internalError when
   /// p–q is no edge.
-  void addEdgeFeature(std::uint32_t p, std::uint32_t q, FeatureId f);
+  void addEdgeFeature(VertexId p, VertexId q, FeatureId f);
 
   /// Is c on the ray from a through b (c collinear with a, b assumed)?
-  bool onRay(std::uint32_t a, std::uint32_t b, std::uint32_t c) const;
+  bool onRay(VertexId a, VertexId b, VertexId c) const;
 
   /// Is u a vertex exactly on the input segment a0→b0 (exact orient2d) and
   /// strictly between cur and tgt? After a split at a rounded crossing point,
   /// cur→tgt is no longer on the input line, so a vertex exactly on it must be
   /// found against a0→b0 or the constraint would bypass it by an ulp.
-  bool onInputSegment(std::uint32_t a0, std::uint32_t b0, std::uint32_t cur, std::uint32_t tgt,
-                      std::uint32_t u, const std::vector<std::uint32_t>& passed) const;
+  bool onInputSegment(VertexId a0, VertexId b0, VertexId cur, VertexId tgt, VertexId u,
+                      const std::vector<VertexId>& passed) const;
 
   /// Inserts the constraint segment a→b (live vertices) for feature f.
-  void insertSegment(std::uint32_t a, std::uint32_t b, FeatureId f);
+  void insertSegment(VertexId a, VertexId b, FeatureId f);
 
   /// Swaps away every edge crossing a→b (Sloan; book 6.5), marks a–b
   /// constrained for f, then restores the Delaunay property from the new edges.
-  void removeCrossings(std::uint32_t a, std::uint32_t b,
-                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossed,
-                       FeatureId f);
+  void removeCrossings(VertexId a, VertexId b,
+                       const std::vector<std::pair<VertexId, VertexId>>& crossed, FeatureId f);
 
   // ---------------------------------------------- crossing resolution
   /// z of the segment u→w (linear in its vertices' z) at the point of it
   /// nearest to p.
-  double zAlong(std::uint32_t u, std::uint32_t w, const Point2& p) const;
+  double zAlong(VertexId u, VertexId w, const Point2& p) const;
 
   /// Does feature f win a crossing or an edge against g? Higher
   /// constraintPriority() first, then the earlier registered feature.
   bool outranks(FeatureId f, FeatureId g) const;
 
   /// The highest-ranking (outranks()) feature of the constrained edge u–w.
-  FeatureId edgeWinner(std::uint32_t u, std::uint32_t w) const;
+  FeatureId edgeWinner(VertexId u, VertexId w) const;
 
   /// Radius within which a constructed (rounded) point is taken to be an
   /// existing vertex: 2^-40 of its coordinate magnitude (about 6e-6 m at UTM
@@ -202,23 +204,23 @@ class ConstrainedTriangulation : public Triangulation {
   static double constructionTolerance(const Point2& p);
 
   /// Distance from vertex v to the segment between vertices a and b.
-  double distanceToSegment(std::uint32_t v, std::uint32_t a, std::uint32_t b) const;
+  double distanceToSegment(VertexId v, VertexId a, VertexId b) const;
 
   /// Is each feature of the edge R–L on both or on neither of the edges R–u
   /// and u–L?
-  bool chainsStayOpen(std::uint32_t R, std::uint32_t L, std::uint32_t u) const;
+  bool chainsStayOpen(VertexId R, VertexId L, VertexId u) const;
 
   /// Records that the features of edge R–L (but `except`) bend by `by`.
-  void addBend(std::uint32_t R, std::uint32_t L, FeatureId except, double by);
+  void addBend(VertexId R, VertexId L, FeatureId except, double by);
 
   /// The constraint cur→tgt crosses constrained edge e (R→L, in the
   /// triangle on cur's side). Makes a vertex at the crossing and returns it,
-  /// or returns kNone when it rerouted e's constraint instead (the caller
+  /// or returns invalid when it rerouted e's constraint instead (the caller
   /// walks cur→tgt again). Where the vertex goes is placeCrossing's choice;
   /// the event is recorded in the report.
-  std::uint32_t crossingVertex(std::uint32_t cur, std::uint32_t tgt, std::uint32_t e, FeatureId f);
+  VertexId crossingVertex(VertexId cur, VertexId tgt, HalfedgeId e, FeatureId f);
   /// The crossing of cur→tgt with the constrained edge e (see Crossing).
-  [[nodiscard]] Crossing crossingAt(std::uint32_t cur, std::uint32_t tgt, std::uint32_t e) const;
+  [[nodiscard]] Crossing crossingAt(VertexId cur, VertexId tgt, HalfedgeId e) const;
   /// Where crossing x goes: the first step, in CrossingStep's order, that
   /// applies. Changes nothing.
   [[nodiscard]] CrossingPlacement placeCrossing(const Crossing& x) const;
@@ -234,22 +236,22 @@ class ConstrainedTriangulation : public Triangulation {
   [[nodiscard]] std::optional<CrossingPlacement> atSliverApex(const Crossing& x) const;
   [[nodiscard]] CrossingPlacement atNearestVertex(const Crossing& x) const;
   /// Squared distance from vertex v to p.
-  [[nodiscard]] double squaredDistance(std::uint32_t v, const Point2& p) const {
+  [[nodiscard]] double squaredDistance(VertexId v, const Point2& p) const {
     const double dx = xy[v].x - p.x, dy = xy[v].y - p.y;
     return dx * dx + dy * dy;
   }
   /// Is p strictly inside the triangle (a, b, u) beyond its edge a→b (u not
-  /// kInf)?
-  [[nodiscard]] bool strictlyInside(std::uint32_t a, std::uint32_t b, std::uint32_t u,
-                                    const Point2& p) const {
-    return u != kInf && geometry::orient2d(xy[b], xy[u], p) > 0 &&
+  /// kInfinite)?
+  [[nodiscard]] bool strictlyInside(VertexId a, VertexId b, VertexId u, const Point2& p) const {
+    return u != kInfinite && geometry::orient2d(xy[b], xy[u], p) > 0 &&
            geometry::orient2d(xy[u], xy[a], p) > 0;
   }
   /// The triangle that holds point p strictly inside (or, with a target
   /// vertex at p, a triangle at the target), if the open segment from vertex a
-  /// to p crosses no constrained edge and passes through no vertex; else kNone.
-  [[gnu::noinline]] std::uint32_t clearPathEnd(std::uint32_t a, const Point2& p,
-                                               std::uint32_t target = kNone) const;
+  /// to p crosses no constrained edge and passes through no vertex; else
+  /// invalid.
+  [[gnu::noinline]] TriangleId clearPathEnd(VertexId a, const Point2& p,
+                                            VertexId target = VertexId::invalid()) const;
 
   /// The constrained edge R–L is replaced by R→w→L, w a vertex the segments
   /// from R and L to which cross no constrained edge and pass through no
@@ -258,23 +260,22 @@ class ConstrainedTriangulation : public Triangulation {
   /// edge, or when reroutes nest deeper than rerouteDepthLimit (each reroute
   /// inserts segments that may cross constraints and reroute again; the
   /// guards of insertSegment are per call).
-  [[gnu::noinline]] void rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w);
+  [[gnu::noinline]] void rerouteThrough(VertexId R, VertexId L, VertexId w);
 
   /// X moved by up to 8 ulps across the edge a→b towards u, to a point
   /// strictly inside the triangle (a, b, u); nullopt if none is found.
-  [[gnu::noinline]] std::optional<Point2> nudgedInto(std::uint32_t a, std::uint32_t b,
-                                                     std::uint32_t u, const Point2& X) const;
+  [[gnu::noinline]] std::optional<Point2> nudgedInto(VertexId a, VertexId b, VertexId u,
+                                                     const Point2& X) const;
 
-  /// Of the apexes c and d beside e (kInf to skip one), the one nearest to
-  /// e's segment within maxDistance, and its distance; kNone if none. An apex
+  /// Of the apexes c and d beside e (kInfinite to skip one), the one nearest
+  /// to e's segment within maxDistance, and its distance; invalid if none. An apex
   /// qualifies if each of e's features is on both or on neither of its edges
   /// to e's ends: the feature's chain then grows by an edge, or loses e where
   /// it already runs through the apex. A feature on one of them only would
   /// make its chain run back on itself.
-  [[gnu::noinline]] std::pair<std::uint32_t, double> sliverApexOnEdge(std::uint32_t e,
-                                                                      std::uint32_t c,
-                                                                      std::uint32_t d,
-                                                                      double maxDistance) const;
+  [[gnu::noinline]] std::pair<VertexId, double> sliverApexOnEdge(HalfedgeId e, VertexId c,
+                                                                 VertexId d,
+                                                                 double maxDistance) const;
 };
 
 }  // namespace tinsmith::cdt

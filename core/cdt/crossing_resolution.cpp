@@ -7,7 +7,7 @@
 // The constraint cur→tgt crosses constrained edge e (R→L, in the
 // triangle on cur's side). Makes a vertex at the crossing and returns it:
 // R, L or an apex beside e when the crossing is within the tolerance of
-// one, else a new vertex at the rounded crossing X. Returns kNone when it
+// one, else a new vertex at the rounded crossing X. Returns invalid when it
 // rerouted e's constraint instead: the caller walks cur→tgt again.
 //
 // When X is within the tolerance of an end of cur→tgt that is not beside e
@@ -43,7 +43,7 @@ namespace tinsmith::cdt {
 
 using geometry::orient2d;
 
-double ConstrainedTriangulation::zAlong(std::uint32_t u, std::uint32_t w, const Point2& p) const {
+double ConstrainedTriangulation::zAlong(VertexId u, VertexId w, const Point2& p) const {
   const double dx = xy[w].x - xy[u].x, dy = xy[w].y - xy[u].y;
   const double l2 = dx * dx + dy * dy;
   double t = l2 > 0 ? ((p.x - xy[u].x) * dx + (p.y - xy[u].y) * dy) / l2 : 0.0;
@@ -56,7 +56,7 @@ bool ConstrainedTriangulation::outranks(FeatureId f, FeatureId g) const {
   return pf > pg || (pf == pg && f < g);
 }
 
-FeatureId ConstrainedTriangulation::edgeWinner(std::uint32_t u, std::uint32_t w) const {
+FeatureId ConstrainedTriangulation::edgeWinner(VertexId u, VertexId w) const {
   FeatureId best = kNoFeature;
   for (FeatureId f : edgeFeatures.find(edgeKey(u, w))) {
     if (best == kNoFeature || outranks(f, best)) best = f;
@@ -68,8 +68,7 @@ double ConstrainedTriangulation::constructionTolerance(const Point2& p) {
   return std::ldexp(std::max(std::fabs(p.x), std::fabs(p.y)), -40);
 }
 
-double ConstrainedTriangulation::distanceToSegment(std::uint32_t v, std::uint32_t a,
-                                                   std::uint32_t b) const {
+double ConstrainedTriangulation::distanceToSegment(VertexId v, VertexId a, VertexId b) const {
   const Point2 &p = xy[v], &pa = xy[a], &pb = xy[b];
   const double dx = pb.x - pa.x, dy = pb.y - pa.y, l2 = dx * dx + dy * dy;
   double t = l2 > 0 ? ((p.x - pa.x) * dx + (p.y - pa.y) * dy) / l2 : 0.0;
@@ -77,8 +76,7 @@ double ConstrainedTriangulation::distanceToSegment(std::uint32_t v, std::uint32_
   return std::hypot(p.x - (pa.x + t * dx), p.y - (pa.y + t * dy));
 }
 
-bool ConstrainedTriangulation::chainsStayOpen(std::uint32_t R, std::uint32_t L,
-                                              std::uint32_t u) const {
+bool ConstrainedTriangulation::chainsStayOpen(VertexId R, VertexId L, VertexId u) const {
   const auto ru = edgeFeatures.find(edgeKey(R, u)), ul = edgeFeatures.find(edgeKey(u, L));
   for (const FeatureId g : edgeFeatures.find(edgeKey(R, L))) {
     const bool onRu = std::find(ru.begin(), ru.end(), g) != ru.end();
@@ -88,8 +86,7 @@ bool ConstrainedTriangulation::chainsStayOpen(std::uint32_t R, std::uint32_t L,
   return true;
 }
 
-void ConstrainedTriangulation::addBend(std::uint32_t R, std::uint32_t L, FeatureId except,
-                                       double by) {
+void ConstrainedTriangulation::addBend(VertexId R, VertexId L, FeatureId except, double by) {
   for (const FeatureId g : edgeFeatures.find(edgeKey(R, L))) {
     if (g == except) continue;
     if (g >= bend.size()) bend.resize(g + 1, 0.0);
@@ -97,23 +94,22 @@ void ConstrainedTriangulation::addBend(std::uint32_t R, std::uint32_t L, Feature
   }
 }
 
-Crossing ConstrainedTriangulation::crossingAt(std::uint32_t cur, std::uint32_t tgt,
-                                              std::uint32_t e) const {
+Crossing ConstrainedTriangulation::crossingAt(VertexId cur, VertexId tgt, HalfedgeId e) const {
   Crossing x{};
   x.cur = cur;
   x.tgt = tgt;
   x.e = e;
-  x.R = tv[e];
-  x.L = tv[nxt(e)];
+  x.R = origin(e);
+  x.L = origin(nxt(e));
   x.X = geometry::intersectionPoint(xy[cur], xy[tgt], xy[x.R], xy[x.L]);
-  x.c = tv[prv(e)];
-  x.d = tv[prv(opp[e])];
-  auto dist2 = [&](std::uint32_t v) { return squaredDistance(v, x.X); };
+  x.c = origin(prv(e));
+  x.d = origin(prv(twin(e)));
+  auto dist2 = [&](VertexId v) { return squaredDistance(v, x.X); };
   x.nearest = dist2(x.R) <= dist2(x.L) ? x.R : x.L;
   // The apexes count too: with nearly collinear constraints the crossing
   // can be at cur itself (c) or at the vertex beyond (d).
-  for (const std::uint32_t u : {x.c, x.d}) {
-    if (u != kInf && dist2(u) < dist2(x.nearest)) x.nearest = u;
+  for (const VertexId u : {x.c, x.d}) {
+    if (u != kInfinite && dist2(u) < dist2(x.nearest)) x.nearest = u;
   }
   // X is rounded, and R or L may itself be a rounded crossing of the same
   // lines (three constraints through one point): a constructed point this
@@ -121,7 +117,7 @@ Crossing ConstrainedTriangulation::crossingAt(std::uint32_t cur, std::uint32_t t
   // The rounding error of X scales with the coordinates it is computed
   // from, not with X (which may be near the origin).
   double magnitude = 0.0;
-  for (const std::uint32_t u : {cur, tgt, x.R, x.L}) {
+  for (const VertexId u : {cur, tgt, x.R, x.L}) {
     magnitude = std::max({magnitude, std::fabs(xy[u].x), std::fabs(xy[u].y)});
   }
   x.tol = std::max(options.snapTolerance, constructionTolerance({magnitude, magnitude}));
@@ -142,15 +138,15 @@ CrossingPlacement ConstrainedTriangulation::placeCrossing(const Crossing& x) con
 // The crossing at an end of cur→tgt that is no corner beside e (slivers
 // between them): e's constraint runs through that end if it can by flips.
 std::optional<CrossingPlacement> ConstrainedTriangulation::atSegmentEnd(const Crossing& x) const {
-  std::uint32_t end = kNone;
-  for (const std::uint32_t u : {x.cur, x.tgt}) {
+  VertexId end;
+  for (const VertexId u : {x.cur, x.tgt}) {
     if (u != x.R && u != x.L && u != x.c && u != x.d && squaredDistance(u, x.X) <= x.tol * x.tol &&
         squaredDistance(u, x.X) < squaredDistance(x.nearest, x.X) &&
-        clearPathEnd(x.R, xy[u], u) != kNone && clearPathEnd(x.L, xy[u], u) != kNone) {
+        clearPathEnd(x.R, xy[u], u).valid() && clearPathEnd(x.L, xy[u], u).valid()) {
       end = u;
     }
   }
-  if (end == kNone) return std::nullopt;
+  if (!end.valid()) return std::nullopt;
   CrossingPlacement p;
   p.step = CrossingStep::SegmentEnd;
   p.vertex = end;
@@ -183,9 +179,9 @@ std::optional<CrossingPlacement> ConstrainedTriangulation::besideEdge(const Cros
   p.step = CrossingStep::BesideEdge;
   p.at = x.X;
   if (side > 0 && strictlyInside(x.R, x.L, x.c, x.X)) {
-    p.triangle = x.e / 3;
+    p.triangle = triangleOf(x.e);
   } else if (side < 0 && strictlyInside(x.L, x.R, x.d, x.X)) {
-    p.triangle = opp[x.e] / 3;
+    p.triangle = neighbour(x.e);
   } else {
     return std::nullopt;
   }
@@ -200,14 +196,14 @@ std::optional<CrossingPlacement> ConstrainedTriangulation::nudgedBesideEdge(
   p.step = CrossingStep::Nudged;
   if (strictlyInside(x.R, x.L, x.c, x.X)) {
     if (const auto P = nudgedInto(x.R, x.L, x.c, x.X)) {
-      p.triangle = x.e / 3;
+      p.triangle = triangleOf(x.e);
       p.at = *P;
       return p;
     }
   }
   if (strictlyInside(x.L, x.R, x.d, x.X)) {
     if (const auto Q = nudgedInto(x.L, x.R, x.d, x.X)) {
-      p.triangle = opp[x.e] / 3;
+      p.triangle = neighbour(x.e);
       p.at = *Q;
       return p;
     }
@@ -218,8 +214,8 @@ std::optional<CrossingPlacement> ConstrainedTriangulation::nudgedBesideEdge(
 // X lies in a triangle beyond a sliver that the segments from R and L reach
 // crossing nothing.
 std::optional<CrossingPlacement> ConstrainedTriangulation::beyondSliver(const Crossing& x) const {
-  const std::uint32_t t = clearPathEnd(x.R, x.X);
-  if (t == kNone || clearPathEnd(x.L, x.X) != t) return std::nullopt;
+  const TriangleId t = clearPathEnd(x.R, x.X);
+  if (!t.valid() || clearPathEnd(x.L, x.X) != t) return std::nullopt;
   CrossingPlacement p;
   p.step = CrossingStep::BeyondSliver;
   p.triangle = t;
@@ -231,18 +227,17 @@ namespace {
 // The apex of a sliver beside e that may join e's constraint (see
 // sliverApexOnEdge), looked for among the apexes whose triangle does not hold
 // X strictly.
-std::pair<std::uint32_t, double> sliverApexOf(const ConstrainedTriangulation& t,
-                                              const Crossing& x) {
+std::pair<VertexId, double> sliverApexOf(const ConstrainedTriangulation& t, const Crossing& x) {
   const bool cOk = t.strictlyInside(x.R, x.L, x.c, x.X);
   const bool dOk = t.strictlyInside(x.L, x.R, x.d, x.X);
-  return t.sliverApexOnEdge(x.e, !cOk ? x.c : kInf, !dOk ? x.d : kInf,
+  return t.sliverApexOnEdge(x.e, !cOk ? x.c : kInfinite, !dOk ? x.d : kInfinite,
                             std::max(x.tol, std::sqrt(t.squaredDistance(x.nearest, x.X))));
 }
 }  // namespace
 
 std::optional<CrossingPlacement> ConstrainedTriangulation::atSliverApex(const Crossing& x) const {
   const auto [apex, bendBy] = sliverApexOf(*this, x);
-  if (apex == kNone || apex == x.cur || apex == x.tgt) return std::nullopt;
+  if (!apex.valid() || apex == x.cur || apex == x.tgt) return std::nullopt;
   CrossingPlacement p;
   p.step = CrossingStep::SliverApex;
   p.vertex = apex;
@@ -253,23 +248,23 @@ std::optional<CrossingPlacement> ConstrainedTriangulation::atSliverApex(const Cr
 // The fallback: an apex at an end of cur→tgt is where the crossing is; else
 // the nearest of R, L and the apexes.
 CrossingPlacement ConstrainedTriangulation::atNearestVertex(const Crossing& x) const {
-  const std::uint32_t apex = sliverApexOf(*this, x).first;
+  const VertexId apex = sliverApexOf(*this, x).first;
   CrossingPlacement p;
   p.step = CrossingStep::NearestVertex;
-  p.vertex = apex != kNone ? apex : x.nearest;
+  p.vertex = apex.valid() ? apex : x.nearest;
   return p;
 }
 
-std::uint32_t ConstrainedTriangulation::crossingVertex(std::uint32_t cur, std::uint32_t tgt,
-                                                       std::uint32_t e, FeatureId f) {
+VertexId ConstrainedTriangulation::crossingVertex(VertexId cur, VertexId tgt, HalfedgeId e,
+                                                  FeatureId f) {
   const Crossing x = crossingAt(cur, tgt, e);
   const CrossingPlacement place = placeCrossing(x);
   ++crossingSteps[static_cast<std::size_t>(place.step)];
-  const std::uint32_t R = x.R, L = x.L;
+  const VertexId R = x.R, L = x.L;
   if (place.step == CrossingStep::SliverApex) {
     addBend(R, L, kNoFeature, place.bendBy);
     rerouteThrough(R, L, place.vertex);
-    return kNone;
+    return VertexId::invalid();
   }
   const FeatureId existing = edgeWinner(R, L);
   const bool insertedWins = outranks(f, existing);
@@ -278,8 +273,8 @@ std::uint32_t ConstrainedTriangulation::crossingVertex(std::uint32_t cur, std::u
   ev.inserted = f;
   ev.zExisting = zAlong(R, L, x.X);
   ev.zInserted = zAlong(cur, tgt, x.X);
-  std::uint32_t v;
-  if (place.vertex != kNone) {
+  VertexId v;
+  if (place.vertex.valid()) {
     v = place.vertex;
     if (place.step == CrossingStep::SegmentEnd) rerouteThrough(R, L, v);
     // Both constraints now run through v: each bends by v's distance from
@@ -292,12 +287,12 @@ std::uint32_t ConstrainedTriangulation::crossingVertex(std::uint32_t cur, std::u
       rerouteThrough(R, L, v);
     }
   } else {
-    v = static_cast<std::uint32_t>(xy.size());
+    v = xy.endId();
     xy.push_back(place.at);
     z.push_back(insertedWins ? ev.zInserted : ev.zExisting);
     vfeat.push_back(insertedWins ? f : existing);
     rep.push_back(v);
-    vhe.push_back(kNone);
+    vhe.push_back(HalfedgeId::invalid());
     insertedUpTo = xy.size();
     if (place.step == CrossingStep::SplitEdge) {
       splitEdge(e, v);
@@ -307,50 +302,50 @@ std::uint32_t ConstrainedTriangulation::crossingVertex(std::uint32_t cur, std::u
     }
     lopAround(v);
   }
-  ev.vertex = VertexId(v);
+  ev.vertex = v;
   ev.at = {xy[v].x, xy[v].y, z[v]};
   report.intersections.push_back(ev);
   return v;
 }
 
-std::uint32_t ConstrainedTriangulation::clearPathEnd(std::uint32_t a, const Point2& p,
-                                                     std::uint32_t target) const {
+TriangleId ConstrainedTriangulation::clearPathEnd(VertexId a, const Point2& p,
+                                                  VertexId target) const {
   // The wedge at a that the segment leaves through: a→u→w, u right, w left.
-  std::uint32_t e = kNone;
-  const std::uint32_t start = vhe[a];
-  std::uint32_t h = start;
+  HalfedgeId e;
+  const HalfedgeId start = vhe[a];
+  HalfedgeId h = start;
   do {
-    const std::uint32_t u = tv[nxt(h)], w = tv[prv(h)];
-    if (target != kNone && (u == target || w == target)) return h / 3;
-    if (u != kInf && w != kInf) {
+    const VertexId u = origin(nxt(h)), w = origin(prv(h));
+    if (target.valid() && (u == target || w == target)) return triangleOf(h);
+    if (u != kInfinite && w != kInfinite) {
       const int ou = orient2d(xy[a], p, xy[u]), ow = orient2d(xy[a], p, xy[w]);
-      if (ou == 0 || ow == 0) return kNone;
+      if (ou == 0 || ow == 0) return TriangleId::invalid();
       if (ou < 0 && ow > 0) {
         e = nxt(h);
         break;
       }
     }
-    h = opp[prv(h)];
+    h = twin(prv(h));
   } while (h != start);
-  if (e == kNone) return kNone;
+  if (!e.valid()) return TriangleId::invalid();
   for (std::size_t steps = 0; steps < tv.size(); ++steps) {
-    const int o = orient2d(xy[tv[e]], xy[tv[nxt(e)]], p);
-    if (o > 0) return e / 3;  // p is on this side of e: inside e's triangle
-    if (o == 0 || cons[e]) return kNone;
-    const std::uint32_t g = opp[e];
-    const std::uint32_t x = tv[prv(g)];
-    if (x == kInf) return kNone;
-    if (x == target) return g / 3;
+    const int o = orient2d(xy[origin(e)], xy[origin(nxt(e))], p);
+    if (o > 0) return triangleOf(e);  // p is on this side of e: inside e's triangle
+    if (o == 0 || cons[e]) return TriangleId::invalid();
+    const HalfedgeId g = twin(e);
+    const VertexId x = origin(prv(g));
+    if (x == kInfinite) return TriangleId::invalid();
+    if (x == target) return triangleOf(g);
     const int ox = orient2d(xy[a], p, xy[x]);
-    if (ox == 0) return kNone;
+    if (ox == 0) return TriangleId::invalid();
     e = ox > 0 ? nxt(g) : prv(g);
   }
-  return kNone;
+  return TriangleId::invalid();
 }
 
-void ConstrainedTriangulation::rerouteThrough(std::uint32_t R, std::uint32_t L, std::uint32_t w) {
-  const std::uint32_t h = findHalfedge(R, L);
-  if (h == kNone) throw internalError("the constrained edge to reroute is missing");
+void ConstrainedTriangulation::rerouteThrough(VertexId R, VertexId L, VertexId w) {
+  const HalfedgeId h = findHalfedge(R, L);
+  if (!h.valid()) throw internalError("the constrained edge to reroute is missing");
   if (rerouteDepth >= rerouteDepthLimit) {
     throw internalError("constraint reroutes nested more than " +
                         std::to_string(rerouteDepthLimit) + " deep (at " + std::to_string(xy[R].x) +
@@ -366,23 +361,23 @@ void ConstrainedTriangulation::rerouteThrough(std::uint32_t R, std::uint32_t L, 
   deepestReroute = std::max(deepestReroute, rerouteDepth);
   const auto view = edgeFeatures.find(edgeKey(R, L));
   const std::vector<FeatureId> fs(view.begin(), view.end());
-  cons[h] = cons[opp[h]] = 0;
+  cons[h] = cons[twin(h)] = 0;
   edgeFeatures.erase(edgeKey(R, L));
   for (const FeatureId g : fs) {
     insertSegment(R, w, g);
     insertSegment(w, L, g);
   }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{R, L}};
+  std::vector<std::pair<VertexId, VertexId>> todo{{R, L}};
   lop(todo);
 }
 
-std::optional<Point2> ConstrainedTriangulation::nudgedInto(std::uint32_t a, std::uint32_t b,
-                                                           std::uint32_t u, const Point2& X) const {
-  if (u == kInf) return std::nullopt;
+std::optional<Point2> ConstrainedTriangulation::nudgedInto(VertexId a, VertexId b, VertexId u,
+                                                           const Point2& X) const {
+  if (u == kInfinite) return std::nullopt;
   const double dx = xy[b].x - xy[a].x, dy = xy[b].y - xy[a].y, len = std::hypot(dx, dy);
   if (!(len > 0)) return std::nullopt;
   double magnitude = std::max(std::fabs(X.x), std::fabs(X.y));
-  for (const std::uint32_t w : {a, b}) {
+  for (const VertexId w : {a, b}) {
     magnitude = std::max({magnitude, std::fabs(xy[w].x), std::fabs(xy[w].y)});
   }
   const double ulp = std::ldexp(magnitude, -52);
@@ -397,12 +392,13 @@ std::optional<Point2> ConstrainedTriangulation::nudgedInto(std::uint32_t a, std:
   return std::nullopt;
 }
 
-std::pair<std::uint32_t, double> ConstrainedTriangulation::sliverApexOnEdge(
-    std::uint32_t e, std::uint32_t c, std::uint32_t d, double maxDistance) const {
-  const std::uint32_t R = tv[e], L = tv[nxt(e)];
-  std::pair<std::uint32_t, double> best{kNone, maxDistance};
-  for (const std::uint32_t u : {c, d}) {
-    if (u == kInf || !chainsStayOpen(R, L, u)) continue;
+std::pair<VertexId, double> ConstrainedTriangulation::sliverApexOnEdge(HalfedgeId e, VertexId c,
+                                                                       VertexId d,
+                                                                       double maxDistance) const {
+  const VertexId R = origin(e), L = origin(nxt(e));
+  std::pair<VertexId, double> best{VertexId::invalid(), maxDistance};
+  for (const VertexId u : {c, d}) {
+    if (u == kInfinite || !chainsStayOpen(R, L, u)) continue;
     const double du = distanceToSegment(u, R, L);
     if (du <= best.second) best = {u, du};
   }

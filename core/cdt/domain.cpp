@@ -9,23 +9,28 @@ namespace {
 
 /// Per triangle: the fewest half-edges with counts(h) crossed on a way in
 /// from outside the hull (0-1 breadth-first search over the triangles).
+/// Depths not reached yet.
+constexpr std::uint32_t kUnreached = ~std::uint32_t{0};
+
 template <class Counts>
-std::vector<std::uint32_t> crossingDepth(const TriangleStore& store, const Counts& counts) {
+IdVector<TriangleId, std::uint32_t> crossingDepth(const TriangleStore& store,
+                                                  const Counts& counts) {
   const std::uint32_t nt = store.triCount();
-  std::vector<std::uint32_t> depth(nt, kNone);
-  std::deque<std::uint32_t> dq;
-  for (std::uint32_t t = 0; t < nt; ++t) {
+  IdVector<TriangleId, std::uint32_t> depth(nt, kUnreached);
+  std::deque<TriangleId> dq;
+  for (std::uint32_t k = 0; k < nt; ++k) {
+    const TriangleId t(k);
     if (store.isGhost(t)) {
       depth[t] = 0;
       dq.push_back(t);
     }
   }
   while (!dq.empty()) {
-    const std::uint32_t t = dq.front();
+    const TriangleId t = dq.front();
     dq.pop_front();
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t h = 3 * t + i;
-      const std::uint32_t n = store.opp[h] / 3;
+      const HalfedgeId h = halfedgeOf(t, i);
+      const TriangleId n = store.neighbour(h);
       const std::uint32_t w = counts(h) ? 1 : 0;
       if (depth[t] + w < depth[n]) {
         depth[n] = depth[t] + w;
@@ -42,9 +47,9 @@ std::vector<std::uint32_t> crossingDepth(const TriangleStore& store, const Count
 
 }  // namespace
 
-bool Domain::isDomainEdge(const TriangleStore& store, std::uint32_t h, bool boundary) const {
+bool Domain::isDomainEdge(const TriangleStore& store, HalfedgeId h, bool boundary) const {
   if (!store.cons[h]) return false;
-  for (FeatureId f : store.edgeFeatures.find(edgeKey(store.tv[h], store.tv[nxt(h)]))) {
+  for (FeatureId f : store.edgeFeatures.find(edgeKey(store.origin(h), store.origin(nxt(h))))) {
     if (f < featureRole.size() && featureRole[f] != Role::None) {
       if (!boundary || featureRole[f] == Role::Boundary) return true;
     }
@@ -57,22 +62,23 @@ std::vector<std::uint8_t> Domain::classify(const TriangleStore& store) const {
   const std::uint32_t nt = store.triCount();
   std::vector<std::uint8_t> inside(nt, 0);
   if (!hasBoundary && !hasHole) {
-    for (std::uint32_t t = 0; t < nt; ++t) inside[t] = !store.isGhost(t);
+    for (std::uint32_t t = 0; t < nt; ++t) inside[t] = !store.isGhost(TriangleId(t));
     return inside;
   }
-  std::vector<std::uint32_t> enclosing;  // boundary edges crossed
+  IdVector<TriangleId, std::uint32_t> enclosing;  // boundary edges crossed
   if (hasBoundary && hasHole) {
-    enclosing = crossingDepth(store, [&](std::uint32_t h) { return isDomainEdge(store, h, true); });
+    enclosing = crossingDepth(store, [&](HalfedgeId h) { return isDomainEdge(store, h, true); });
   }
   // (Across a hole edge that is no boundary edge the boundary depth is the
   // same on both sides.)
-  const std::vector<std::uint32_t> depth = crossingDepth(store, [&](std::uint32_t h) {
+  const IdVector<TriangleId, std::uint32_t> depth = crossingDepth(store, [&](HalfedgeId h) {
     if (!isDomainEdge(store, h)) return false;
-    return enclosing.empty() || enclosing[h / 3] > 0 || isDomainEdge(store, h, true);
+    return enclosing.empty() || enclosing[triangleOf(h)] > 0 || isDomainEdge(store, h, true);
   });
-  for (std::uint32_t t = 0; t < nt; ++t) {
+  for (std::uint32_t k = 0; k < nt; ++k) {
+    const TriangleId t(k);
     if (store.isGhost(t)) continue;
-    inside[t] = hasBoundary ? (depth[t] % 2 == 1) : (depth[t] % 2 == 0);
+    inside[k] = hasBoundary ? (depth[t] % 2 == 1) : (depth[t] % 2 == 0);
   }
   return inside;
 }

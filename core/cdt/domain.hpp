@@ -25,7 +25,7 @@ struct Domain {
 
   /// Does half-edge h of `store` carry a domain ring: any boundary or hole
   /// (`boundary` false), or a boundary (`boundary` true)?
-  [[nodiscard]] bool isDomainEdge(const TriangleStore& store, std::uint32_t h,
+  [[nodiscard]] bool isDomainEdge(const TriangleStore& store, HalfedgeId h,
                                   bool boundary = false) const;
   /// Per triangle of `store`: inside the domain (1) or not (0). Without rings,
   /// every finite triangle is inside; else crossing-count parity from the

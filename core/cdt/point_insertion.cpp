@@ -40,7 +40,7 @@ void Triangulation::checkPoint(const Point3& p, FeatureId feature, std::size_t i
                          "supported range (0 or 1e-50 to 1e60 in magnitude)",
                      where, "check the coordinate units and CRS");
   }
-  if (id >= kInf - 1) throw inputError("too many points (at most 2^32 - 3)");
+  if (id >= kInfinite.value - 1) throw inputError("too many points (at most 2^32 - 3)");
 }
 
 VertexId Triangulation::appendPoints(std::span<const Point3> points, FeatureId feature) {
@@ -59,46 +59,48 @@ VertexId Triangulation::appendPoints(std::span<const Point3> points, FeatureId f
     xy.push_back(p.xy());
     z.push_back(p.z);
     vfeat.push_back(feature);
-    rep.push_back(kNone);
+    rep.push_back(VertexId::invalid());
   }
   return first;
 }
 
 Location Triangulation::scan(const Point2& p) const {
-  for (std::uint32_t t = 0; t < triCount(); ++t) {
+  for (std::uint32_t k = 0; k < triCount(); ++k) {
+    const TriangleId t(k);
     if (isGhost(t)) continue;
     bool inside = true;
     for (std::uint32_t i = 0; i < 3 && inside; ++i) {
-      inside = orientP(tv[3 * t + i], tv[3 * t + (i + 1) % 3], p) >= 0;
+      inside = orientP(corner(t, i), corner(t, (i + 1) % 3), p) >= 0;
     }
     if (inside) return classify(t, p);
   }
-  for (std::uint32_t t = 0; t < triCount(); ++t) {
+  for (std::uint32_t k = 0; k < triCount(); ++k) {
+    const TriangleId t(k);
     if (!isGhost(t)) continue;
-    const std::uint32_t e = ghostEdge(t);
-    if (orientP(tv[e], tv[nxt(e)], p) > 0) return {LocKind::Outside, t, kNone, kNone};
+    const HalfedgeId e = ghostEdge(t);
+    if (orientP(origin(e), origin(nxt(e)), p) > 0) return {LocKind::Outside, t, {}, {}};
   }
   throw internalError("point location failed: the point is in no triangle");
 }
 
-void Triangulation::merge(std::uint32_t dup, std::uint32_t keep) {
+void Triangulation::merge(VertexId dup, VertexId keep) {
   rep[dup] = keep;
   CdtReport::Merge m;
   m.at = xy[keep];
-  m.kept = VertexId(keep);
-  m.merged = VertexId(dup);
+  m.kept = keep;
+  m.merged = dup;
   const int pd = priorityOf(features, vfeat[dup]), pk = priorityOf(features, vfeat[keep]);
   double droppedZ = z[dup];
   FeatureId droppedF = vfeat[dup];
   // Which input the kept z came from (ties go to the earlier input).
-  auto src = zSource.find(keep);
-  const std::uint32_t from = src == zSource.end() ? keep : src->second;
+  auto src = zSource.find(keep.value);
+  const VertexId from = src == zSource.end() ? keep : src->second;
   if (pd > pk || (pd == pk && dup < from)) {
     droppedZ = z[keep];
     droppedF = vfeat[keep];
     z[keep] = z[dup];
     vfeat[keep] = vfeat[dup];
-    zSource[keep] = dup;
+    zSource[keep.value] = dup;
   }
   m.keptZ = z[keep];
   m.droppedZ = droppedZ;
@@ -107,18 +109,18 @@ void Triangulation::merge(std::uint32_t dup, std::uint32_t keep) {
   report.merges.push_back(m);
 }
 
-bool Triangulation::findFirstTriangle(const std::vector<std::uint32_t>& order, std::size_t& ib,
+bool Triangulation::findFirstTriangle(const std::vector<VertexId>& order, std::size_t& ib,
                                       std::size_t& ic) const {
-  const std::uint32_t a = order[0];
-  ib = kNone;
-  ic = kNone;
+  const VertexId a = order[0];
+  ib = kNoPosition;
+  ic = kNoPosition;
   for (std::size_t i = 1; i < order.size(); ++i) {
     if (!(xy[order[i]] == xy[a])) {
       ib = i;
       break;
     }
   }
-  if (ib == kNone) return false;
+  if (ib == kNoPosition) return false;
   for (std::size_t i = ib + 1; i < order.size(); ++i) {
     if (orient(a, order[ib], order[i]) != 0) {
       ic = i;
@@ -128,36 +130,36 @@ bool Triangulation::findFirstTriangle(const std::vector<std::uint32_t>& order, s
   return false;
 }
 
-void Triangulation::initialTriangle(const std::vector<std::uint32_t>& order, std::size_t& usedA,
+void Triangulation::initialTriangle(const std::vector<VertexId>& order, std::size_t& usedA,
                                     std::size_t& usedB, std::size_t& usedC) {
-  const std::uint32_t a = order[0];
-  std::size_t ib = kNone, ic = kNone;
+  const VertexId a = order[0];
+  std::size_t ib = kNoPosition, ic = kNoPosition;
   if (!findFirstTriangle(order, ib, ic)) {
     throw geometryError("the input has fewer than 3 non-collinear distinct points (" +
                             std::to_string(order.size()) + " points given)",
                         {}, "give at least three points that do not lie on one line");
   }
-  std::uint32_t b = order[ib], c = order[ic];
+  VertexId b = order[ib], c = order[ic];
   if (orient(a, b, c) < 0) std::swap(b, c);
   usedA = 0;
   usedB = ib;
   usedC = ic;
-  for (std::uint32_t v : {a, b, c}) rep[v] = v;
-  const std::uint32_t t = newTriangle(), g0 = newTriangle(), g1 = newTriangle(), g2 = newTriangle();
-  setTri(g0, b, a, kInf);
-  setTri(g1, c, b, kInf);
-  setTri(g2, a, c, kInf);
+  for (VertexId v : {a, b, c}) rep[v] = v;
+  const TriangleId t = newTriangle(), g0 = newTriangle(), g1 = newTriangle(), g2 = newTriangle();
+  setTri(g0, b, a, kInfinite);
+  setTri(g1, c, b, kInfinite);
+  setTri(g2, a, c, kInfinite);
   setTri(t, a, b, c);
-  link(3 * t, 3 * g0);
-  link(3 * t + 1, 3 * g1);
-  link(3 * t + 2, 3 * g2);
-  link(3 * g0 + 1, 3 * g2 + 2);
-  link(3 * g0 + 2, 3 * g1 + 1);
-  link(3 * g1 + 2, 3 * g2 + 1);
+  link(halfedgeOf(t, 0), halfedgeOf(g0, 0));
+  link(halfedgeOf(t, 1), halfedgeOf(g1, 0));
+  link(halfedgeOf(t, 2), halfedgeOf(g2, 0));
+  link(halfedgeOf(g0, 1), halfedgeOf(g2, 2));
+  link(halfedgeOf(g0, 2), halfedgeOf(g1, 1));
+  link(halfedgeOf(g1, 2), halfedgeOf(g2, 1));
   lastTriangle = t;
 }
 
-std::vector<std::uint32_t> Triangulation::insertionOrder() const {
+std::vector<VertexId> Triangulation::insertionOrder() const {
   const std::size_t n = xy.size();
   if (insertedUpTo >= n) return {};
   const unsigned threads = threadCount();
@@ -165,7 +167,8 @@ std::vector<std::uint32_t> Triangulation::insertionOrder() const {
   std::vector<Box> boxes(threads);
   parallelParts(count, threads, threads, [&](std::size_t b, std::size_t e, unsigned k) {
     for (std::size_t i = insertedUpTo + b; i < insertedUpTo + e; ++i) {
-      if (rep[i] == kNone) boxes[k].add(xy[i]);
+      const VertexId v(static_cast<std::uint32_t>(i));
+      if (!rep[v].valid()) boxes[k].add(xy[v]);
     }
   }, kSerialBelow);
   Box box;
@@ -186,7 +189,8 @@ std::vector<std::uint32_t> Triangulation::insertionOrder() const {
   parallelParts(count, threads, threads, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t j = b; j < e; ++j) {
       const std::size_t i = insertedUpTo + j;
-      if (rep[i] != kNone) {
+      const VertexId v(static_cast<std::uint32_t>(i));
+      if (rep[v].valid()) {
         keys[j] = kSkip | i;
         continue;
       }
@@ -196,22 +200,22 @@ std::vector<std::uint32_t> Triangulation::insertionOrder() const {
       h ^= h >> 29;
       const auto round = static_cast<std::uint32_t>(
           std::min<int>(std::countr_zero(h | (std::uint64_t{1} << 40)), static_cast<int>(rounds)));
-      const std::uint32_t key = ((rounds - round) << 26) | hilbert(xy[i]);
+      const std::uint32_t key = ((rounds - round) << 26) | hilbert(xy[v]);
       keys[j] = (static_cast<std::uint64_t>(key) << 32) | i;
     }
   }, kSerialBelow);
   radixSortHigh32(keys, threads);
-  std::vector<std::uint32_t> order;
+  std::vector<VertexId> order;
   order.reserve(count);
   for (std::uint64_t k : keys) {
     if ((k & kSkip) == kSkip) break;
-    order.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
+    order.emplace_back(static_cast<std::uint32_t>(k & 0xffffffffu));
   }
   return order;
 }
 
-void Triangulation::insertInOrder(const std::vector<std::uint32_t>& order) {
-  std::size_t skipA = kNone, skipB = kNone, skipC = kNone;
+void Triangulation::insertInOrder(const std::vector<VertexId>& order) {
+  std::size_t skipA = kNoPosition, skipB = kNoPosition, skipC = kNoPosition;
   if (!triangulated()) initialTriangle(order, skipA, skipB, skipC);
   // The insertion order jumps around the input arrays: fetch ahead.
   constexpr std::size_t kAhead = 8;

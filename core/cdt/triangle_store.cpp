@@ -12,9 +12,10 @@ namespace tinsmith::cdt {
 
 void TriangleStore::startTrackingVhe() {
   if (trackVhe) return;
-  vhe.assign(xy.size(), kNone);
-  for (std::uint32_t h = 0; h < tv.size(); ++h) {
-    if (tv[h] != kInf) vhe[tv[h]] = h;
+  vhe.assign(xy.size(), HalfedgeId::invalid());
+  for (std::uint32_t i = 0; i < tv.size(); ++i) {
+    const HalfedgeId h(i);
+    if (origin(h) != kInfinite) vhe[origin(h)] = h;
   }
   trackVhe = true;
 }
@@ -25,16 +26,16 @@ void TriangleStore::reserveTriangles(std::size_t triangles) {
   cons.reserve(3 * triangles);
 }
 
-void TriangleStore::lop(std::vector<std::pair<std::uint32_t, std::uint32_t>>& todo) {
+void TriangleStore::lop(std::vector<std::pair<VertexId, VertexId>>& todo) {
   std::size_t flips = 0;
   while (!todo.empty()) {
     const auto [p, q] = todo.back();
     todo.pop_back();
-    if (p == kInf || q == kInf) continue;
-    const std::uint32_t h = findHalfedge(p, q);
-    if (h == kNone || cons[h]) continue;
-    const std::uint32_t c = tv[prv(h)], d = tv[prv(opp[h])];
-    if (c == kInf || d == kInf) continue;
+    if (p == kInfinite || q == kInfinite) continue;
+    const HalfedgeId h = findHalfedge(p, q);
+    if (!h.valid() || cons[h]) continue;
+    const VertexId c = origin(prv(h)), d = origin(prv(twin(h)));
+    if (c == kInfinite || d == kInfinite) continue;
     if (geometry::incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
       if (++flips > 64 + 64 * xy.size()) {
         throw internalError("edge legalization did not terminate");
@@ -48,42 +49,46 @@ void TriangleStore::lop(std::vector<std::pair<std::uint32_t, std::uint32_t>>& to
   }
 }
 
-void TriangleStore::lopAround(std::uint32_t v) {
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> todo;
-  const std::uint32_t start = vhe[v];
-  std::uint32_t h = start;
+void TriangleStore::lopAround(VertexId v) {
+  std::vector<std::pair<VertexId, VertexId>> todo;
+  const HalfedgeId start = vhe[v];
+  HalfedgeId h = start;
   do {
-    todo.emplace_back(v, tv[nxt(h)]);
-    todo.emplace_back(tv[nxt(h)], tv[prv(h)]);
-    h = opp[prv(h)];
+    todo.emplace_back(v, origin(nxt(h)));
+    todo.emplace_back(origin(nxt(h)), origin(prv(h)));
+    h = twin(prv(h));
   } while (h != start);
   lop(todo);
 }
 
 MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<const double> z,
                                 std::size_t featureCount, unsigned threads,
-                                std::vector<std::uint32_t>& vertexOf) {
+                                IdVector<VertexId, VertexId>& vertexOf) {
   const std::uint32_t nt = triCount();
-  // triMap: working triangle → output triangle (kNone outside); monotone, so
-  // the compaction below can run in place. Transient: freed before the output
-  // points are allocated.
-  std::vector<std::uint32_t> triMap;
+  // triMap: working triangle → output triangle (invalid outside); monotone,
+  // so the compaction below can run in place. Transient: freed before the
+  // output points are allocated.
+  IdVector<TriangleId, TriangleId> triMap;
   {
     triMap.resize(nt);
     std::uint32_t k = 0;
-    for (std::uint32_t t = 0; t < nt; ++t) triMap[t] = inside[t] ? k++ : kNone;
+    for (std::uint32_t t = 0; t < nt; ++t) {
+      triMap[TriangleId(t)] = inside[t] ? TriangleId(k++) : TriangleId::invalid();
+    }
     std::vector<std::uint8_t>().swap(inside);
   }
-  std::vector<std::uint32_t> used(xy.size(), kNone);
+  // used: working vertex → mesh vertex (first only marked with id 0).
+  IdVector<VertexId, VertexId> used(xy.size(), VertexId::invalid());
   std::uint32_t outT = 0;
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    if (triMap[t] == kNone) continue;
+  for (std::uint32_t i = 0; i < nt; ++i) {
+    const TriangleId t(i);
+    if (!triMap[t].valid()) continue;
     ++outT;
-    for (std::uint32_t i = 0; i < 3; ++i) used[tv[3 * t + i]] = 0;
+    for (std::uint32_t c = 0; c < 3; ++c) used[corner(t, c)] = VertexId(0);
   }
   std::uint32_t outV = 0;
-  for (std::size_t v = 0; v < used.size(); ++v) {
-    if (used[v] != kNone) used[v] = outV++;
+  for (VertexId& u : used) {
+    if (u.valid()) u = VertexId(outV++);
   }
   MeshStorage mesh;
   mesh.outgoing.assign(outV, HalfedgeId());
@@ -94,53 +99,59 @@ MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<cons
   mesh.consBits.assign(3 * static_cast<std::size_t>(outT) / 64 + 1, 0);
   mesh.featureBegin.assign(1, 0);
   std::vector<FeatureId> fs;
-  std::vector<std::uint32_t> boundary;  // output half-edges without twin, ascending
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    const std::uint32_t b = 3 * t;
-    if (triMap[t] == kNone) {
+  std::vector<HalfedgeId> boundary;  // output half-edges without twin, ascending
+  // The arrays are rewritten in place, as the mesh's raw corners and twins.
+  for (std::uint32_t i = 0; i < nt; ++i) {
+    const TriangleId t(i);
+    const std::uint32_t b = halfedgeOf(t, 0).value;
+    if (!triMap[t].valid()) {
       removed.push_back({t,
                          {tv[b], tv[b + 1], tv[b + 2]},
                          {opp[b], opp[b + 1], opp[b + 2]},
-                         {cons[b], cons[b + 1], cons[b + 2]}});
+                         {cons[halfedgeOf(t, 0)], cons[halfedgeOf(t, 1)], cons[halfedgeOf(t, 2)]}});
       continue;
     }
     // Read t completely before writing slot triMap[t] <= t.
-    const std::uint32_t c[3] = {tv[b], tv[b + 1], tv[b + 2]};
-    const std::uint32_t g[3] = {opp[b], opp[b + 1], opp[b + 2]};
-    const std::uint8_t k[3] = {cons[b], cons[b + 1], cons[b + 2]};
-    const std::uint32_t o = 3 * triMap[t];
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      if (!k[i]) continue;
+    const VertexId c[3] = {corner(t, 0), corner(t, 1), corner(t, 2)};
+    const HalfedgeId g[3] = {twin(halfedgeOf(t, 0)), twin(halfedgeOf(t, 1)),
+                             twin(halfedgeOf(t, 2))};
+    const std::uint8_t k[3] = {cons[halfedgeOf(t, 0)], cons[halfedgeOf(t, 1)],
+                               cons[halfedgeOf(t, 2)]};
+    const TriangleId o = triMap[t];
+    for (std::uint32_t j = 0; j < 3; ++j) {
+      if (!k[j]) continue;
       fs.clear();
-      for (FeatureId f : edgeFeatures.find(edgeKey(c[i], c[(i + 1) % 3]))) {
+      for (FeatureId f : edgeFeatures.find(edgeKey(c[j], c[(j + 1) % 3]))) {
         if (f < featureCount) fs.push_back(f);
       }
       if (fs.empty()) continue;
       std::sort(fs.begin(), fs.end());
-      mesh.consBits[(o + i) / 64] |= std::uint64_t{1} << ((o + i) % 64);
+      const std::uint32_t out = halfedgeOf(o, j).value;
+      mesh.consBits[out / 64] |= std::uint64_t{1} << (out % 64);
       mesh.featureIds.insert(mesh.featureIds.end(), fs.begin(), fs.end());
       mesh.featureBegin.push_back(static_cast<std::uint32_t>(mesh.featureIds.size()));
     }
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t n = triMap[g[i] / 3];
-      tv[o + i] = used[c[i]];
-      opp[o + i] = n != kNone ? 3 * n + g[i] % 3 : kNone;
-      cons[o + i] = k[i];
+    for (std::uint32_t j = 0; j < 3; ++j) {
+      const HalfedgeId out = halfedgeOf(o, j);
+      const TriangleId n = triMap[triangleOf(g[j])];
+      tv[out.value] = used[c[j]].value;
+      opp[out.value] = n.valid() ? halfedgeOf(n, cornerOf(g[j])).value : HalfedgeId::kInvalid;
+      cons[out] = k[j];
     }
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      if (opp[o + i] == kNone) boundary.push_back(o + i);
+    for (std::uint32_t j = 0; j < 3; ++j) {
+      if (!twin(halfedgeOf(o, j)).valid()) boundary.push_back(halfedgeOf(o, j));
     }
   }
   // Outgoing half-edge per vertex, the rule of Mesh::build: the first boundary
   // half-edge leaving v if there is one, else the first. Written back to
   // front without reading (the vertex order is unrelated to the triangle
-  // order, so these stores are scattered).
+  // order, so these stores are scattered). Corners are mesh vertices now.
   for (std::uint32_t h = 3 * outT; h-- > 0;) mesh.outgoing[tv[h]] = HalfedgeId(h);
   for (std::size_t i = boundary.size(); i-- > 0;) {
-    mesh.outgoing[tv[boundary[i]]] = HalfedgeId(boundary[i]);
+    mesh.outgoing[tv[boundary[i].value]] = boundary[i];
   }
-  std::vector<std::uint32_t>().swap(boundary);
-  std::vector<std::uint32_t>().swap(triMap);
+  std::vector<HalfedgeId>().swap(boundary);
+  std::vector<TriangleId>().swap(triMap);
   tv.resize(3 * static_cast<std::size_t>(outT));
   opp.resize(3 * static_cast<std::size_t>(outT));
   cons.resize(3 * static_cast<std::size_t>(outT));
@@ -152,58 +163,65 @@ MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<cons
   tv.clear();
   opp.clear();
   mesh.points.resize(outV);
-  parallelParts(used.size(), threads, threads, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t v = b; v < e; ++v) {
-      if (used[v] != kNone) mesh.points[used[v]] = {xy[v].x, xy[v].y, z[v]};
-    }
-  }, kSerialBelow);
+  parallelParts(
+      used.size(), threads, threads,
+      [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t i = b; i < e; ++i) {
+          const VertexId v(static_cast<std::uint32_t>(i));
+          if (used[v].valid()) mesh.points[used[v].value] = {xy[v].x, xy[v].y, z[i]};
+        }
+      },
+      kSerialBelow);
   vertexOf = std::move(used);
   return mesh;
 }
 
 void TriangleStore::unpack(std::vector<std::uint32_t>&& corners, std::vector<std::uint32_t>&& twins,
-                           const std::vector<std::uint32_t>& workingVertex) {
+                           const std::vector<VertexId>& workingVertex) {
   if (!packed) return;
   const std::uint32_t outT = packedTriangles;
   const auto nt = static_cast<std::uint32_t>(outT + removed.size());
+  // Mesh corners and twins become working ones in place, in raw form.
   tv = std::move(corners);
   opp = std::move(twins);
   tv.resize(3 * static_cast<std::size_t>(nt));
   opp.resize(3 * static_cast<std::size_t>(nt));
   cons.resize(3 * static_cast<std::size_t>(nt));
-  std::vector<std::uint32_t> slotOf(outT);
+  IdVector<TriangleId, TriangleId> slotOf(outT);  // mesh triangle → working slot
   // Back to front: kept triangle o moves to slot t >= o.
   std::size_t r = removed.size();
   std::uint32_t o = outT;
   for (std::uint32_t t = nt; t-- > 0;) {
-    if (r > 0 && removed[r - 1].slot == t) {
+    if (r > 0 && removed[r - 1].slot.value == t) {
       --r;
       continue;  // filled below
     }
     --o;
-    slotOf[o] = t;
+    slotOf[TriangleId(o)] = TriangleId(t);
     for (std::uint32_t i = 0; i < 3; ++i) {
-      tv[3 * t + i] = workingVertex[tv[3 * o + i]];
-      opp[3 * t + i] = opp[3 * o + i];  // a mesh half-edge id; remapped below
-      cons[3 * t + i] = cons[3 * o + i];
+      const HalfedgeId to = halfedgeOf(TriangleId(t), i), from = halfedgeOf(TriangleId(o), i);
+      tv[to.value] = workingVertex[tv[from.value]].value;
+      opp[to.value] = opp[from.value];  // a mesh half-edge id; remapped below
+      cons[to] = cons[from];
     }
   }
   r = 0;
   for (std::uint32_t t = 0; t < nt; ++t) {
-    if (r < removed.size() && removed[r].slot == t) {
+    if (r < removed.size() && removed[r].slot.value == t) {
       ++r;
       continue;
     }
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t g = opp[3 * t + i];
-      if (g != kNone) opp[3 * t + i] = 3 * slotOf[g / 3] + g % 3;
+      const HalfedgeId h = halfedgeOf(TriangleId(t), i), g = twin(h);
+      if (g.valid()) opp[h.value] = halfedgeOf(slotOf[triangleOf(g)], cornerOf(g)).value;
     }
   }
   for (const RemovedTriangle& x : removed) {
     for (std::uint32_t i = 0; i < 3; ++i) {
-      tv[3 * x.slot + i] = x.tv[i];
-      cons[3 * x.slot + i] = x.cons[i];
-      link(3 * x.slot + i, x.opp[i]);
+      const HalfedgeId h = halfedgeOf(x.slot, i);
+      tv[h.value] = x.tv[i];
+      cons[h] = x.cons[i];
+      link(h, HalfedgeId(x.opp[i]));
     }
   }
   std::vector<RemovedTriangle>().swap(removed);

@@ -63,32 +63,34 @@ bool circleXRange(const Point2& a, const Point2& b, const Point2& c, double& lo,
 /// the hole on its left; `safe` is the twin half-edge in the safe triangle
 /// (in this triangulation for the left half, in `right` for the right half).
 struct SeamBorder {
-  std::uint32_t u, v, safe;
+  VertexId u, v;
+  HalfedgeId safe;
   bool rightHalf;
 };
 
 }  // namespace
 
-std::vector<std::uint8_t> ConstrainedTriangulation::unsafeTriangles(bool leftHalf, double leftMax,
-                                                                    double rightMin) const {
-  std::vector<std::uint8_t> unsafe(triCount(), 0);
-  std::vector<std::uint8_t> tested(triCount(), 0);
-  std::vector<std::uint32_t> todo;
-  for (std::uint32_t t = 0; t < triCount(); ++t) {
+IdVector<TriangleId, std::uint8_t> ConstrainedTriangulation::unsafeTriangles(
+    bool leftHalf, double leftMax, double rightMin) const {
+  IdVector<TriangleId, std::uint8_t> unsafe(triCount(), 0);
+  IdVector<TriangleId, std::uint8_t> tested(triCount(), 0);
+  std::vector<TriangleId> todo;
+  for (std::uint32_t k = 0; k < triCount(); ++k) {
+    const TriangleId t(k);
     if (isGhost(t)) {
       unsafe[t] = tested[t] = 1;
       todo.push_back(t);
     }
   }
   while (!todo.empty()) {
-    const std::uint32_t t = todo.back();
+    const TriangleId t = todo.back();
     todo.pop_back();
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t n = opp[3 * t + i] / 3;
+      const TriangleId n = neighbour(halfedgeOf(t, i));
       if (tested[n]) continue;
       tested[n] = 1;
       double lo = 0, hi = 0;
-      const bool known = circleXRange(xy[tv[3 * n]], xy[tv[3 * n + 1]], xy[tv[3 * n + 2]], lo, hi);
+      const bool known = circleXRange(xy[corner(n, 0)], xy[corner(n, 1)], xy[corner(n, 2)], lo, hi);
       if (!known || (leftHalf ? !(hi < rightMin) : !(lo > leftMax))) {
         unsafe[n] = 1;
         todo.push_back(n);
@@ -98,7 +100,7 @@ std::vector<std::uint8_t> ConstrainedTriangulation::unsafeTriangles(bool leftHal
   return unsafe;
 }
 
-double ConstrainedTriangulation::splitValue(const std::vector<std::uint32_t>& order) const {
+double ConstrainedTriangulation::splitValue(const std::vector<VertexId>& order) const {
   std::vector<double> xs(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) xs[i] = xy[order[i]].x;
   const std::size_t mid = xs.size() / 2;
@@ -127,14 +129,14 @@ double ConstrainedTriangulation::splitValue(const std::vector<std::uint32_t>& or
   return std::numeric_limits<double>::quiet_NaN();
 }
 
-bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& order) {
+bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<VertexId>& order) {
   const double split = splitValue(order);
   if (std::isnan(split)) return false;
-  std::vector<std::uint32_t> leftOrder, rightOrder;
+  std::vector<VertexId> leftOrder, rightOrder;
   leftOrder.reserve(order.size() / 2 + 1);
   rightOrder.reserve(order.size() / 2 + 1);
   double leftMax = -INFINITY, rightMin = INFINITY;
-  for (std::uint32_t v : order) {
+  for (VertexId v : order) {
     const double x = xy[v].x;
     if (x < split) {
       leftOrder.push_back(v);
@@ -149,20 +151,21 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& ord
       !findFirstTriangle(leftOrder, ib, ic) || !findFirstTriangle(rightOrder, ib, ic)) {
     return false;
   }
-  std::vector<std::uint32_t>().swap(order);
+  std::vector<VertexId>().swap(order);
 
   // The right half in a triangulation of its own, its vertices numbered in input
   // order (so that merge ties still go to the earlier input).
-  std::vector<std::uint32_t> localOf(xy.size(), kNone);
-  for (std::uint32_t v : rightOrder) localOf[v] = 0;
-  std::vector<std::uint32_t> rightGlobal;
+  IdVector<VertexId, VertexId> localOf(xy.size(), VertexId::invalid());  // global → right
+  for (VertexId v : rightOrder) localOf[v] = VertexId(0);
+  IdVector<VertexId, VertexId> rightGlobal;  // right → global
   rightGlobal.reserve(rightOrder.size());
-  for (std::uint32_t g = 0; g < localOf.size(); ++g) {
-    if (localOf[g] == kNone) continue;
-    localOf[g] = static_cast<std::uint32_t>(rightGlobal.size());
+  for (std::uint32_t k = 0; k < localOf.size(); ++k) {
+    const VertexId g(k);
+    if (!localOf[g].valid()) continue;
+    localOf[g] = rightGlobal.endId();
     rightGlobal.push_back(g);
   }
-  for (std::uint32_t& v : rightOrder) v = localOf[v];
+  for (VertexId& v : rightOrder) v = localOf[v];
   // Segments with both ends on one side go in with that half (a segment
   // lies on the side of its ends); the rest after the merge.
   std::vector<std::uint32_t> leftSegments, rightSegments, seamSegments;
@@ -178,14 +181,15 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& ord
     sg.b = localOf[sg.b];
     rightSegmentList.push_back(sg);
   }
-  std::vector<std::uint32_t>().swap(localOf);
+  std::vector<VertexId>().swap(localOf);
   std::vector<Point2> rightXy(rightGlobal.size());
   std::vector<double> rightZ(rightGlobal.size());
   std::vector<FeatureId> rightFeature(rightGlobal.size());
   for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
-    rightXy[j] = xy[rightGlobal[j]];
-    rightZ[j] = z[rightGlobal[j]];
-    rightFeature[j] = vfeat[rightGlobal[j]];
+    const VertexId g = rightGlobal[VertexId(j)];
+    rightXy[j] = xy[g];
+    rightZ[j] = z[g];
+    rightFeature[j] = vfeat[g];
   }
   ConstrainedTriangulation right(options.snapTolerance, rerouteDepthLimit, features,
                                  std::move(rightXy), std::move(rightZ), std::move(rightFeature),
@@ -195,7 +199,7 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& ord
   right.edgeFeatures.reserve(rightSegments.size());
 
   // Each half is triangulated and classified on its own thread.
-  std::vector<std::uint8_t> unsafeLeft, unsafeRight;
+  IdVector<TriangleId, std::uint8_t> unsafeLeft, unsafeRight;
   std::exception_ptr rightError;
   auto buildRight = [&] {
     try {
@@ -225,33 +229,35 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& ord
     buildRight();
   }
   if (rightError) std::rethrow_exception(rightError);
-  std::vector<std::uint32_t>().swap(leftOrder);
-  std::vector<std::uint32_t>().swap(rightOrder);
+  std::vector<VertexId>().swap(leftOrder);
+  std::vector<VertexId>().swap(rightOrder);
 
   // The right half's vertices (its crossings get new global ids), merges,
   // crossings and constrained edges, in global ids.
-  for (std::size_t j = rightGlobal.size(); j < right.xy.size(); ++j) {
-    rightGlobal.push_back(static_cast<std::uint32_t>(xy.size()));
-    xy.push_back(right.xy[j]);
+  for (std::uint32_t j = static_cast<std::uint32_t>(rightGlobal.size()); j < right.xy.size(); ++j) {
+    rightGlobal.push_back(xy.endId());
+    xy.push_back(right.xy[VertexId(j)]);
     z.push_back(0);
     vfeat.push_back(kNoFeature);
-    rep.push_back(kNone);
+    rep.push_back(VertexId::invalid());
   }
   insertedUpTo = xy.size();
-  for (std::uint32_t j = 0; j < rightGlobal.size(); ++j) {
-    const std::uint32_t g = rightGlobal[j];
+  for (std::uint32_t k = 0; k < rightGlobal.size(); ++k) {
+    const VertexId j(k), g = rightGlobal[j];
     rep[g] = rightGlobal[right.rep[j]];
     z[g] = right.z[j];
     vfeat[g] = right.vfeat[j];
   }
-  for (const auto& [keep, from] : right.zSource) zSource[rightGlobal[keep]] = rightGlobal[from];
+  for (const auto& [keep, from] : right.zSource) {
+    zSource[rightGlobal[VertexId(keep)].value] = rightGlobal[from];
+  }
   for (CdtReport::Merge mg : right.report.merges) {
-    mg.kept = VertexId(rightGlobal[mg.kept.value]);
-    mg.merged = VertexId(rightGlobal[mg.merged.value]);
+    mg.kept = rightGlobal[mg.kept];
+    mg.merged = rightGlobal[mg.merged];
     report.merges.push_back(mg);
   }
   for (CdtReport::Intersection ev : right.report.intersections) {
-    ev.vertex = VertexId(rightGlobal[ev.vertex.value]);
+    ev.vertex = rightGlobal[ev.vertex];
     report.intersections.push_back(ev);
   }
   deepestReroute = std::max(deepestReroute, right.deepestReroute);
@@ -261,15 +267,16 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& ord
   report.dropped.insert(report.dropped.end(), right.report.dropped.begin(),
                         right.report.dropped.end());
   right.edgeFeatures.forEach([&](std::uint64_t key, EdgeFeatureMap::View fs) {
-    const std::uint64_t global = edgeKey(rightGlobal[key >> 32], rightGlobal[key & 0xffffffffu]);
+    const auto [u, w] = edgeOfKey(key);
+    const std::uint64_t global = edgeKey(rightGlobal[u], rightGlobal[w]);
     for (FeatureId f : fs) edgeFeatures.add(global, f);
   });
   // Only the right half's triangles are needed from here on.
   std::vector<Point2>().swap(right.xy);
   std::vector<double>().swap(right.z);
   std::vector<FeatureId>().swap(right.vfeat);
-  std::vector<std::uint32_t>().swap(right.rep);
-  std::vector<std::uint32_t>().swap(right.vhe);
+  std::vector<VertexId>().swap(right.rep);
+  std::vector<HalfedgeId>().swap(right.vhe);
   right.edgeFeatures = EdgeFeatureMap();
   right.report = CdtReport();
 
@@ -281,194 +288,272 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<std::uint32_t>& ord
   return true;
 }
 
-void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
-                                           const std::vector<std::uint32_t>& rightGlobal,
-                                           const std::vector<std::uint8_t>& unsafeLeft,
-                                           const std::vector<std::uint8_t>& unsafeRight) {
-  // The seam set S (corners of unsafe triangles), numbered in input order,
-  // and the border edges of the hole.
-  std::unordered_map<std::uint32_t, std::uint32_t> seamOf;
-  std::vector<std::uint32_t> seamGlobal;
+namespace {
+
+/// The seam between the two halves: the set S of the unsafe triangles'
+/// corners (global ids, ascending — input order), the border edges of the
+/// hole they leave, and the constrained edges inside the hole.
+struct Seam {
+  IdVector<VertexId, VertexId> global;                // seam vertex → global vertex
+  std::unordered_map<std::uint32_t, VertexId> local;  // global vertex (value) → seam vertex
   std::vector<SeamBorder> borders;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> inner;  // constrained edges in the hole
-  auto collect = [&](const std::vector<std::uint32_t>& corners,
-                     const std::vector<std::uint32_t>& twins,
-                     const std::vector<std::uint8_t>& constrained,
-                     const std::vector<std::uint8_t>& unsafe, bool rightHalf) {
-    for (std::uint32_t t = 0; t < unsafe.size(); ++t) {
+  std::vector<std::pair<VertexId, VertexId>> inner;  // global ids
+  [[nodiscard]] VertexId vertex(VertexId g) { return local[g.value]; }
+};
+
+/// Part 1 of the merge. The seam of the two halves, from the unsafe
+/// triangles of each (`left` in global ids; `right` in local ids, which
+/// rightGlobal maps). Borders and inner edges come in triangle order, the
+/// left half's first. Changes nothing.
+Seam collectSeam(const TriangleStore& left, const TriangleStore& right,
+                 const IdVector<VertexId, VertexId>& rightGlobal,
+                 const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+                 const IdVector<TriangleId, std::uint8_t>& unsafeRight) {
+  Seam seam;
+  auto collect = [&](const TriangleStore& half, const IdVector<TriangleId, std::uint8_t>& unsafe,
+                     bool rightHalf) {
+    auto global = [&](VertexId v) { return rightHalf && v != kInfinite ? rightGlobal[v] : v; };
+    for (std::uint32_t k = 0; k < unsafe.size(); ++k) {
+      const TriangleId t(k);
       if (!unsafe[t]) continue;
       for (std::uint32_t i = 0; i < 3; ++i) {
-        std::uint32_t v = corners[3 * t + i];
-        if (v == kInf) continue;
-        if (rightHalf) v = rightGlobal[v];
-        if (seamOf.try_emplace(v, 0).second) seamGlobal.push_back(v);
-        const std::uint32_t h = 3 * t + i, g = twins[h];
-        std::uint32_t w = corners[nxt(h)];
-        if (rightHalf && w != kInf) w = rightGlobal[w];
-        if (!unsafe[g / 3]) {
-          borders.push_back({v, w, g, rightHalf});
-        } else if (constrained[h] && h < g) {
-          inner.emplace_back(v, w);
+        const HalfedgeId h = halfedgeOf(t, i), g = half.twin(h);
+        if (half.origin(h) == kInfinite) continue;
+        const VertexId v = global(half.origin(h));
+        if (seam.local.try_emplace(v.value, VertexId(0)).second) seam.global.push_back(v);
+        const VertexId w = global(half.origin(nxt(h)));
+        if (!unsafe[triangleOf(g)]) {
+          seam.borders.push_back({v, w, g, rightHalf});
+        } else if (half.cons[h] && h < g) {
+          seam.inner.emplace_back(v, w);
         }
       }
     }
   };
-  collect(tv, opp, cons, unsafeLeft, false);
-  collect(right.tv, right.opp, right.cons, unsafeRight, true);
-  std::sort(seamGlobal.begin(), seamGlobal.end());
-  for (std::uint32_t j = 0; j < seamGlobal.size(); ++j) seamOf[seamGlobal[j]] = j;
+  collect(left, unsafeLeft, false);
+  collect(right, unsafeRight, true);
+  std::sort(seam.global.begin(), seam.global.end());
+  for (std::uint32_t j = 0; j < seam.global.size(); ++j) {
+    seam.local[seam.global[VertexId(j)].value] = VertexId(j);
+  }
+  return seam;
+}
 
-  // DT(S) with the border edges (feature 0) and the constrained edges in the
-  // hole (feature 1) as constraints.
+/// The triangles that fill the hole between the halves' safe triangles:
+/// DT(S) in seam ids, which of its triangles lie in the hole, and per border
+/// edge (in Seam::borders' order) its half-edge in DT(S), the hole on its left.
+struct HoleFill {
+  ConstrainedTriangulation dt;
+  IdVector<TriangleId, std::uint8_t> inHole;
+  std::vector<HalfedgeId> borderHalfedge;
+};
+
+/// Part 2 of the merge. DT(S), with the border edges (feature 0) and the
+/// constrained edges in the hole (feature 1) as constraints, on `xy` (the
+/// global points); the hole is what is reachable from the border without
+/// crossing it (with no border, no safe triangle at all: everything).
+/// Throws internalError when DT(S) had to change its input (merge, split or
+/// drop), lacks a border edge, or the border does not close the hole.
+HoleFill fillHole(Seam& seam, const IdVector<VertexId, Point2>& xy) {
   std::vector<Point2> seamXy;
-  seamXy.reserve(seamGlobal.size());
-  for (std::uint32_t g : seamGlobal) seamXy.push_back(xy[g]);
-  std::vector<Segment> seamSegments;
-  seamSegments.reserve(borders.size() + inner.size());
-  for (const SeamBorder& b : borders) seamSegments.push_back({seamOf[b.u], seamOf[b.v], 0});
-  for (const auto& [u, w] : inner) seamSegments.push_back({seamOf[u], seamOf[w], 1});
-  ConstrainedTriangulation seam(
-      0.0, kRerouteDepthLimit,
-      {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}}, std::move(seamXy),
-      std::vector<double>(seamGlobal.size(), 0.0),
-      std::vector<FeatureId>(seamGlobal.size(), kNoFeature), std::move(seamSegments));
-  seam.insertPendingPoints();
-  seam.insertPendingSegments();
-  if (!seam.report.merges.empty() || !seam.report.intersections.empty() ||
-      !seam.report.dropped.empty() || !seam.bend.empty()) {
+  seamXy.reserve(seam.global.size());
+  for (VertexId g : seam.global) seamXy.push_back(xy[g]);
+  std::vector<Segment> segments;
+  segments.reserve(seam.borders.size() + seam.inner.size());
+  for (const SeamBorder& b : seam.borders) {
+    segments.push_back({seam.vertex(b.u), seam.vertex(b.v), 0});
+  }
+  for (const auto& [u, w] : seam.inner) segments.push_back({seam.vertex(u), seam.vertex(w), 1});
+  HoleFill fill{ConstrainedTriangulation(
+                    0.0, kRerouteDepthLimit,
+                    {{FeatureKind::Other, "seam border"}, {FeatureKind::Other, "constraint"}},
+                    std::move(seamXy), std::vector<double>(seam.global.size(), 0.0),
+                    std::vector<FeatureId>(seam.global.size(), kNoFeature), std::move(segments)),
+                {},
+                {}};
+  ConstrainedTriangulation& dt = fill.dt;
+  dt.insertPendingPoints();
+  dt.insertPendingSegments();
+  if (!dt.report.merges.empty() || !dt.report.intersections.empty() || !dt.report.dropped.empty() ||
+      !dt.bend.empty()) {
     throw internalError("the seam between the two halves changed its input");
   }
 
-  // The hole: DT(S) triangles reachable from the border without crossing it.
-  // (With no safe triangle at all, DT(S) is the whole triangulation.)
-  std::vector<std::uint8_t> inHole(seam.triCount(), borders.empty() ? 1 : 0);
-  std::vector<std::uint32_t> seamHalfedge(borders.size());
-  std::vector<std::uint32_t> todo;
-  for (std::size_t k = 0; k < borders.size(); ++k) {
-    const std::uint32_t h = seam.findHalfedge(seamOf[borders[k].u], seamOf[borders[k].v]);
-    if (h == kNone) throw internalError("a seam border edge is missing");
-    seamHalfedge[k] = h;
-    if (!inHole[h / 3]) {
-      inHole[h / 3] = 1;
-      todo.push_back(h / 3);
+  IdVector<TriangleId, std::uint8_t>& inHole = fill.inHole;
+  inHole.assign(dt.triCount(), seam.borders.empty() ? 1 : 0);
+  fill.borderHalfedge.resize(seam.borders.size());
+  std::vector<TriangleId> todo;
+  for (std::size_t k = 0; k < seam.borders.size(); ++k) {
+    const HalfedgeId h =
+        dt.findHalfedge(seam.vertex(seam.borders[k].u), seam.vertex(seam.borders[k].v));
+    if (!h.valid()) throw internalError("a seam border edge is missing");
+    fill.borderHalfedge[k] = h;
+    if (!inHole[triangleOf(h)]) {
+      inHole[triangleOf(h)] = 1;
+      todo.push_back(triangleOf(h));
     }
   }
   while (!todo.empty()) {
-    const std::uint32_t t = todo.back();
+    const TriangleId t = todo.back();
     todo.pop_back();
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t h = 3 * t + i;
-      if (seam.cons[h]) {
-        const auto fs = seam.edgeFeatures.find(edgeKey(seam.tv[h], seam.tv[nxt(h)]));
+      const HalfedgeId h = halfedgeOf(t, i);
+      if (dt.cons[h]) {
+        const auto fs = dt.edgeFeatures.find(edgeKey(dt.origin(h), dt.origin(nxt(h))));
         if (std::find(fs.begin(), fs.end(), FeatureId{0}) != fs.end()) continue;  // border
       }
-      const std::uint32_t n = seam.opp[h] / 3;
+      const TriangleId n = dt.neighbour(h);
       if (!inHole[n]) {
         inHole[n] = 1;
         todo.push_back(n);
       }
     }
   }
-  for (std::uint32_t h : seamHalfedge) {
-    if (inHole[seam.opp[h] / 3]) throw internalError("the seam hole is not closed");
+  for (HalfedgeId h : fill.borderHalfedge) {
+    if (inHole[dt.neighbour(h)]) throw internalError("the seam hole is not closed");
   }
+  return fill;
+}
 
-  // New slots: freed left slots first, then appended.
-  std::vector<std::uint32_t> freeSlots;
-  for (std::uint32_t t = 0; t < unsafeLeft.size(); ++t) {
+/// Moves the last triangles of `store` into its free slots freeSlots[from..]
+/// (ascending; a free slot has an invalid first corner) and drops the free
+/// slots left at the end, so that the triangles are contiguous again.
+void closeFreeSlots(TriangleStore& store, const std::vector<TriangleId>& freeSlots,
+                    std::size_t from) {
+  auto isFree = [&](TriangleId t) { return !store.corner(t, 0).valid(); };
+  std::uint32_t end = store.triCount();
+  for (std::size_t k = from; k < freeSlots.size(); ++k) {
+    const TriangleId f = freeSlots[k];
+    while (end > 0 && isFree(TriangleId(end - 1))) --end;
+    if (f.value >= end) break;
+    const TriangleId t(--end);
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const HalfedgeId to = halfedgeOf(f, i), moved = halfedgeOf(t, i);
+      store.tv[to.value] = store.tv[moved.value];
+      store.cons[to] = store.cons[moved];
+      store.link(to, store.twin(moved));
+    }
+    store.tv[halfedgeOf(t, 0).value] = VertexId::kInvalid;
+  }
+  while (end > 0 && isFree(TriangleId(end - 1))) --end;
+  store.tv.resize(3 * static_cast<std::size_t>(end));
+  store.opp.resize(3 * static_cast<std::size_t>(end));
+  store.cons.resize(3 * static_cast<std::size_t>(end));
+}
+
+/// Part 3 of the merge. The left half's unsafe triangles make way for the
+/// right half's safe ones and the hole's (fill): both are copied into
+/// `left`, into the freed slots first, then appended, their ids made global
+/// (the hole's edges constrained where `left.edgeFeatures` has the edge),
+/// linked to the safe triangles along the border, and the slots left free
+/// are closed. Frees the triangle arrays of `right` and `fill.dt` as it
+/// copies them. Throws internalError when a copied triangle is left without
+/// a twin.
+void stitch(ConstrainedTriangulation& left, ConstrainedTriangulation& right,
+            const IdVector<VertexId, VertexId>& rightGlobal,
+            const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+            const IdVector<TriangleId, std::uint8_t>& unsafeRight, const Seam& seam,
+            HoleFill& fill) {
+  // New slots: freed left slots first, then appended. A freed slot is marked
+  // by an invalid first corner.
+  std::vector<TriangleId> freeSlots;
+  for (std::uint32_t k = 0; k < unsafeLeft.size(); ++k) {
+    const TriangleId t(k);
     if (unsafeLeft[t]) {
       freeSlots.push_back(t);
-      tv[3 * t] = kNone;
+      left.tv[halfedgeOf(t, 0).value] = VertexId::kInvalid;
     }
   }
   std::size_t used = 0;
-  std::uint32_t appended = triCount();
-  auto takeSlot = [&] { return used < freeSlots.size() ? freeSlots[used++] : appended++; };
-  std::vector<std::uint32_t> rightSlot(right.triCount(), kNone);
-  for (std::uint32_t t = 0; t < right.triCount(); ++t) {
-    if (!unsafeRight[t]) rightSlot[t] = takeSlot();
+  std::uint32_t appended = left.triCount();
+  auto takeSlot = [&] {
+    return used < freeSlots.size() ? freeSlots[used++] : TriangleId(appended++);
+  };
+  IdVector<TriangleId, TriangleId> rightSlot(right.triCount(), TriangleId::invalid());
+  for (std::uint32_t k = 0; k < right.triCount(); ++k) {
+    if (!unsafeRight[TriangleId(k)]) rightSlot[TriangleId(k)] = takeSlot();
   }
-  std::vector<std::uint32_t> seamSlot(seam.triCount(), kNone);
-  for (std::uint32_t t = 0; t < seam.triCount(); ++t) {
-    if (inHole[t]) seamSlot[t] = takeSlot();
+  IdVector<TriangleId, TriangleId> holeSlot(fill.dt.triCount(), TriangleId::invalid());
+  for (std::uint32_t k = 0; k < fill.dt.triCount(); ++k) {
+    if (fill.inHole[TriangleId(k)]) holeSlot[TriangleId(k)] = takeSlot();
   }
   // Copies the kept triangles of another triangulation array by array, freeing each
   // source array once copied (two full copies of the right half's arrays
   // never coexist); twins outside the kept set are linked through the
-  // borders below.
+  // borders below. The raw arrays are copied as such, ids translated.
   const std::size_t size = 3 * static_cast<std::size_t>(appended);
-  auto copyKept = [&](ConstrainedTriangulation& from, const std::vector<std::uint32_t>& slot,
-                      const std::vector<std::uint32_t>& global) {
+  auto copyKept = [&](ConstrainedTriangulation& from, const IdVector<TriangleId, TriangleId>& slot,
+                      const IdVector<VertexId, VertexId>& global) {
     auto each = [&](const auto& f) {
-      parallelParts(slot.size(), threadCount(), threadCount(), [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t t = b; t < e; ++t) {
-          if (slot[t] == kNone) continue;
-          for (std::uint32_t i = 0; i < 3; ++i) f(3 * t + i, 3 * std::size_t{slot[t]} + i);
-        }
-      }, kSerialBelow);
+      parallelParts(
+          slot.size(), left.threadCount(), left.threadCount(),
+          [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t k = b; k < e; ++k) {
+              const TriangleId t(static_cast<std::uint32_t>(k));
+              if (!slot[t].valid()) continue;
+              for (std::uint32_t i = 0; i < 3; ++i) f(halfedgeOf(t, i), halfedgeOf(slot[t], i));
+            }
+          },
+          kSerialBelow);
     };
-    tv.resize(size);
-    each([&](std::size_t h, std::size_t out) {
-      const std::uint32_t v = from.tv[h];
-      tv[out] = v == kInf ? kInf : global[v];
+    left.tv.resize(size);
+    each([&](HalfedgeId h, HalfedgeId out) {
+      const VertexId v = from.origin(h);
+      left.tv[out.value] = (v == kInfinite ? kInfinite : global[v]).value;
     });
     std::vector<std::uint32_t>().swap(from.tv);
-    opp.resize(size);
-    each([&](std::size_t h, std::size_t out) {
-      const std::uint32_t g = from.opp[h];
-      opp[out] = slot[g / 3] == kNone ? kNone : 3 * slot[g / 3] + g % 3;
+    left.opp.resize(size);
+    each([&](HalfedgeId h, HalfedgeId out) {
+      const HalfedgeId g = from.twin(h);
+      const TriangleId s = slot[triangleOf(g)];
+      left.opp[out.value] = s.valid() ? halfedgeOf(s, cornerOf(g)).value : HalfedgeId::kInvalid;
     });
     std::vector<std::uint32_t>().swap(from.opp);
-    cons.resize(size);
-    each([&](std::size_t h, std::size_t out) { cons[out] = from.cons[h]; });
+    left.cons.resize(size);
+    each([&](HalfedgeId h, HalfedgeId out) { left.cons[out] = from.cons[h]; });
     std::vector<std::uint8_t>().swap(from.cons);
   };
   copyKept(right, rightSlot, rightGlobal);
-  copyKept(seam, seamSlot, seamGlobal);
-  // The seam's constraints include the hole's border: take the flags from
-  // the real constrained edges instead.
-  for (const std::uint32_t t : seamSlot) {
-    if (t == kNone) continue;
+  copyKept(fill.dt, holeSlot, seam.global);
+  // DT(S)'s constraints include the hole's border: take the flags from the
+  // real constrained edges instead.
+  for (const TriangleId t : holeSlot) {
+    if (!t.valid()) continue;
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t u = tv[3 * t + i], w = tv[3 * t + (i + 1) % 3];
-      cons[3 * t + i] = u != kInf && w != kInf && !edgeFeatures.find(edgeKey(u, w)).empty();
+      const VertexId u = left.corner(t, i), w = left.corner(t, (i + 1) % 3);
+      left.cons[halfedgeOf(t, i)] =
+          u != kInfinite && w != kInfinite && !left.edgeFeatures.find(edgeKey(u, w)).empty();
     }
   }
-  for (std::size_t k = 0; k < borders.size(); ++k) {
-    const SeamBorder& b = borders[k];
-    const std::uint32_t h = seamHalfedge[k];
-    const std::uint32_t safe = b.rightHalf ? 3 * rightSlot[b.safe / 3] + b.safe % 3 : b.safe;
-    link(safe, 3 * seamSlot[h / 3] + h % 3);
+  for (std::size_t k = 0; k < seam.borders.size(); ++k) {
+    const SeamBorder& b = seam.borders[k];
+    const HalfedgeId h = fill.borderHalfedge[k];
+    const HalfedgeId safe =
+        b.rightHalf ? halfedgeOf(rightSlot[triangleOf(b.safe)], cornerOf(b.safe)) : b.safe;
+    left.link(safe, halfedgeOf(holeSlot[triangleOf(h)], cornerOf(h)));
   }
-  for (const std::uint32_t t : seamSlot) {
-    if (t == kNone) continue;
+  for (const TriangleId t : holeSlot) {
+    if (!t.valid()) continue;
     for (std::uint32_t i = 0; i < 3; ++i) {
-      const std::uint32_t h = 3 * t + i;
-      if (opp[h] >= opp.size() || opp[opp[h]] != h) {
+      const HalfedgeId h = halfedgeOf(t, i);
+      if (left.opp[h.value] >= left.opp.size() || left.twin(left.twin(h)) != h) {
         throw internalError("merging the two halves left a broken triangle");
       }
     }
   }
+  closeFreeSlots(left, freeSlots, used);
+}
 
-  // Close the gaps the unused freed slots left: the last triangles move in.
-  std::uint32_t end = triCount();
-  for (std::size_t k = used; k < freeSlots.size(); ++k) {
-    const std::uint32_t f = freeSlots[k];
-    while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
-    if (f >= end) break;
-    const std::uint32_t t = --end;
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      tv[3 * f + i] = tv[3 * t + i];
-      cons[3 * f + i] = cons[3 * t + i];
-      link(3 * f + i, opp[3 * t + i]);
-    }
-    tv[3 * t] = kNone;
-  }
-  while (end > 0 && tv[3 * (end - 1)] == kNone) --end;
-  tv.resize(3 * static_cast<std::size_t>(end));
-  opp.resize(3 * static_cast<std::size_t>(end));
-  cons.resize(3 * static_cast<std::size_t>(end));
-  lastTriangle = 0;
+}  // namespace
+
+void ConstrainedTriangulation::mergeHalves(ConstrainedTriangulation& right,
+                                           const IdVector<VertexId, VertexId>& rightGlobal,
+                                           const IdVector<TriangleId, std::uint8_t>& unsafeLeft,
+                                           const IdVector<TriangleId, std::uint8_t>& unsafeRight) {
+  Seam seam = collectSeam(*this, right, rightGlobal, unsafeLeft, unsafeRight);
+  HoleFill fill = fillHole(seam, xy);
+  stitch(*this, right, rightGlobal, unsafeLeft, unsafeRight, seam, fill);
+  lastTriangle = TriangleId(0);
 }
 
 }  // namespace tinsmith::cdt

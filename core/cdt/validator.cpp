@@ -14,8 +14,6 @@
 
 namespace tinsmith {
 
-using cdt::kNone;
-
 namespace {
 std::string formatCoord(double v) {
   char buf[32];
@@ -35,17 +33,17 @@ ValidationReport Cdt::validateCounting(const ValidationOptions& options,
     if (r.problems.size() < options.maxProblems) r.problems.push_back(s);
   };
   // Every input vertex is a mesh vertex, or merged/dropped and reported.
-  std::vector<std::uint8_t> merged(m.xy.size(), 0), dropped(m.xy.size(), 0);
-  for (const auto& mg : m.report.merges) merged[mg.merged.value] = 1;
-  for (std::uint32_t v = 0; v < m.xy.size(); ++v) {
+  cdt::IdVector<VertexId, std::uint8_t> merged(m.xy.size(), 0);
+  for (const auto& mg : m.report.merges) merged[mg.merged] = 1;
+  for (std::uint32_t k = 0; k < m.xy.size(); ++k) {
+    const VertexId v(k);
     if (m.rep[v] != v && !merged[v]) {
-      add("input vertex " + std::to_string(v) + " is neither a vertex nor reported as merged");
+      add("input vertex " + std::to_string(k) + " is neither a vertex nor reported as merged");
     }
-    if (m.meshOf[v] != kNone) {
-      const Point3& p = mesh().point(VertexId(m.meshOf[v]));
-      const std::uint32_t r0 = m.rep[v];
-      if (r0 == v && !(p.xy() == m.xy[v])) {
-        add("input vertex " + std::to_string(v) + " moved");
+    if (m.meshOf[v].valid()) {
+      const Point3& p = mesh().point(m.meshOf[v]);
+      if (m.rep[v] == v && !(p.xy() == m.xy[v])) {
+        add("input vertex " + std::to_string(k) + " moved");
       }
     }
   }
@@ -84,14 +82,16 @@ ValidationReport Cdt::validateCounting(const ValidationOptions& options,
     std::vector<std::uint8_t> visited(me.vertexCount(), 0);  // by the chain search, per segment
     std::vector<std::uint32_t> queue;
     for (const cdt::Segment& s : m.segments) {
-      const std::uint32_t a = m.meshOf[s.a], b = m.meshOf[s.b];
-      if (a == b || s.feature >= m.features.size()) continue;
-      const std::string name = "constraint segment " + std::to_string(s.a) + "-" +
-                               std::to_string(s.b) + " (feature " + std::to_string(s.feature) + ")";
-      if (a == kNone || b == kNone) {
+      const VertexId ma = m.meshOf[s.a], mb = m.meshOf[s.b];
+      if (ma == mb || s.feature >= m.features.size()) continue;
+      const std::string name = "constraint segment " + std::to_string(s.a.value) + "-" +
+                               std::to_string(s.b.value) + " (feature " +
+                               std::to_string(s.feature) + ")";
+      if (!ma.valid() || !mb.valid()) {
         add(name + " has an end that is not a mesh vertex");
         continue;
       }
+      const std::uint32_t a = ma.value, b = mb.value;  // mesh vertices, as `adj` has them
       const Point2 P = m.xy[s.a], Q = m.xy[s.b];
       const double dx = Q.x - P.x, dy = Q.y - P.y, len2 = dx * dx + dy * dy;
       const double len = std::sqrt(len2);

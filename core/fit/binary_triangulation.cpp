@@ -10,48 +10,6 @@
 
 namespace tinsmith::fit {
 
-void KeyIndexMap::reserve(std::size_t count) {
-  while ((slots_.size() * 7) / 10 < count) grow();
-}
-
-void KeyIndexMap::grow() {
-  std::vector<Slot> old = std::move(slots_);
-  const std::size_t capacity = old.empty() ? 64 : old.size() * 2;
-  slots_.assign(capacity, Slot{kEmpty, 0});
-  mask_ = capacity - 1;
-  for (const Slot& s : old) {
-    if (s.key == kEmpty) continue;
-    std::size_t h = hash(s.key) & mask_;
-    while (slots_[h].key != kEmpty) h = (h + 1) & mask_;
-    slots_[h] = s;
-  }
-}
-
-bool KeyIndexMap::insert(std::uint64_t key, std::uint32_t id) {
-  if ((size_ + 1) * 10 > slots_.size() * 7) grow();
-  std::size_t h = hash(key) & mask_;
-  while (true) {
-    Slot& s = slots_[h];
-    if (s.key == key) return false;
-    if (s.key == kEmpty) {
-      s = Slot{key, id};
-      ++size_;
-      return true;
-    }
-    h = (h + 1) & mask_;
-  }
-}
-
-void KeyIndexMap::clear() {
-  slots_.clear();
-  mask_ = 0;
-  size_ = 0;
-}
-
-namespace {
-
-}  // namespace
-
 BinaryTriangulation::BinaryTriangulation(Point2 origin, double size, int gridLevels)
     : origin_(origin), size_(size), gridLevels_(gridLevels), side_(0) {
   if (!(size > 0.0) || !std::isfinite(size)) {

@@ -24,50 +24,32 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/base/u64_map.hpp"
 #include "core/geometry/predicates.hpp"
 
 namespace tinsmith::fit {
 
-/// A map from 64-bit keys to dense 32-bit ids with linear probing; the key
-/// ~0 (kEmpty) is reserved: it is never found, and inserting it stores
-/// nothing. Deterministic (no hashing randomness).
+/// A map from 64-bit keys to dense 32-bit ids (a U64Map at most 7/10 full);
+/// the key ~0 (kEmpty) is reserved: it is never found, and inserting it
+/// stores nothing. Deterministic (no hashing randomness).
 class KeyIndexMap {
  public:
-  static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
+  static constexpr std::uint64_t kEmpty = U64Map<std::uint32_t>::kEmpty;
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-  void reserve(std::size_t count);
+  void reserve(std::size_t count) { table_.reserve(count); }
   /// The id of `key`, or kNone.
   [[nodiscard]] std::uint32_t find(std::uint64_t key) const {
-    if (slots_.empty() || key == kEmpty) return kNone;  // kEmpty would match an empty slot
-    std::size_t h = hash(key) & mask_;
-    while (true) {
-      const Slot& s = slots_[h];
-      if (s.key == key) return s.id;
-      if (s.key == kEmpty) return kNone;
-      h = (h + 1) & mask_;
-    }
+    const std::uint32_t* id = table_.find(key);
+    return id ? *id : kNone;
   }
   /// Inserts key → id unless present or kEmpty; returns true when inserted.
-  bool insert(std::uint64_t key, std::uint32_t id);
-  [[nodiscard]] std::size_t size() const { return size_; }
-  void clear();
+  bool insert(std::uint64_t key, std::uint32_t id) { return table_.insert(key, id).second; }
+  [[nodiscard]] std::size_t size() const { return table_.size(); }
+  void clear() { table_.clear(); }
 
  private:
-  struct Slot {
-    std::uint64_t key;
-    std::uint32_t id;
-  };
-  static std::size_t hash(std::uint64_t key) {
-    key ^= key >> 33;
-    key *= 0xff51afd7ed558ccdULL;
-    key ^= key >> 33;
-    return static_cast<std::size_t>(key);
-  }
-  void grow();
-  std::vector<Slot> slots_;
-  std::size_t mask_ = 0;
-  std::size_t size_ = 0;
+  U64Map<std::uint32_t, 7, 10> table_;
 };
 
 /// A triangle of a binary triangulation by the keys of its hypotenuse ends l,

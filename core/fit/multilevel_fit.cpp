@@ -159,8 +159,9 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     // per-part moments are allocated (lower peak memory).
     SparseMatrix energy;
     if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
-    std::vector<TriangleMoments> moments = levelMoments(mesh, level, data, tris, triIndex, triVerts, positions,
-                                                        triOf, previousTris, previousMoments, threads);
+    const std::vector<TriangleMoments>& moments =
+        levelMoments(mesh, level, data, tris, triIndex, triVerts, positions, triOf, previousTris,
+                     previousMoments, threads);
     SparseMatrix a;
     Vector rhs;
     if (options.smoothing != Smoothing::None) {
@@ -174,7 +175,6 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
       a = std::move(eq.btb);
       rhs = std::move(eq.btz);
     }
-    std::vector<TriangleMoments>().swap(moments);
     applyFixedVertices(a, rhs, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
     const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);

@@ -165,12 +165,12 @@ std::vector<FixedVertex> activateFixedPoints(BinaryTriangulation& mesh, std::spa
   return fixed;
 }
 
-std::vector<TriangleMoments> levelMoments(const BinaryTriangulation& mesh, int level, const SortedData& data,
-                                          std::span<const BinaryTriangle> tris, const KeyIndexMap& triIndex,
-                                          std::span<const Triangle> triVerts, std::span<const Point2> positions,
-                                          std::vector<std::uint32_t>& triOf,
-                                          std::vector<BinaryTriangle>& previousTris,
-                                          std::vector<TriangleMoments>& previousMoments, unsigned threads) {
+const std::vector<TriangleMoments>& levelMoments(
+    const BinaryTriangulation& mesh, int level, const SortedData& data,
+    std::span<const BinaryTriangle> tris, const KeyIndexMap& triIndex,
+    std::span<const Triangle> triVerts, std::span<const Point2> positions,
+    std::vector<std::uint32_t>& triOf, std::vector<BinaryTriangle>& previousTris,
+    std::vector<TriangleMoments>& previousMoments, unsigned threads) {
   // Triangles of Δ_{k−1} that were not split keep their path, their points
   // and so their moments: only the points of split triangles are located
   // again (continuing downward from their old triangle) and accumulated.
@@ -238,8 +238,8 @@ std::vector<TriangleMoments> levelMoments(const BinaryTriangulation& mesh, int l
     }
   }
   previousTris.assign(tris.begin(), tris.end());
-  previousMoments = moments;
-  return moments;
+  previousMoments = std::move(moments);
+  return previousMoments;
 }
 
 LevelErrors levelErrors(const SortedData& data, std::span<const std::uint32_t> triOf,

@@ -61,13 +61,15 @@ std::vector<FixedVertex> activateFixedPoints(BinaryTriangulation& mesh, std::spa
 /// Triangles of the previous level that were not split keep their moments;
 /// the points of split ones are located again below their old triangle and
 /// accumulated. Updates triOf (each point's current triangle), previousTris
-/// and previousMoments to this level's. `level` 1 locates from the roots.
-std::vector<TriangleMoments> levelMoments(const BinaryTriangulation& mesh, int level, const SortedData& data,
-                                          std::span<const BinaryTriangle> tris, const KeyIndexMap& triIndex,
-                                          std::span<const Triangle> triVerts, std::span<const Point2> positions,
-                                          std::vector<std::uint32_t>& triOf,
-                                          std::vector<BinaryTriangle>& previousTris,
-                                          std::vector<TriangleMoments>& previousMoments, unsigned threads);
+/// and previousMoments to this level's, and returns previousMoments (the
+/// moments move there: one copy serves this level's system and the next
+/// level). `level` 1 locates from the roots.
+const std::vector<TriangleMoments>& levelMoments(
+    const BinaryTriangulation& mesh, int level, const SortedData& data,
+    std::span<const BinaryTriangle> tris, const KeyIndexMap& triIndex,
+    std::span<const Triangle> triVerts, std::span<const Point2> positions,
+    std::vector<std::uint32_t>& triOf, std::vector<BinaryTriangle>& previousTris,
+    std::vector<TriangleMoments>& previousMoments, unsigned threads);
 
 /// A grid cell of the current level with data: its Morton code at that
 /// level, its point count and its largest error.
