@@ -80,7 +80,11 @@ MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<cons
   // used: working vertex → mesh vertex (first only marked with id 0).
   IdVector<VertexId, VertexId> used(xy.size(), VertexId::invalid());
   std::uint32_t outT = 0;
+  constexpr std::uint32_t kAhead = 16;  // triangles whose vertices are prefetched
   for (std::uint32_t i = 0; i < nt; ++i) {
+    if (i + kAhead < nt)
+      for (std::uint32_t h = 3 * (i + kAhead); h < 3 * (i + kAhead) + 3; ++h)
+        if (tv[h] < used.size()) __builtin_prefetch(&used[VertexId(tv[h])], 1);
     const TriangleId t(i);
     if (!triMap[t].valid()) continue;
     ++outT;
@@ -101,7 +105,15 @@ MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<cons
   std::vector<FeatureId> fs;
   std::vector<HalfedgeId> boundary;  // output half-edges without twin, ascending
   // The arrays are rewritten in place, as the mesh's raw corners and twins.
+  // A triangle's corners and its neighbours are anywhere in `used` and
+  // `triMap`: those of the triangle kAhead slots on are prefetched.
   for (std::uint32_t i = 0; i < nt; ++i) {
+    if (i + kAhead < nt) {
+      for (std::uint32_t h = 3 * (i + kAhead); h < 3 * (i + kAhead) + 3; ++h) {
+        if (tv[h] < used.size()) __builtin_prefetch(&used[VertexId(tv[h])]);
+        if (opp[h] < opp.size()) __builtin_prefetch(&triMap[TriangleId(opp[h] / 3)]);
+      }
+    }
     const TriangleId t(i);
     const std::uint32_t b = halfedgeOf(t, 0).value;
     if (!triMap[t].valid()) {

@@ -218,6 +218,50 @@ bool setUpColumns(std::string_view line, std::int64_t lineNo, const std::string&
   return isHeader;
 }
 
+/// The common line parsed in one scan: plain, unquoted numbers in the wanted
+/// columns of a whitespace-, comma- or semicolon-separated line (trimmed).
+/// Returns false when it meets anything else — a quote, a '+', a short line,
+/// a field that is not all number, a value that is not finite, a tab-separated
+/// file — and the caller takes the general path, which accepts exactly what
+/// this accepts, with the same values, and words the errors.
+bool parsePlainLine(std::string_view line, TextDelimiter delimiter, const Columns& c, Point3& p) {
+  if (delimiter == TextDelimiter::Tab || delimiter == TextDelimiter::Auto) return false;
+  const bool blankSeparated = delimiter == TextDelimiter::Whitespace;
+  const char sep = delimiter == TextDelimiter::Comma ? ',' : ';';
+  auto blank = [](char ch) { return ch == ' ' || ch == '\t' || ch == '\r'; };
+  const char* s = line.data();
+  const char* const end = s + line.size();
+  const int want = c.z < 0 ? 2 : 3;
+  int found = 0;
+  for (int field = 0; found < want; ++field) {
+    while (s < end && blank(*s)) ++s;  // between fields, or a field's leading blanks
+    if (s == end && blankSeparated) return false;
+    double* target = field == c.x ? &p.x : field == c.y ? &p.y : field == c.z ? &p.z : nullptr;
+    if (target) {
+      if (s == end || *s == '"' || *s == '\'' || *s == '+') return false;
+      const auto r = std::from_chars(s, end, *target);
+      if (r.ec != std::errc() || !std::isfinite(*target)) return false;
+      s = r.ptr;
+      ++found;
+      if (blankSeparated) {
+        if (s < end && !blank(*s)) return false;
+      } else {
+        while (s < end && blank(*s)) ++s;
+        if (s < end && *s != sep) return false;
+      }
+    } else if (blankSeparated) {
+      while (s < end && !blank(*s)) ++s;
+    } else {
+      while (s < end && *s != sep) ++s;
+    }
+    if (!blankSeparated) {
+      if (s == end && found < want) return false;
+      ++s;  // past the separator
+    }
+  }
+  return true;
+}
+
 /// The data lines of `text`, whose first line is line `firstLine` of the
 /// file: appends their points and line numbers. Returns the number of lines
 /// (counting blank and comment lines). Throws on the first bad line.
@@ -236,6 +280,13 @@ std::int64_t parseDataLines(std::string_view text, std::int64_t firstLine,
     pos = end + 1;
     ++lineNo;
     if (line.empty() || line.front() == '#') continue;
+    Point3 p;
+    if (parsePlainLine(line, delimiter, c, p)) {
+      if (options.fixedZ) p.z = *options.fixedZ;
+      points.push_back(p);
+      lines.push_back(lineNo);
+      continue;
+    }
     splitFields(line, delimiter, fields);
     if (static_cast<int>(fields.size()) < c.needed) {
       throw inputError("expected at least " + std::to_string(c.needed) + " " +
@@ -243,7 +294,6 @@ std::int64_t parseDataLines(std::string_view text, std::int64_t firstLine,
                            std::to_string(fields.size()),
                        atLine(sourceName, lineNo), "fix or remove the line");
     }
-    Point3 p;
     const std::array<std::pair<int, double*>, 3> wanted{{{c.x, &p.x}, {c.y, &p.y}, {c.z, &p.z}}};
     for (std::size_t k = 0; k < 3; ++k) {
       if (wanted[k].first < 0) continue;

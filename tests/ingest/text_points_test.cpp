@@ -129,6 +129,34 @@ std::string longText(std::size_t points) {
   return text;
 }
 
+TEST(TextPoints, PlainAndUnusualFieldsReadAlike) {
+  // Most lines take the one-scan path; quotes, '+', blanks around fields,
+  // extra columns and trailing separators take the general one. Both agree.
+  const auto t = parseTextPoints(
+      "1,2,3\n"
+      "\"4\",5,+6\n"
+      " 7 , 8 ,9 ,extra\n"
+      "10,11,12,\r\n"
+      "-1.5e2,2.5E-1,0\n",
+      "mixed.csv");
+  ASSERT_EQ(t.points.size(), 5u);
+  EXPECT_EQ(t.points[0], (Point3{1, 2, 3}));
+  EXPECT_EQ(t.points[1], (Point3{4, 5, 6}));
+  EXPECT_EQ(t.points[2], (Point3{7, 8, 9}));
+  EXPECT_EQ(t.points[3], (Point3{10, 11, 12}));
+  EXPECT_EQ(t.points[4], (Point3{-150, 0.25, 0}));
+  const auto w = parseTextPoints("1 2 3 4\n\t5\t 6 7\r\n8 9 +10\n", "mixed.xyz");
+  ASSERT_EQ(w.points.size(), 3u);
+  EXPECT_EQ(w.points[1], (Point3{5, 6, 7}));
+  EXPECT_EQ(w.points[2], (Point3{8, 9, 10}));
+  // Not-quite numbers are refused by either path with the general wording.
+  for (const std::string bad : {"1,2,3e\n", "1,2,0x10\n", "1,2,3 4\n", "1,,3\n", "1 2 3x\n"}) {
+    const std::string first = bad.find(',') != std::string::npos ? "1,2,3\n" : "1 2 3\n";
+    const auto e = expectError([&] { parseTextPoints(first + bad, "bad.csv"); });
+    EXPECT_NE(std::string(e.what()).find("is not a number"), std::string::npos) << bad << ": " << e.what();
+  }
+}
+
 TEST(TextPoints, PiecesParsedInParallelGiveTheSameTable) {
   const std::string text = longText(120000);  // ~3 MB: parsed in pieces
   TextPointOptions one, four;

@@ -63,8 +63,16 @@ bool isTextPolylineFile(const std::filesystem::path& p) {
 
 // Plain mode: every input as it is; points of kind Other, break lines of kind
 // BreakLine, so a line keeps its z where it passes through a point.
-std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
+// Each file's read time goes into `times` as the stage "read FILENAME".
+std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
+                                            std::vector<ingest::BuildReport::StageTime>& times) {
   std::vector<ingest::BuildLayer> layers;
+  auto start = std::chrono::steady_clock::now();
+  auto timeRead = [&](const ingest::BuildLayer& layer) {
+    const auto now = std::chrono::steady_clock::now();
+    times.push_back({"read " + layer.name, std::chrono::duration<double>(now - start).count()});
+    start = now;
+  };
   for (const auto& file : o.points) {
     ingest::BuildLayer layer;
     layer.name = std::filesystem::path(file).filename().string();
@@ -86,6 +94,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
                          "give 3D points, or use a config with a 'z' attribute");
       layer.points = read.points;
     }
+    timeRead(layer);
     layers.push_back(std::move(layer));
   }
   for (const auto& file : o.breaklines) {
@@ -113,6 +122,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
         layer.lines.push_back({f.vertices, f.closed, true, where});
       }
     }
+    timeRead(layer);
     layers.push_back(std::move(layer));
   }
   return layers;
@@ -165,13 +175,11 @@ void run(const TinOptions& o) {
     options.snapTolerance = o.snap.value_or(0.0);
     options.flatTriangleRepair = false;
     options.riverDescent = false;
-    const auto start = std::chrono::steady_clock::now();
-    auto layers = plainLayers(o);
-    const double readSeconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::vector<ingest::BuildReport::StageTime> readTimes;
+    auto layers = plainLayers(o, readTimes);
     report = ingest::buildTinInto(std::move(layers), withFlags(options), writeTin, p);
-    report.times.insert(report.times.begin(), {"read", readSeconds});
-    report.totalSeconds += readSeconds;
+    report.times.insert(report.times.begin(), readTimes.begin(), readTimes.end());
+    for (const auto& t : readTimes) report.totalSeconds += t.seconds;
   } else {
     ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
     if (o.strict) config.tin.strict = true;
