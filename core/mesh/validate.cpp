@@ -71,6 +71,19 @@ void inParts(std::size_t n, unsigned threads, std::size_t maxProblems, Problems&
   }
 }
 
+/// Runs check(h, problems) for every half-edge h, in parts (see inParts).
+template <class Check>
+void checkHalfedges(const Mesh& m, unsigned threads, std::size_t maxProblems, Problems& problems,
+                    Check&& check) {
+  struct NoResult {};
+  inParts<NoResult>(
+      m.halfedgeCount(), threads, maxProblems, problems,
+      [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
+        for (std::size_t i = b; i < e; ++i) check(HalfedgeId(static_cast<std::uint32_t>(i)), found);
+      },
+      [](NoResult&) {});
+}
+
 std::string edgeName(const Mesh& m, HalfedgeId h) {
   return std::to_string(m.origin(h).value) + "-" + std::to_string(m.target(h).value);
 }
@@ -298,18 +311,12 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
                                         c.boundaryHalfedges.begin(), c.boundaryHalfedges.end());
       });
   if (2 * counts.pairs != counts.interiorHalf) {
-    inParts<NoResult>(
-        nh, threads, maxProblems, problems,
-        [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
-          for (std::size_t i = b; i < e; ++i) {
-            const HalfedgeId h(static_cast<std::uint32_t>(i));
-            const HalfedgeId t = m.twin(h);
-            if (t.valid() && (t.value >= nh || t == h || m.twin(t) != h))
-              found.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
-                        ") and its twin are not symmetric");
-          }
-        },
-        [](NoResult&) {});
+    checkHalfedges(m, threads, maxProblems, problems, [&](HalfedgeId h, Problems& found) {
+      const HalfedgeId t = m.twin(h);
+      if (t.valid() && (t.value >= nh || t == h || m.twin(t) != h))
+        found.add("half-edge " + std::to_string(h.value) + " (" + edgeName(m, h) +
+                  ") and its twin are not symmetric");
+    });
   }
   r.boundaryEdges = counts.boundary;
   r.edges = counts.boundary + counts.interiorHalf / 2;
@@ -361,21 +368,14 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   }
 
   if (options.checkDelaunay) {
-    inParts<NoResult>(
-        nh, threads, maxProblems, problems,
-        [&](std::size_t b, std::size_t e, Problems& found, NoResult&) {
-          for (std::size_t i = b; i < e; ++i) {
-            const HalfedgeId h(static_cast<std::uint32_t>(i));
-            const HalfedgeId t = m.twin(h);
-            if (!t.valid() || t.value < i || m.isConstrained(h) || m.twin(t) != h) continue;
-            const Point2 a = m.xy(m.origin(h)), b2 = m.xy(m.target(h));
-            const Point2 c = m.xy(m.origin(Mesh::prev(h))), d = m.xy(m.origin(Mesh::prev(t)));
-            if (geometry::incircle(a, b2, c, d) > 0) {
-              found.add("edge " + edgeName(m, h) + " is not locally Delaunay");
-            }
-          }
-        },
-        [](NoResult&) {});
+    checkHalfedges(m, threads, maxProblems, problems, [&](HalfedgeId h, Problems& found) {
+      const HalfedgeId t = m.twin(h);
+      if (!t.valid() || t < h || m.isConstrained(h) || m.twin(t) != h) return;
+      const Point2 a = m.xy(m.origin(h)), b = m.xy(m.target(h));
+      const Point2 c = m.xy(m.origin(Mesh::prev(h))), d = m.xy(m.origin(Mesh::prev(t)));
+      if (geometry::incircle(a, b, c, d) > 0)
+        found.add("edge " + edgeName(m, h) + " is not locally Delaunay");
+    });
   }
   std::move(problems).writeTo(r);
   return r;
