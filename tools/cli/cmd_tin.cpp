@@ -227,7 +227,7 @@ void addTinCommand(CLI::App& app) {
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
-  addThreadsOption(*cmd, opt->threads, "Threads for the triangulation and its check", "the TIN is the same for any count");
+  addThreadsOption(*cmd, opt->threads, "Threads for reading XYZ/CSV points, the triangulation and its check", "the TIN is the same for any count");
   addQuietFlag(*cmd, opt->quiet, "No summary and no progress on stderr");
   cmd->callback([opt] { run(*opt); });
 }
