@@ -14,6 +14,7 @@
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
 #include "ingest/readers/raster_reader.hpp"
+#include "ingest/readers/synthetic_reader.hpp"
 #include "ingest/readers/text_points.hpp"
 
 namespace tinsmith::ingest {
@@ -417,6 +418,7 @@ IngestedLayer readRasterLayer(const LayerConfig& config) {
 }
 
 IngestedLayer readLayer(const LayerConfig& config, const Progress* progress) {
+  if (isSyntheticSpec(config.path.string())) return readSyntheticLayer(config);
   if (config.kind == LayerKind::Dem) return readRasterLayer(config);
   if (isTextPointFile(config.path)) return readTextLayer(config);
   return readOgrLayer(config, progress);
