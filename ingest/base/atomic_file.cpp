@@ -12,28 +12,24 @@
 
 namespace tinsmith::ingest {
 
-namespace {
-SourceLocation at(const std::filesystem::path& path) { return {path.string(), {}, {}, {}}; }
-}  // namespace
-
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
   const std::filesystem::path dir =
       target_.has_parent_path() ? target_.parent_path() : std::filesystem::path(".");
   if (target_.filename().empty())
-    throw ioError("the output path names a directory, not a file", at(target_),
+    throw ioError("the output path names a directory, not a file", fileLocation(target_),
                   "give a file name such as out/site.tin");
   std::error_code ec;
   if (!std::filesystem::is_directory(dir, ec))
-    throw ioError("the output directory '" + dir.string() + "' does not exist", at(target_),
-                  "create it first or choose another output path");
+    throw ioError("the output directory '" + dir.string() + "' does not exist",
+                  fileLocation(target_), "create it first or choose another output path");
   std::string pattern = (dir / ("." + target_.filename().string() + ".XXXXXX.part")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
   const int fd = ::mkstemps(name.data(), 5);
   if (fd < 0)
-    throw ioError(std::string("cannot create a file in '") + dir.string() +
-                      "': " + std::strerror(errno),
-                  at(target_), "check that the directory is writable");
+    throw ioError(
+        std::string("cannot create a file in '") + dir.string() + "': " + std::strerror(errno),
+        fileLocation(target_), "check that the directory is writable");
   temp_ = name.data();
   // mkstemp creates 0600; give the file the usual permissions (umask applies).
   const mode_t mask = ::umask(0);
@@ -43,7 +39,8 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
   if (!file_) {
     ::close(fd);
     std::filesystem::remove(temp_, ec);
-    throw ioError(std::string("cannot open the output: ") + std::strerror(errno), at(target_));
+    throw ioError(std::string("cannot open the output: ") + std::strerror(errno),
+                  fileLocation(target_));
   }
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 16);
 }
@@ -62,7 +59,8 @@ void AtomicFile::fail(const std::string& what) {
   file_ = nullptr;
   std::error_code ec;
   std::filesystem::remove(temp_, ec);
-  throw ioError(what + ": " + reason, at(target_), "check free disk space and permissions");
+  throw ioError(what + ": " + reason, fileLocation(target_),
+                "check free disk space and permissions");
 }
 
 void AtomicFile::write(const void* data, std::size_t size) {
@@ -89,7 +87,8 @@ void AtomicFile::commit() {
   std::filesystem::rename(temp_, target_, ec);
   if (ec) {
     std::filesystem::remove(temp_, ec);
-    throw ioError("cannot move the finished file into place: " + ec.message(), at(target_),
+    throw ioError("cannot move the finished file into place: " + ec.message(),
+                  fileLocation(target_),
                   "check that the target is not a directory and is writable");
   }
   committed_ = true;

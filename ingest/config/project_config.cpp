@@ -455,17 +455,13 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
 ProjectConfig loadProjectConfig(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) {
-    SourceLocation where;
-    where.file = file.string();
-    throw inputError("config file not found", where, "check the path");
+    throw inputError("config file not found", fileLocation(file), "check the path");
   }
   std::ifstream in(file, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();
   if (!in && !in.eof()) {
-    SourceLocation where;
-    where.file = file.string();
-    throw inputError("cannot read the config file", where, "check its permissions");
+    throw inputError("cannot read the config file", fileLocation(file), "check its permissions");
   }
   return parseProjectConfig(text.str(), file);
 }

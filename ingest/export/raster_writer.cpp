@@ -22,12 +22,6 @@
 namespace tinsmith::ingest {
 namespace {
 
-SourceLocation at(const std::filesystem::path& path) {
-  SourceLocation where;
-  where.file = path.string();
-  return where;
-}
-
 void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
   if (grid.width <= 0 || grid.height <= 0 ||
       grid.z.size() !=
@@ -35,7 +29,7 @@ void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
     throw ioError("height grid is malformed: " + std::to_string(grid.width) + " x " +
                       std::to_string(grid.height) + " with " + std::to_string(grid.z.size()) +
                       " values",
-                  at(path));
+                  fileLocation(path));
   }
 }
 
@@ -51,7 +45,7 @@ void commit(const std::filesystem::path& tmp, const std::filesystem::path& path)
   std::filesystem::rename(tmp, path, ec);
   if (ec) {
     std::filesystem::remove(tmp, ec);
-    throw ioError("cannot move the finished file into place: " + ec.message(), at(path));
+    throw ioError("cannot move the finished file into place: " + ec.message(), fileLocation(path));
   }
 }
 
@@ -72,13 +66,13 @@ void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
       driver->Create(tmp.string().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
   CSLDestroy(options);
   if (!ds)
-    throw ioError("cannot create the GeoTIFF" + lastGdalError(), at(path),
+    throw ioError("cannot create the GeoTIFF" + lastGdalError(), fileLocation(path),
                   "check the folder exists and is writable");
   auto fail = [&](const std::string& what) {
     ds.reset();
     std::error_code ec;
     std::filesystem::remove(tmp, ec);
-    throw ioError(what + lastGdalError(), at(path));
+    throw ioError(what + lastGdalError(), fileLocation(path));
   };
   auto gt = grid.geotransform;
   if (ds->SetGeoTransform(gt.data()) != CE_None) fail("cannot write the geotransform");
@@ -102,7 +96,7 @@ void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
   if (CPLGetLastErrorType() >= CE_Failure) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);
-    throw ioError("cannot finish the GeoTIFF" + lastGdalError(), at(path));
+    throw ioError("cannot finish the GeoTIFF" + lastGdalError(), fileLocation(path));
   }
   commit(tmp, path);
 }
@@ -129,7 +123,7 @@ void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);
     throw ioError(std::string("cannot write the EXR heightmap (OpenEXR: ") + e.what() + ")",
-                  at(path), "check the folder exists and is writable");
+                  fileLocation(path), "check the folder exists and is writable");
   }
   commit(tmp, path);
 }

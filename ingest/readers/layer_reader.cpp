@@ -304,9 +304,7 @@ IngestedLayer emptyLayer(const LayerConfig& config) {
 void checkExists(const LayerConfig& config) {
   std::error_code ec;
   if (!std::filesystem::exists(config.path, ec)) {
-    SourceLocation where;
-    where.file = config.path.string();
-    throw inputError("file not found", where,
+    throw inputError("file not found", fileLocation(config.path),
                      "check the layer's path (relative to the config file)");
   }
 }
@@ -335,9 +333,8 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
       if (raster) hint = "this is a raster: use kind = \"dem\"";
     }
     CPLErrorReset();
-    SourceLocation where;
-    where.file = config.path.string();
-    throw inputError("cannot open as a vector dataset" + lastGdalError(), where, hint);
+    throw inputError("cannot open as a vector dataset" + lastGdalError(), fileLocation(config.path),
+                     hint);
   }
   OGRLayer* layer = nullptr;
   auto layerNames = [&] {
@@ -349,9 +346,7 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
   if (!config.layer.empty()) {
     layer = ds->GetLayerByName(config.layer.c_str());
     if (!layer) {
-      SourceLocation where;
-      where.file = config.path.filename().string();
-      throw inputError("has no layer '" + config.layer + "'", where,
+      throw inputError("has no layer '" + config.layer + "'", fileLocation(config.path.filename()),
                        "layers in the file: " + layerNames());
     }
   } else if (ds->GetLayerCount() == 0) {

@@ -132,7 +132,7 @@ class Spec {
   }
 
   [[noreturn]] void fail(const std::string& problem, const std::string& hint = {}) const {
-    throw inputError(problem, SourceLocation{std::string(text_), {}, {}, {}}, hint);
+    throw inputError(problem, fileLocation(std::string(text_)), hint);
   }
 
  private:

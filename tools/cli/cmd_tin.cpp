@@ -96,7 +96,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o) {
       config.kind = ingest::LayerKind::Points;
       const auto read = ingest::readOgrLayer(config);
       if (!read.hasZ)
-        throw inputError("the points have no z", {file, {}, {}, {}},
+        throw inputError("the points have no z", fileLocation(file),
                          "give 3D points, or use a config with a 'z' attribute");
       layer.points = read.points;
     }
