@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace tinsmith {
 
@@ -37,6 +38,12 @@ struct SourceLocation {
   /// "file, layer 'L', feature F, line N" — only the fields that are set.
   [[nodiscard]] std::string str() const;
 };
+
+/// The location of a whole file (or any named input): `file` set, nothing
+/// else. A std::filesystem::path converts to its native string.
+inline SourceLocation fileLocation(std::string file) {
+  return SourceLocation{std::move(file)};
+}
 
 class Error : public std::runtime_error {
  public:

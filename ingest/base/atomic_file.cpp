@@ -12,57 +12,97 @@
 
 namespace tinsmith::ingest {
 
-namespace {
-SourceLocation at(const std::filesystem::path& path) { return {path.string(), {}, {}, {}}; }
-}  // namespace
-
-AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
+AtomicPath::AtomicPath(std::filesystem::path target) : target_(std::move(target)) {
   const std::filesystem::path dir =
       target_.has_parent_path() ? target_.parent_path() : std::filesystem::path(".");
   if (target_.filename().empty())
-    throw ioError("the output path names a directory, not a file", at(target_),
+    throw ioError("the output path names a directory, not a file", fileLocation(target_),
                   "give a file name such as out/site.tin");
   std::error_code ec;
   if (!std::filesystem::is_directory(dir, ec))
-    throw ioError("the output directory '" + dir.string() + "' does not exist", at(target_),
-                  "create it first or choose another output path");
+    throw ioError("the output directory '" + dir.string() + "' does not exist",
+                  fileLocation(target_), "create it first or choose another output path");
   std::string pattern = (dir / ("." + target_.filename().string() + ".XXXXXX.part")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
-  const int fd = ::mkstemps(name.data(), 5);
-  if (fd < 0)
-    throw ioError(std::string("cannot create a file in '") + dir.string() +
-                      "': " + std::strerror(errno),
-                  at(target_), "check that the directory is writable");
+  fd_ = ::mkstemps(name.data(), 5);
+  if (fd_ < 0)
+    throw ioError(
+        std::string("cannot create a file in '") + dir.string() + "': " + std::strerror(errno),
+        fileLocation(target_), "check that the directory is writable");
   temp_ = name.data();
   // mkstemp creates 0600; give the file the usual permissions (umask applies).
   const mode_t mask = ::umask(0);
   ::umask(mask);
-  ::fchmod(fd, 0666 & ~mask);
+  ::fchmod(fd_, 0666 & ~mask);
+}
+
+AtomicPath::~AtomicPath() {
+  if (!committed_) discard();
+}
+
+int AtomicPath::takeDescriptor() {
+  const int fd = fd_;
+  fd_ = -1;
+  return fd;
+}
+
+void AtomicPath::discard() noexcept {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  if (!temp_.empty()) {
+    std::error_code ec;
+    std::filesystem::remove(temp_, ec);
+  }
+}
+
+void AtomicPath::commit() {
+  if (committed_) throw internalError("AtomicPath::commit twice");
+  if (fd_ >= 0) ::close(fd_);
+  // fsync applies to the file, not the descriptor: a fresh one flushes what
+  // the writer (GDAL, OpenEXR, a FILE*) wrote through its own.
+  fd_ = ::open(temp_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0 || ::fsync(fd_) != 0) {
+    const std::string reason = std::strerror(errno);
+    discard();
+    throw ioError("syncing to disk failed: " + reason, fileLocation(target_),
+                  "check free disk space and permissions");
+  }
+  ::close(fd_);
+  fd_ = -1;
+  std::error_code ec;
+  std::filesystem::rename(temp_, target_, ec);
+  if (ec) {
+    discard();
+    throw ioError("cannot move the finished file into place: " + ec.message(),
+                  fileLocation(target_),
+                  "check that the target is not a directory and is writable");
+  }
+  committed_ = true;
+}
+
+AtomicFile::AtomicFile(std::filesystem::path target) : path_(std::move(target)) {
+  const int fd = path_.takeDescriptor();
   file_ = ::fdopen(fd, "wb");
   if (!file_) {
+    const std::string reason = std::strerror(errno);
     ::close(fd);
-    std::filesystem::remove(temp_, ec);
-    throw ioError(std::string("cannot open the output: ") + std::strerror(errno), at(target_));
+    throw ioError("cannot open the output: " + reason, fileLocation(path_.target()));
   }
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 16);
 }
 
 AtomicFile::~AtomicFile() {
   if (file_) std::fclose(file_);
-  if (!committed_ && !temp_.empty()) {
-    std::error_code ec;
-    std::filesystem::remove(temp_, ec);
-  }
 }
 
 void AtomicFile::fail(const std::string& what) {
   const std::string reason = std::strerror(errno);
   if (file_) std::fclose(file_);
   file_ = nullptr;
-  std::error_code ec;
-  std::filesystem::remove(temp_, ec);
-  throw ioError(what + ": " + reason, at(target_), "check free disk space and permissions");
+  path_.discard();
+  throw ioError(what + ": " + reason, fileLocation(path_.target()),
+                "check free disk space and permissions");
 }
 
 void AtomicFile::write(const void* data, std::size_t size) {
@@ -81,18 +121,10 @@ void AtomicFile::writeAt(std::size_t offset, const void* data, std::size_t size)
 void AtomicFile::commit() {
   if (!file_) throw internalError("AtomicFile::commit twice");
   if (std::fflush(file_) != 0) fail("writing failed");
-  if (::fsync(::fileno(file_)) != 0) fail("syncing to disk failed");
   const int rc = std::fclose(file_);
   file_ = nullptr;
   if (rc != 0) fail("closing failed");
-  std::error_code ec;
-  std::filesystem::rename(temp_, target_, ec);
-  if (ec) {
-    std::filesystem::remove(temp_, ec);
-    throw ioError("cannot move the finished file into place: " + ec.message(), at(target_),
-                  "check that the target is not a directory and is writable");
-  }
-  committed_ = true;
+  path_.commit();
 }
 
 }  // namespace tinsmith::ingest

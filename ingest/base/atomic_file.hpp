@@ -1,8 +1,13 @@
-// An output file that appears all at once or not at all: bytes go to a temp
-// file in the target's directory (".NAME.XXXXXX.part"); commit() flushes,
-// fsyncs and renames it over the target. If commit() is never reached (an
-// exception, a failed write), the destructor removes the temp file, so a failed
-// run leaves neither a partial file nor a stale temp behind.
+// Output files that appear all at once or not at all. Bytes go to a temp
+// file in the target's directory (".NAME.XXXXXX.part", a name made unique by
+// mkstemps, so two writers of one target never share it); commit() fsyncs it
+// and renames it over the target. If commit() is never reached (an
+// exception, a failed write), the destructor removes the temp file, so a
+// failed run leaves neither a partial file nor a stale temp behind.
+//
+//   AtomicFile  writes the bytes itself (.tin, OBJ, PLY, JSON reports);
+//   AtomicPath  hands out the temp path to a library that writes by name
+//               (GDAL, OpenEXR), then commits it the same way.
 #pragma once
 
 #include <cstddef>
@@ -12,6 +17,37 @@
 #include <string_view>
 
 namespace tinsmith::ingest {
+
+class AtomicPath {
+ public:
+  /// Creates the (empty) temp file next to `target`. Throws ioError naming
+  /// `target` when it names a directory, or its directory does not exist or
+  /// is not writable.
+  explicit AtomicPath(std::filesystem::path target);
+  AtomicPath(const AtomicPath&) = delete;
+  AtomicPath& operator=(const AtomicPath&) = delete;
+  ~AtomicPath();
+
+  /// Where to write: replace the file's contents, never rename or remove it.
+  [[nodiscard]] const std::filesystem::path& temp() const { return temp_; }
+  [[nodiscard]] const std::filesystem::path& target() const { return target_; }
+  /// Fsyncs the temp file and renames it onto the target; the writer must
+  /// have closed it. Throws ioError (and removes the temp file) on failure.
+  void commit();
+  /// Removes the temp file now (what the destructor does if not committed).
+  void discard() noexcept;
+
+ private:
+  friend class AtomicFile;
+  /// The temp file's descriptor, open for writing (AtomicFile takes it);
+  /// -1 once taken or closed.
+  int takeDescriptor();
+
+  std::filesystem::path target_;
+  std::filesystem::path temp_;
+  int fd_ = -1;
+  bool committed_ = false;
+};
 
 class AtomicFile {
  public:
@@ -30,14 +66,12 @@ class AtomicFile {
   /// Flushes, fsyncs, closes and renames onto the target. Throws ioError.
   void commit();
 
-  [[nodiscard]] const std::filesystem::path& target() const { return target_; }
+  [[nodiscard]] const std::filesystem::path& target() const { return path_.target(); }
 
  private:
-  void fail(const std::string& what);
-  std::filesystem::path target_;
-  std::filesystem::path temp_;
+  [[noreturn]] void fail(const std::string& what);
+  AtomicPath path_;
   std::FILE* file_ = nullptr;
-  bool committed_ = false;
 };
 
 }  // namespace tinsmith::ingest

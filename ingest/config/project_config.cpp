@@ -11,6 +11,7 @@
 #include "core/base/error.hpp"
 #include "ingest/config/toml_nodes.hpp"
 #include "ingest/base/gdal_runtime.hpp"
+#include "ingest/readers/synthetic_reader.hpp"
 
 namespace tinsmith::ingest {
 
@@ -203,9 +204,12 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
   const auto path = getString(ctx, t, "path", tn);
   if (!path || path->empty())
     ctx.fail(tn + " has no 'path'", layer.configLine, "give the data file's path");
+  const bool synthetic = isSyntheticSpec(*path);
   layer.path = std::filesystem::path(*path);
-  if (layer.path.is_relative()) layer.path = baseDir / layer.path;
-  layer.path = layer.path.lexically_normal();
+  if (!synthetic) {
+    if (layer.path.is_relative()) layer.path = baseDir / layer.path;
+    layer.path = layer.path.lexically_normal();
+  }
 
   const auto kind = getString(ctx, t, "kind", tn);
   if (!kind)
@@ -268,14 +272,31 @@ LayerConfig parseLayer(const Context& ctx, const toml::table& t, std::size_t ind
              keyLine(t, t.contains("band") ? "band" : "nodata"));
   }
 
+  if (synthetic) {
+    if (!layer.zAttribute.empty())
+      ctx.fail(tn + ".z: a synthetic layer has no attributes", keyLine(t, "z"),
+               "leave 'z' out (z comes from the spec's surface), or use z_value");
+    if (t.contains("x") || t.contains("y") || t.contains("delimiter") || t.contains("header") ||
+        rasterKey || t.contains("layer"))
+      ctx.fail(
+          tn + ": a synthetic layer takes none of layer, x, y, delimiter, header, band, nodata",
+          layer.configLine, "they describe files; the spec says everything else");
+    try {
+      checkSyntheticSpec(*path, layer.kind);
+    } catch (const Error& e) {
+      ctx.fail(tn + ".path: " + e.where().file + ": " + e.problem(), keyLine(t, "path"), e.hint());
+    }
+  }
   std::error_code ec;
-  if (!std::filesystem::exists(layer.path, ec)) {
+  if (!synthetic && !std::filesystem::exists(layer.path, ec)) {
     ctx.fail(tn + ".path: file not found: " + layer.path.string(), keyLine(t, "path"),
              "paths are relative to the config file's folder");
   }
 
   if (const auto name = getString(ctx, t, "name", tn)) {
     layer.name = *name;
+  } else if (synthetic) {
+    layer.name = *path;
   } else {
     layer.name = layer.path.filename().string();
     if (!layer.layer.empty()) layer.name += ":" + layer.layer;
@@ -434,17 +455,13 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
 ProjectConfig loadProjectConfig(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) {
-    SourceLocation where;
-    where.file = file.string();
-    throw inputError("config file not found", where, "check the path");
+    throw inputError("config file not found", fileLocation(file), "check the path");
   }
   std::ifstream in(file, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();
   if (!in && !in.eof()) {
-    SourceLocation where;
-    where.file = file.string();
-    throw inputError("cannot read the config file", where, "check its permissions");
+    throw inputError("cannot read the config file", fileLocation(file), "check its permissions");
   }
   return parseProjectConfig(text.str(), file);
 }

@@ -10,6 +10,9 @@
 //              ProjectConfig::extraTables); `tinsmith serve --config` reads
 //              [server] itself (server/app/server_config.hpp)
 //
+// A layer's path may be a "synthetic:…" spec (readers.synthetic,
+// ingest/readers/synthetic_reader.hpp) instead of a file; it is checked here.
+//
 // Every problem is a tinsmith::Error (kind Input) whose location names the
 // config file and the line, and whose message names the key: unknown keys,
 // wrong types, out-of-range values, missing files, a geographic project CRS.
@@ -43,7 +46,8 @@ GeometryClass geometryClass(LayerKind kind);
 
 struct LayerConfig {
   std::string name;            ///< `name`, else the file name (plus ":layer")
-  std::filesystem::path path;  ///< absolute: resolved against the config's folder
+  std::filesystem::path path;  ///< absolute: resolved against the config's folder;
+                               ///< or a "synthetic:…" spec as written (readers.synthetic)
   std::string layer;           ///< layer inside a multi-layer dataset; empty: the first
   LayerKind kind = LayerKind::Points;
   std::string zAttribute;        ///< `z`: attribute (or CSV column) holding z; empty: 3D geometry

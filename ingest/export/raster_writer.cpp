@@ -14,19 +14,13 @@
 #include <limits>
 #include <memory>
 #include <string>
-#include <system_error>
 
 #include "core/base/error.hpp"
+#include "ingest/base/atomic_file.hpp"
 #include "ingest/base/gdal_runtime.hpp"
 
 namespace tinsmith::ingest {
 namespace {
-
-SourceLocation at(const std::filesystem::path& path) {
-  SourceLocation where;
-  where.file = path.string();
-  return where;
-}
 
 void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
   if (grid.width <= 0 || grid.height <= 0 ||
@@ -35,23 +29,7 @@ void checkGrid(const HeightGrid& grid, const std::filesystem::path& path) {
     throw ioError("height grid is malformed: " + std::to_string(grid.width) + " x " +
                       std::to_string(grid.height) + " with " + std::to_string(grid.z.size()) +
                       " values",
-                  at(path));
-  }
-}
-
-// A temporary sibling path; renamed over `path` once complete.
-std::filesystem::path partPath(const std::filesystem::path& path) {
-  auto tmp = path;
-  tmp += ".part";
-  return tmp;
-}
-
-void commit(const std::filesystem::path& tmp, const std::filesystem::path& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw ioError("cannot move the finished file into place: " + ec.message(), at(path));
+                  fileLocation(path));
   }
 }
 
@@ -62,23 +40,22 @@ void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
   ensureGdalReady();
   auto* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   if (!driver) throw internalError("GDAL has no GTiff driver");
-  const auto tmp = partPath(path);
+  AtomicPath out(path);
   char** options = nullptr;
   options = CSLSetNameValue(options, "COMPRESS", "DEFLATE");
   options = CSLSetNameValue(options, "PREDICTOR", "3");
   if (grid.width >= 512 && grid.height >= 512) options = CSLSetNameValue(options, "TILED", "YES");
   CPLErrorReset();
   std::unique_ptr<GDALDataset> ds(
-      driver->Create(tmp.string().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
+      driver->Create(out.temp().c_str(), grid.width, grid.height, 1, GDT_Float32, options));
   CSLDestroy(options);
   if (!ds)
-    throw ioError("cannot create the GeoTIFF" + lastGdalError(), at(path),
+    throw ioError("cannot create the GeoTIFF" + lastGdalError(), fileLocation(path),
                   "check the folder exists and is writable");
   auto fail = [&](const std::string& what) {
-    ds.reset();
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw ioError(what + lastGdalError(), at(path));
+    const std::string gdalError = lastGdalError();
+    ds.reset();  // closes the temp file; `out` removes it
+    throw ioError(what + gdalError, fileLocation(path));
   };
   auto gt = grid.geotransform;
   if (ds->SetGeoTransform(gt.data()) != CE_None) fail("cannot write the geotransform");
@@ -99,17 +76,14 @@ void writeGeoTiff(const HeightGrid& grid, const std::filesystem::path& path) {
   if (CPLGetLastErrorType() >= CE_Failure) fail("cannot finish the GeoTIFF");
   CPLErrorReset();
   ds.reset();  // closes the file
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw ioError("cannot finish the GeoTIFF" + lastGdalError(), at(path));
-  }
-  commit(tmp, path);
+  if (CPLGetLastErrorType() >= CE_Failure)
+    throw ioError("cannot finish the GeoTIFF" + lastGdalError(), fileLocation(path));
+  out.commit();
 }
 
 void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
   checkGrid(grid, path);
-  const auto tmp = partPath(path);
+  AtomicPath out(path);
   try {
     Imf::Header header(grid.width, grid.height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -118,7 +92,7 @@ void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
     header.insert("geoTransform",
                   Imf::M33dAttribute(Imath::M33d(g[1], g[2], g[0], g[4], g[5], g[3], 0, 0, 1)));
     if (!grid.crs.empty()) header.insert("crs", Imf::StringAttribute(grid.crs));
-    Imf::OutputFile file(tmp.string().c_str(), header);
+    Imf::OutputFile file(out.temp().c_str(), header);
     Imf::FrameBuffer frame;
     frame.insert("Z",
                  Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(grid.z.data())),
@@ -126,12 +100,10 @@ void writeExr(const HeightGrid& grid, const std::filesystem::path& path) {
     file.setFrameBuffer(frame);
     file.writePixels(grid.height);
   } catch (const std::exception& e) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
     throw ioError(std::string("cannot write the EXR heightmap (OpenEXR: ") + e.what() + ")",
-                  at(path), "check the folder exists and is writable");
+                  fileLocation(path), "check the folder exists and is writable");
   }
-  commit(tmp, path);
+  out.commit();
 }
 
 }  // namespace tinsmith::ingest

@@ -1,6 +1,7 @@
 // writers.raster: height grids as GeoTIFF or OpenEXR heightmaps (the EXR
-// convention: ingest/base/height_grid.hpp), written under a temporary name and
-// renamed, so a failed write leaves no file.
+// convention: ingest/base/height_grid.hpp), written to a unique temp file
+// beside the target and renamed over it (AtomicPath), so a failed write leaves
+// no file and two writers of one target do not collide.
 #pragma once
 
 #include <filesystem>

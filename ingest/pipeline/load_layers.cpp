@@ -4,6 +4,7 @@
 
 #include "ingest/filters/reproject.hpp"
 #include "ingest/readers/layer_reader.hpp"
+#include "ingest/readers/synthetic_reader.hpp"
 
 namespace tinsmith::ingest {
 namespace {
@@ -17,7 +18,15 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 std::vector<IngestedLayer> readLayers(const ProjectConfig& config, const Progress* progress) {
   std::vector<IngestedLayer> layers;
   layers.reserve(config.layers.size());
-  for (const auto& layerConfig : config.layers) layers.push_back(readLayer(layerConfig, progress));
+  for (const auto& layerConfig : config.layers) {
+    layers.push_back(readLayer(layerConfig, progress));
+    // Generated data has no CRS of its own: without a `crs` key it is made
+    // in the project CRS.
+    auto& layer = layers.back();
+    if (layer.sourceCrs.empty() && isSyntheticSpec(layerConfig.path.string())) {
+      layer.sourceCrs = layer.crs = config.crs;
+    }
+  }
   return layers;
 }
 

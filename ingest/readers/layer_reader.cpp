@@ -14,6 +14,7 @@
 #include "core/base/error.hpp"
 #include "ingest/base/gdal_runtime.hpp"
 #include "ingest/readers/raster_reader.hpp"
+#include "ingest/readers/synthetic_reader.hpp"
 #include "ingest/readers/text_points.hpp"
 
 namespace tinsmith::ingest {
@@ -303,9 +304,7 @@ IngestedLayer emptyLayer(const LayerConfig& config) {
 void checkExists(const LayerConfig& config) {
   std::error_code ec;
   if (!std::filesystem::exists(config.path, ec)) {
-    SourceLocation where;
-    where.file = config.path.string();
-    throw inputError("file not found", where,
+    throw inputError("file not found", fileLocation(config.path),
                      "check the layer's path (relative to the config file)");
   }
 }
@@ -334,9 +333,8 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
       if (raster) hint = "this is a raster: use kind = \"dem\"";
     }
     CPLErrorReset();
-    SourceLocation where;
-    where.file = config.path.string();
-    throw inputError("cannot open as a vector dataset" + lastGdalError(), where, hint);
+    throw inputError("cannot open as a vector dataset" + lastGdalError(), fileLocation(config.path),
+                     hint);
   }
   OGRLayer* layer = nullptr;
   auto layerNames = [&] {
@@ -348,9 +346,7 @@ IngestedLayer readOgrLayer(const LayerConfig& config, const Progress* progress) 
   if (!config.layer.empty()) {
     layer = ds->GetLayerByName(config.layer.c_str());
     if (!layer) {
-      SourceLocation where;
-      where.file = config.path.filename().string();
-      throw inputError("has no layer '" + config.layer + "'", where,
+      throw inputError("has no layer '" + config.layer + "'", fileLocation(config.path.filename()),
                        "layers in the file: " + layerNames());
     }
   } else if (ds->GetLayerCount() == 0) {
@@ -417,6 +413,7 @@ IngestedLayer readRasterLayer(const LayerConfig& config) {
 }
 
 IngestedLayer readLayer(const LayerConfig& config, const Progress* progress) {
+  if (isSyntheticSpec(config.path.string())) return readSyntheticLayer(config);
   if (config.kind == LayerKind::Dem) return readRasterLayer(config);
   if (isTextPointFile(config.path)) return readTextLayer(config);
   return readOgrLayer(config, progress);

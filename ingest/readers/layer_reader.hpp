@@ -4,6 +4,8 @@
 //   readers.text   .csv .txt .xyz .tsv .pts  → points (kind = points only)
 //   readers.raster kind = dem: any GDAL raster or .exr → points at cell centres
 //   readers.ogr    anything else OGR opens (GeoJSON, Shapefile, GeoPackage, …)
+//   readers.synthetic  a path "synthetic:PATTERN?…" → generated points, lines
+//                  or rings, no file (synthetic_reader.hpp)
 //
 // z, in order: `z_value` (every vertex), `z` (an attribute / CSV column, must be
 // numeric and finite on every feature), else the geometry's own z when it is

@@ -23,12 +23,6 @@
 namespace tinsmith::ingest {
 namespace {
 
-SourceLocation at(const std::filesystem::path& path) {
-  SourceLocation where;
-  where.file = path.string();
-  return where;
-}
-
 bool isExr(const std::filesystem::path& path) {
   auto ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -41,7 +35,7 @@ bool isExr(const std::filesystem::path& path) {
 HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOptions& options) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
-    throw inputError("raster file not found", at(path), "check the path");
+    throw inputError("raster file not found", fileLocation(path), "check the path");
   if (isExr(path)) {
     auto grid = readExr(path);
     if (options.nodata) {
@@ -57,19 +51,19 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
   std::unique_ptr<GDALDataset> ds(GDALDataset::Open(
       path.string().c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds) {
-    throw inputError("cannot open as a raster" + lastGdalError(), at(path),
+    throw inputError("cannot open as a raster" + lastGdalError(), fileLocation(path),
                      "give a GeoTIFF (or another GDAL raster) or an OpenEXR heightmap");
   }
   if (options.band < 1 || options.band > ds->GetRasterCount()) {
     throw inputError("has no band " + std::to_string(options.band) + " (it has " +
                          std::to_string(ds->GetRasterCount()) + ")",
-                     at(path), "set 'band' to an existing band");
+                     fileLocation(path), "set 'band' to an existing band");
   }
   HeightGrid grid;
   grid.width = ds->GetRasterXSize();
   grid.height = ds->GetRasterYSize();
   if (ds->GetGeoTransform(grid.geotransform.data()) != CE_None) {
-    throw inputError("raster has no georeferencing (no geotransform)", at(path),
+    throw inputError("raster has no georeferencing (no geotransform)", fileLocation(path),
                      "georeference it first, e.g. with gdal_translate -a_ullr … -a_srs …");
   }
   if (const auto* srs = ds->GetSpatialRef()) {
@@ -88,7 +82,7 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
   grid.z.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height));
   if (band->RasterIO(GF_Read, 0, 0, grid.width, grid.height, grid.z.data(), grid.width, grid.height,
                      GDT_Float32, 0, 0, nullptr) != CE_None) {
-    throw inputError("cannot read the raster's cells" + lastGdalError(), at(path),
+    throw inputError("cannot read the raster's cells" + lastGdalError(), fileLocation(path),
                      "the file may be damaged");
   }
   int hasNodata = 0;
@@ -113,7 +107,7 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
 HeightGrid readExr(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
-    throw inputError("EXR file not found", at(path), "check the path");
+    throw inputError("EXR file not found", fileLocation(path), "check the path");
   HeightGrid grid;
   try {
     Imf::InputFile file(path.string().c_str());
@@ -135,7 +129,7 @@ HeightGrid readExr(const std::filesystem::path& path) {
       }
       if (count != 1) {
         throw inputError("EXR has no 'Z' channel and " + std::to_string(count) + " others",
-                         at(path), "give a heightmap with one channel named Z");
+                         fileLocation(path), "give a heightmap with one channel named Z");
       }
     }
     if (const auto* gt = header.findTypedAttribute<Imf::M33dAttribute>("geoTransform")) {
@@ -155,7 +149,7 @@ HeightGrid readExr(const std::filesystem::path& path) {
     throw;
   } catch (const std::exception& e) {
     throw inputError(std::string("cannot read as an EXR heightmap (OpenEXR: ") + e.what() + ")",
-                     at(path), "the file may be damaged or not an OpenEXR file");
+                     fileLocation(path), "the file may be damaged or not an OpenEXR file");
   }
   for (auto& v : grid.z) {
     if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();

@@ -85,7 +85,7 @@ std::vector<TextPolyline> parseTextPolylines(std::string_view text, const std::s
   }
   finish(lineNo);
   if (out.empty())
-    throw inputError("no polyline in the file", {sourceName, {}, {}, {}},
+    throw inputError("no polyline in the file", fileLocation(sourceName),
                      "write one vertex per line as x y z, a blank line between polylines");
   return out;
 }
@@ -93,10 +93,10 @@ std::vector<TextPolyline> parseTextPolylines(std::string_view text, const std::s
 std::vector<TextPolyline> readTextPolylines(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
-    throw inputError("the break-line file does not exist", {path.string(), {}, {}, {}}, "check the path");
+    throw inputError("the break-line file does not exist", fileLocation(path), "check the path");
   std::ifstream in(path, std::ios::binary);
   if (!in || std::filesystem::is_directory(path, ec))
-    throw inputError("cannot read the break-line file", {path.string(), {}, {}, {}}, "check permissions");
+    throw inputError("cannot read the break-line file", fileLocation(path), "check permissions");
   std::ostringstream text;
   text << in.rdbuf();
   return parseTextPolylines(text.str(), path.string());

@@ -110,8 +110,8 @@ bool isWritable(Access access) {
 // store opened for reading (the archive is the input) and ioError otherwise.
 std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
   auto fail = [&](const std::string& problem, const std::string& hint) -> Error {
-    return isWritable(access) ? ioError(problem, at(path), hint)
-                              : inputError(problem, at(path), hint);
+    return isWritable(access) ? ioError(problem, fileLocation(path), hint)
+                              : inputError(problem, fileLocation(path), hint);
   };
   const int flags =
       isWritable(access) ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READONLY;
@@ -297,7 +297,8 @@ class ArchiveStore final : public TileStore {
       keys.emplace_back(text ? text : "", static_cast<std::size_t>(sqlite3_column_bytes(stmt, 0)));
     }
     if (rc != SQLITE_DONE)
-      throw ioError("cannot list the archive's keys: " + message(connection->db.get()), at(path_));
+      throw ioError("cannot list the archive's keys: " + message(connection->db.get()),
+                    fileLocation(path_));
     return keys;
   }
 
@@ -314,12 +315,13 @@ class ArchiveStore final : public TileStore {
     if (sqlite3_step(stmt) != SQLITE_DONE)
       throw ioError(
           "cannot write the key '" + std::string(key) + "': " + message(connection->db.get()),
-          at(path_), "check free disk space and permissions");
+          fileLocation(path_), "check free disk space and permissions");
   }
 
  private:
   Error readFailure(std::string_view key, sqlite3* db) const {
-    return ioError("cannot read the key '" + std::string(key) + "': " + message(db), at(path_));
+    return ioError("cannot read the key '" + std::string(key) + "': " + message(db),
+                   fileLocation(path_));
   }
 
   fs::path path_;
@@ -338,7 +340,7 @@ void removeSidecars(const fs::path& path) {
     if (ec)
       throw ioError(
           "cannot remove the stale '" + sidecar.filename().string() + "': " + ec.message(),
-          at(path), "check permissions");
+          fileLocation(path), "check permissions");
   }
 }
 
@@ -377,8 +379,8 @@ std::unique_ptr<TileStore> openArchive(const fs::path& path, Access access) {
   if (fs::is_directory(path, ec)) {
     const std::string problem = "is a folder, not a .3dtiles archive";
     if (isWritable(access))
-      throw ioError(problem, at(path), "remove it or choose another output path");
-    throw inputError(problem, at(path),
+      throw ioError(problem, fileLocation(path), "remove it or choose another output path");
+    throw inputError(problem, fileLocation(path),
                      "an archive is one file; a folder store's name must not end in .3dtiles");
   }
   if (sqlite3_threadsafe() == 0)
@@ -387,7 +389,7 @@ std::unique_ptr<TileStore> openArchive(const fs::path& path, Access access) {
   if (access == Access::Fresh) {
     fs::remove(path, ec);
     if (ec)
-      throw ioError("cannot remove the old archive: " + ec.message(), at(path),
+      throw ioError("cannot remove the old archive: " + ec.message(), fileLocation(path),
                     "check permissions");
     removeSidecars(path);
   }
@@ -399,14 +401,14 @@ void writeArchive(const TileStore& source, std::span<const std::string> keys,
   createFolderFor(target.parent_path(), target);
   std::error_code ec;
   if (fs::is_directory(target, ec))
-    throw ioError("the target is a folder, not a .3dtiles archive", at(target),
+    throw ioError("the target is a folder, not a .3dtiles archive", fileLocation(target),
                   "remove it or choose another output path");
   TempArchive temp(tempSibling(target));
   {
     int rc = SQLITE_OK;
     Db db = openDb(temp.path(), SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, rc);
     auto fail = [&](const std::string& what) {
-      return ioError(what + ": " + message(db.get()), at(target),
+      return ioError(what + ": " + message(db.get()), fileLocation(target),
                      "check free disk space and permissions");
     };
     if (rc != SQLITE_OK) throw fail("cannot create the archive");
@@ -426,8 +428,8 @@ void writeArchive(const TileStore& source, std::span<const std::string> keys,
       bindBlob(insert.get(), 2, bytes);
       rc = sqlite3_step(insert.get());
       if (rc == SQLITE_CONSTRAINT_PRIMARYKEY)
-        throw inputError("the key '" + key + "' is listed twice for the archive", at(target),
-                         "list each key once");
+        throw inputError("the key '" + key + "' is listed twice for the archive",
+                         fileLocation(target), "list each key once");
       if (rc != SQLITE_DONE) throw fail("cannot write the key '" + key + "'");
     }
     insert.reset();
@@ -440,8 +442,8 @@ void writeArchive(const TileStore& source, std::span<const std::string> keys,
   removeSidecars(target);
   fs::rename(temp.path(), target, ec);
   if (ec)
-    throw ioError("cannot move the finished archive into place: " + ec.message(), at(target),
-                  "check that the target folder is writable");
+    throw ioError("cannot move the finished archive into place: " + ec.message(),
+                  fileLocation(target), "check that the target folder is writable");
   temp.release();
   syncPath(target.parent_path().empty() ? fs::path(".") : target.parent_path(),
            O_RDONLY | O_DIRECTORY);

@@ -102,7 +102,7 @@ class DirectoryStore final : public TileStore {
       if (isValidKey(key)) keys.push_back(std::move(key));
     }
     if (ec)
-      throw ioError("cannot list the folder's files: " + ec.message(), at(root_),
+      throw ioError("cannot list the folder's files: " + ec.message(), fileLocation(root_),
                     "check permissions");
     std::sort(keys.begin(), keys.end());
     return keys;
@@ -115,7 +115,8 @@ class DirectoryStore final : public TileStore {
     const fs::path file = fileFor(key);
     if (isTempName(file.filename().string()))
       throw inputError("the tile key '" + std::string(key) + "' ends like a temporary file's name",
-                       at(root_), "rename the tile; names ending in .tmp-N-N are reserved");
+                       fileLocation(root_),
+                       "rename the tile; names ending in .tmp-N-N are reserved");
     createFolderFor(file.parent_path(), root_);
     const fs::path temp = tempSibling(file);
     Fd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));
@@ -156,12 +157,12 @@ class DirectoryStore final : public TileStore {
   }
 
   [[nodiscard]] Error readFailure(std::string_view key, const std::string& reason) const {
-    return ioError("cannot read the key '" + std::string(key) + "': " + reason, at(root_),
+    return ioError("cannot read the key '" + std::string(key) + "': " + reason, fileLocation(root_),
                    "check permissions");
   }
   [[nodiscard]] Error writeFailure(std::string_view key, const std::string& reason) const {
-    return ioError("cannot write the key '" + std::string(key) + "': " + reason, at(root_),
-                   "check free disk space and permissions");
+    return ioError("cannot write the key '" + std::string(key) + "': " + reason,
+                   fileLocation(root_), "check free disk space and permissions");
   }
 
   fs::path root_;
@@ -193,17 +194,17 @@ std::unique_ptr<TileStore> openDirectory(const fs::path& path, Access access) {
   const bool folder = fs::is_directory(path, ec);
   if (access == Access::Read) {
     if (!folder)
-      throw inputError("is a file, not a tile folder", at(path),
+      throw inputError("is a file, not a tile folder", fileLocation(path),
                        "an archive's name ends in .3dtiles; a folder store is a folder");
     return std::make_unique<DirectoryStore>(path, access);
   }
   if (!folder && fs::exists(fs::symlink_status(path, ec)))
-    throw ioError("the tile folder's path is taken by a file", at(path),
+    throw ioError("the tile folder's path is taken by a file", fileLocation(path),
                   "remove it or choose another output path (an archive's name ends in .3dtiles)");
   if (folder && access == Access::Fresh) {
     fs::remove_all(path, ec);
     if (ec)
-      throw ioError("cannot empty the old tile folder: " + ec.message(), at(path),
+      throw ioError("cannot empty the old tile folder: " + ec.message(), fileLocation(path),
                     "check permissions");
   }
   createFolderFor(path, path);
@@ -216,7 +217,7 @@ void writeDirectory(const TileStore& source, std::span<const std::string> keys,
   std::error_code ec;
   const bool exists = fs::exists(fs::symlink_status(target, ec));
   if (exists && !fs::is_directory(fs::symlink_status(target, ec)))
-    throw ioError("the target is a file, not a tile folder", at(target),
+    throw ioError("the target is a file, not a tile folder", fileLocation(target),
                   "remove it or choose another output path (an archive's name ends in .3dtiles)");
 
   TempFolder staged(tempSibling(target));
@@ -225,16 +226,16 @@ void writeDirectory(const TileStore& source, std::span<const std::string> keys,
     createFolderFor(staged.path(), target);
     for (const std::string& key : keys) {
       if (out.contains(key))
-        throw inputError("the key '" + key + "' is listed twice for the folder", at(target),
-                         "list each key once");
+        throw inputError("the key '" + key + "' is listed twice for the folder",
+                         fileLocation(target), "list each key once");
       out.put(key, bytesForCopy(source, key));
     }
   }
   if (!exists) {
     fs::rename(staged.path(), target, ec);
     if (ec)
-      throw ioError("cannot move the finished folder into place: " + ec.message(), at(target),
-                    "check that the target's folder is writable");
+      throw ioError("cannot move the finished folder into place: " + ec.message(),
+                    fileLocation(target), "check that the target's folder is writable");
     staged.release();
     return;
   }
@@ -244,7 +245,7 @@ void writeDirectory(const TileStore& source, std::span<const std::string> keys,
   fs::rename(target, old.path(), ec);
   if (ec) {
     old.release();
-    throw ioError("cannot move the old folder aside: " + ec.message(), at(target),
+    throw ioError("cannot move the old folder aside: " + ec.message(), fileLocation(target),
                   "check that the target's folder is writable");
   }
   fs::rename(staged.path(), target, ec);
@@ -255,7 +256,7 @@ void writeDirectory(const TileStore& source, std::span<const std::string> keys,
     fs::rename(aside, target, back);
     throw ioError("cannot move the finished folder into place: " + ec.message() +
                       (back ? "; the old folder is now '" + aside.string() + "'" : std::string()),
-                  at(target), "check that the target's folder is writable");
+                  fileLocation(target), "check that the target's folder is writable");
   }
   staged.release();
 }

@@ -20,10 +20,6 @@ enum class Access {
   Fresh,   ///< read-write, emptied (or created) first
 };
 
-inline SourceLocation at(const std::filesystem::path& path) {
-  return {path.string(), {}, {}, {}};
-}
-
 /// Throws inputError naming the store and the key when !isValidKey(key).
 void requireValidKey(std::string_view key, const std::filesystem::path& store);
 

@@ -63,7 +63,7 @@ void requireValidKey(std::string_view key, const std::filesystem::path& store) {
   if (isValidKey(key)) return;
   std::string shown;
   for (const char c : key) shown += c == '\0' ? std::string("\\0") : std::string(1, c);
-  throw inputError("invalid tile key '" + shown + "'", at(store),
+  throw inputError("invalid tile key '" + shown + "'", fileLocation(store),
                    "a key is a relative path with '/' between non-empty segments, without '.', "
                    "'..', '\\' or NUL");
 }
@@ -95,15 +95,16 @@ void createFolderFor(const std::filesystem::path& folder, const std::filesystem:
   if (ec || !std::filesystem::is_directory(folder))
     throw ioError("cannot create the folder '" + folder.string() + "'" +
                       (ec ? ": " + ec.message() : std::string()),
-                  at(target), "check that no part of the path is a file and that it is writable");
+                  fileLocation(target),
+                  "check that no part of the path is a file and that it is writable");
 }
 
 std::string bytesForCopy(const TileStore& source, const std::string& key) {
   requireValidKey(key, source.path());
   std::optional<std::string> bytes = source.get(key);
   if (!bytes)
-    throw inputError("the key '" + key + "' to be copied is not in the store", at(source.path()),
-                     "list only keys the store holds");
+    throw inputError("the key '" + key + "' to be copied is not in the store",
+                     fileLocation(source.path()), "list only keys the store holds");
   return std::move(*bytes);
 }
 
@@ -113,7 +114,7 @@ std::unique_ptr<TileStore> openStoreForReading(const std::filesystem::path& path
   const std::filesystem::path clean = withoutTrailingSlash(path);
   std::error_code ec;
   if (!std::filesystem::exists(clean, ec))
-    throw inputError("the tile store does not exist", detail::at(clean),
+    throw inputError("the tile store does not exist", fileLocation(clean),
                      "check the path; an archive is a .3dtiles file, a directory store a folder");
   if (storeKindFor(clean) == StoreKind::Archive)
     return detail::openArchive(clean, detail::Access::Read);

@@ -35,8 +35,6 @@ constexpr std::array<std::array<std::uint32_t, 256>, 8> makeCrcTables() {
 }
 constexpr auto kCrcTables = makeCrcTables();
 
-SourceLocation at(const std::string& name) { return {name, {}, {}, {}}; }
-
 // Little-endian encoding of the fixed-size fields, independent of the host.
 template <class T>
 void putLe(std::uint8_t* out, T value) {
@@ -203,7 +201,7 @@ class PayloadReader {
   }
   [[nodiscard]] std::size_t remaining() const { return static_cast<std::size_t>(end_ - p_); }
   [[noreturn]] void corrupt(const std::string& what) const {
-    throw inputError("corrupt .tin file: " + what, at(name_),
+    throw inputError("corrupt .tin file: " + what, fileLocation(name_),
                      "the file is damaged; write it again with `tinsmith tin`");
   }
 
@@ -268,7 +266,7 @@ template <class Source>
 void checkContract(const Source& tin, const std::string& name, bool forWriting) {
   auto bad = [&](const std::string& what) {
     if (forWriting) throw internalError("TinData for '" + name + "' is malformed: " + what);
-    throw inputError("corrupt .tin file: " + what, at(name),
+    throw inputError("corrupt .tin file: " + what, fileLocation(name),
                      "the file is damaged; write it again with `tinsmith tin`");
   };
   const std::size_t nv = tin.points().size();
@@ -352,35 +350,37 @@ void writeTinFile(const std::filesystem::path& path, const Mesh& mesh) {
 TinData decodeTin(std::string_view bytes, const std::string& name) {
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
   if (bytes.size() < kMagic.size() || std::memcmp(data, kMagic.data(), kMagic.size()) != 0)
-    throw inputError("not a .tin file (wrong magic bytes)", at(name),
+    throw inputError("not a .tin file (wrong magic bytes)", fileLocation(name),
                      "give a file written by `tinsmith tin`");
   if (bytes.size() < kTinHeaderSize)
     throw inputError("truncated .tin file: " + std::to_string(bytes.size()) +
                          " bytes, shorter than the 32-byte header",
-                     at(name), "the file is incomplete; write it again with `tinsmith tin`");
+                     fileLocation(name),
+                     "the file is incomplete; write it again with `tinsmith tin`");
   const auto version = getLe<std::uint32_t>(data + 8);
   if (getLe<std::uint32_t>(data + 28) != crc32({data, 28}))
-    throw inputError("corrupt .tin file: the header checksum does not match", at(name),
+    throw inputError("corrupt .tin file: the header checksum does not match", fileLocation(name),
                      "the file is damaged; write it again with `tinsmith tin`");
   if (version > kTinFormatVersion)
     throw inputError(".tin format version " + std::to_string(version) +
                          " is newer than this tinsmith reads (version " +
                          std::to_string(kTinFormatVersion) + ")",
-                     at(name), "use a newer tinsmith to read it");
-  if (version == 0) throw inputError("corrupt .tin file: format version 0", at(name));
+                     fileLocation(name), "use a newer tinsmith to read it");
+  if (version == 0) throw inputError("corrupt .tin file: format version 0", fileLocation(name));
   const auto payload = getLe<std::uint64_t>(data + 16);
   const std::uint64_t have = bytes.size() - kTinHeaderSize;
   if (have < payload)
     throw inputError("truncated .tin file: the header announces " + std::to_string(payload) +
                          " payload bytes but only " + std::to_string(have) + " follow",
-                     at(name), "the file is incomplete; write it again with `tinsmith tin`");
+                     fileLocation(name),
+                     "the file is incomplete; write it again with `tinsmith tin`");
   if (have > payload)
     throw inputError("corrupt .tin file: " + std::to_string(have - payload) +
                          " unexpected bytes after the payload",
-                     at(name), "the file is damaged; write it again with `tinsmith tin`");
+                     fileLocation(name), "the file is damaged; write it again with `tinsmith tin`");
   const std::span<const std::uint8_t> body(data + kTinHeaderSize, payload);
   if (crc32(body) != getLe<std::uint32_t>(data + 24))
-    throw inputError("corrupt .tin file: the payload checksum does not match", at(name),
+    throw inputError("corrupt .tin file: the payload checksum does not match", fileLocation(name),
                      "the file is damaged; write it again with `tinsmith tin`");
 
   PayloadReader r(body.data(), body.size(), name);
@@ -415,16 +415,18 @@ TinData readTinFile(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
-    throw inputError("the .tin file does not exist", at(name), "check the path");
+    throw inputError("the .tin file does not exist", fileLocation(name), "check the path");
   if (std::filesystem::is_directory(path, ec))
-    throw inputError("is a directory, not a .tin file", at(name));
+    throw inputError("is a directory, not a .tin file", fileLocation(name));
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw inputError("cannot open the .tin file for reading", at(name), "check permissions");
+  if (!in)
+    throw inputError("cannot open the .tin file for reading", fileLocation(name),
+                     "check permissions");
   const auto size = std::filesystem::file_size(path, ec);
-  if (ec) throw inputError("cannot read the .tin file: " + ec.message(), at(name));
+  if (ec) throw inputError("cannot read the .tin file: " + ec.message(), fileLocation(name));
   std::string bytes(size, '\0');
   if (!in.read(bytes.data(), static_cast<std::streamsize>(size)))
-    throw inputError("cannot read the .tin file", at(name), "check permissions");
+    throw inputError("cannot read the .tin file", fileLocation(name), "check permissions");
   return decodeTin(bytes, name);
 }
 

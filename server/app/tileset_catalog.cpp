@@ -98,7 +98,7 @@ Tileset::Tileset(std::string id, const fs::path& path)
     : id_(std::move(id)), generation_(nextGeneration++), store_(store::openStoreForReading(path)) {
   const auto tileset = parseStoredJson(*store_, "tileset.json");
   if (!tileset.is_object())
-    throw inputError("has no readable tileset.json", {path.string(), {}, {}, {}},
+    throw inputError("has no readable tileset.json", fileLocation(path),
                      "serve a finished store (tinsmith tile writes tileset.json last)");
   const auto build = parseStoredJson(*store_, kBuildKey);
 
@@ -261,8 +261,7 @@ Point2 Tileset::fromLonLat(double lon, double lat) const {
   Point3 p{lon, lat, 0};
   std::lock_guard lock(transformMutex_);
   if (!fromLonLat_)
-    fromLonLat_ = std::make_unique<ingest::CrsTransform>("EPSG:4326", crs_,
-                                                         SourceLocation{id_, {}, {}, {}});
+    fromLonLat_ = std::make_unique<ingest::CrsTransform>("EPSG:4326", crs_, fileLocation(id_));
   if (fromLonLat_->transform(&p, 1) >= 0 || !std::isfinite(p.x) || !std::isfinite(p.y))
     throw inputError("lon, lat cannot be transformed into " + crs_, {}, "check lon and lat");
   return {p.x, p.y};

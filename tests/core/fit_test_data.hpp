@@ -12,30 +12,21 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/base/split_mix.hpp"
 #include "core/fit/least_squares.hpp"
 #include "core/fit/multilevel_fit.hpp"
-#include "tests/support/franke_function.hpp"
+#include "core/surface/franke_function.hpp"
 
 namespace tinsmith::fit::testing {
 
-/// splitmix64: a small, portable, seeded generator.
-class Rng {
+/// The portable seeded generator, plus normal deviates.
+class Rng : public SplitMix64 {
  public:
-  explicit Rng(std::uint64_t seed) : state_(seed) {}
-  std::uint64_t next() {
-    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  ///< [0, 1)
+  using SplitMix64::SplitMix64;
   double normal() {  ///< Box–Muller
     const double u = 1.0 - uniform(), v = uniform();
     return std::sqrt(-2.0 * std::log(u)) * std::cos(6.283185307179586 * v);
   }
-
- private:
-  std::uint64_t state_;
 };
 
 inline double frankeGradientNorm(double x, double y) {

@@ -1,16 +1,17 @@
 // readers.raster / writers.raster: GeoTIFF and EXR round trips with
 // georeferencing and nodata, DEM layers as points, the real dem.tif and SRTM.
-#include "ingest/export/raster_writer.hpp"
-#include "ingest/readers/raster_reader.hpp"
-
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <thread>
 
 #include "core/base/error.hpp"
+#include "ingest/export/raster_writer.hpp"
 #include "ingest/readers/layer_reader.hpp"
+#include "ingest/readers/raster_reader.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::ingest {
@@ -31,6 +32,11 @@ HeightGrid sampleGrid() {
   return g;
 }
 
+std::size_t filesIn(const std::filesystem::path& dir) {
+  return static_cast<std::size_t>(std::distance(std::filesystem::directory_iterator(dir),
+                                                std::filesystem::directory_iterator()));
+}
+
 void expectSameGrid(const HeightGrid& a, const HeightGrid& b) {
   EXPECT_EQ(a.width, b.width);
   EXPECT_EQ(a.height, b.height);
@@ -49,7 +55,7 @@ TEST(RasterIo, GeoTiffRoundTrip) {
   const auto dir = test::scratchDir("raster_tif");
   const auto grid = sampleGrid();
   writeGeoTiff(grid, dir / "h.tif");
-  EXPECT_FALSE(std::filesystem::exists(dir / "h.tif.part"));
+  EXPECT_EQ(filesIn(dir), 1u);  // no temp file left beside it
   const auto back = readHeightGrid(dir / "h.tif");
   expectSameGrid(grid, back);
   EXPECT_EQ(back.crs, "EPSG:26912");
@@ -127,8 +133,57 @@ TEST(RasterIo, Errors) {
   bad.z.pop_back();
   expectMessage([&] { writeExr(bad, dir / "bad.exr"); }, "malformed");
   expectMessage([&] { writeGeoTiff(sampleGrid(), dir / "no-such-dir" / "h.tif"); },
-                "cannot create");
+                "no-such-dir' does not exist");
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
+}
+
+TEST(RasterIo, AFailedWriteLeavesNoTempFileAndNoPartialTarget) {
+  const auto dir = test::scratchDir("raster_failed_write");
+  auto bad = sampleGrid();
+  bad.crs = "not a CRS";  // GDAL fails after the file is created
+  EXPECT_THROW(writeGeoTiff(bad, dir / "h.tif"), Error);
+  EXPECT_EQ(filesIn(dir), 0u);
+  // Over an existing target: the old file stays, byte for byte.
+  writeGeoTiff(sampleGrid(), dir / "h.tif");
+  const std::string before = test::readFile(dir / "h.tif");
+  EXPECT_THROW(writeGeoTiff(bad, dir / "h.tif"), Error);
+  EXPECT_EQ(test::readFile(dir / "h.tif"), before);
+  EXPECT_EQ(filesIn(dir), 1u);
+  // A target that cannot be replaced (a folder): the finished temp file goes.
+  std::filesystem::create_directories(dir / "taken.exr" / "inside");
+  std::filesystem::create_directories(dir / "taken.tif" / "inside");
+  EXPECT_THROW(writeExr(sampleGrid(), dir / "taken.exr"), Error);
+  EXPECT_THROW(writeGeoTiff(sampleGrid(), dir / "taken.tif"), Error);
+  EXPECT_EQ(filesIn(dir), 3u);
+}
+
+TEST(RasterIo, TwoWritersOfOneTargetDoNotCollide) {
+  // Each writer has its own temp file, so the target is always one of the
+  // two grids, whole — with one fixed temp name they wrote into one file.
+  const auto dir = test::scratchDir("raster_two_writers");
+  auto other = sampleGrid();
+  for (auto& z : other.z) z += 100.0f;
+  for (const bool exr : {false, true}) {
+    const auto target = dir / (exr ? "h.exr" : "h.tif");
+    std::atomic<int> failures{0};
+    auto write = [&](const HeightGrid& grid) {
+      for (int i = 0; i < 20; ++i) {
+        try {
+          exr ? writeExr(grid, target) : writeGeoTiff(grid, target);
+        } catch (const Error&) {
+          ++failures;
+        }
+      }
+    };
+    std::thread a(write, sampleGrid());
+    std::thread b(write, other);
+    a.join();
+    b.join();
+    EXPECT_EQ(failures, 0) << target;
+    const auto back = readHeightGrid(target);
+    expectSameGrid(back.z[0] == other.z[0] ? other : sampleGrid(), back);
+  }
+  EXPECT_EQ(filesIn(dir), 2u);
 }
 
 TEST(RasterIo, RedButteDem) {

@@ -8,7 +8,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "tests/support/hill_points.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -20,6 +19,12 @@ struct Project {
   fs::path dir, config, out;
 };
 
+/// The spot heights of the project: a hill of 31 × 31 points, 25 m apart and
+/// slightly irregular, at UTM 12N-sized coordinates.
+const std::string kHill =
+    "synthetic:grid?nx=31&ny=31&spacing=25&jitter=0.05&x0=430000&y0=4515000&surface=hill"
+    "&z0=1600&scale=80";
+
 /// A hill of spot heights and a config whose [tiles] writes out/site.3dtiles.
 /// `tilesExtra` is added to [tiles].
 Project makeProject(const std::string& name, const std::string& tilesExtra = "") {
@@ -27,15 +32,9 @@ Project makeProject(const std::string& name, const std::string& tilesExtra = "")
   p.dir = scratchDir(name);
   p.out = p.dir / "out";
   fs::create_directories(p.out);
-  {
-    std::ofstream csv(p.dir / "hill.csv");
-    csv << "x,y,z\n";
-    writeHillPoints(csv, ',');
-  }
   p.config = p.dir / "site.toml";
-  std::ofstream(p.config) << "[project]\ncrs = \"EPSG:26912\"\n\n"
-                             "[[layer]]\npath = \"hill.csv\"\nkind = \"points\"\n"
-                             "crs = \"EPSG:26912\"\nz = \"z\"\n\n"
+  std::ofstream(p.config) << "[project]\ncrs = \"EPSG:26912\"\n\n[[layer]]\npath = \"" << kHill
+                          << "\"\nkind = \"points\"\ncrs = \"EPSG:26912\"\nname = \"hill\"\n\n"
                              "[tiles]\ntolerance = 0.5\nmax_triangles = 2048\n"
                              "output = \"out/site.3dtiles\"\n"
                           << tilesExtra;
@@ -137,7 +136,9 @@ TEST(BuildCli, BadInputFailsClearlyAndLeavesNothingUnderTheOutputsNames) {
        "site.toml, line 14: tiles.frame = \"enu\": unknown frame"},
       {"tolerance 0 in the config", "tolerance = 0\n", "tolerance = 0.5\n", "", "", 3,
        "site.toml, line 13: tiles.tolerance = 0: must be greater than 0"},
-      {"a missing layer file", "", "hill.csv", "gone.csv", "", 3, "gone.csv"},
+      {"a missing layer file", "", kHill, "gone.csv", "", 3, "gone.csv"},
+      {"a bad synthetic spec", "", "jitter=0.05", "jitter=5", "", 3,
+       "jitter = 5 is out of range — jitter must be 0 to 0.5"},
       {"tolerance 0 on the command line", "", "", "", "--tolerance 0", 2,
        "tolerance must be a positive number"},
       {"a bad compression", "", "", "", "--compression zstd", 2,

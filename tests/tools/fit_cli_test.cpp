@@ -64,13 +64,9 @@ TEST(FitCli, FitsPointsAndWritesTinAndStats) {
 TEST(FitCli, DomainSetsTheSquareAndQuietPrintsNothing) {
   if (!std::filesystem::exists(binary())) GTEST_SKIP() << "tinsmith binary not built";
   const auto dir = test::scratchDir("fit_cli_domain");
-  {
-    std::ofstream out(dir / "plane.xyz");
-    for (int j = 0; j <= 10; ++j) {
-      for (int i = 0; i <= 10; ++i) out << 100 + 10 * i << " " << 200 + 10 * j << " " << 5 + 0.5 * i << "\n";
-    }
-  }
-  const std::string input = (dir / "plane.xyz").string(), tin = (dir / "fit.tin").string();
+  // 11 × 11 points on a plane, 10 m apart, over [100, 200] × [200, 300].
+  const std::string input = "'synthetic:grid?nx=11&ny=11&spacing=10&x0=100&y0=200'";
+  const std::string tin = (dir / "fit.tin").string();
   // A square larger than the data: the TIN covers all of it.
   auto r = test::runCommand(binary() + " fit " + input + " --tolerance 0.01 --domain 50,150,200 -q -o " + tin);
   ASSERT_EQ(r.exitCode, 0) << r.err;

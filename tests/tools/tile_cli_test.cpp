@@ -1,25 +1,23 @@
-// tinsmith tile / merge / info on a store: a small TIN from plain points,
+// tinsmith tile / merge / info on a store: a small TIN from synthetic points,
 // tiled into an archive; the same bytes for any thread count, for a resumed
 // run and for shards merged; bad input fails clearly and leaves no store.
 #include <gtest/gtest.h>
 
 #include <fstream>
 
-#include "tests/support/hill_points.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
 namespace {
 
+/// A small hill of 31 × 31 spot heights, 25 m apart and slightly irregular,
+/// at UTM 12N-sized coordinates: a quick TIN to tile.
 std::filesystem::path smallTin(const std::filesystem::path& dir) {
-  const auto xyz = dir / "hill.xyz";
-  {
-    std::ofstream out(xyz);
-    writeHillPoints(out, ' ');
-  }
   const auto tin = dir / "hill.tin";
-  const auto r =
-      runTinsmith("tin --points " + xyz.string() + " --crs EPSG:26912 -q -o " + tin.string());
+  const auto r = runTinsmith(
+      "tin --points 'synthetic:grid?nx=31&ny=31&spacing=25&jitter=0.05&x0=430000&y0=4515000"
+      "&surface=hill&z0=1600&scale=80' --crs EPSG:26912 -q -o " +
+      tin.string());
   EXPECT_EQ(r.exitCode, 0) << r.err;
   return tin;
 }

@@ -106,25 +106,17 @@ TEST(TinCli, PlainPointsAndBreakLinesMakeAValidTinThatTheCheckerAccepts) {
 }
 
 TEST(TinCli, TheTinIsTheSameForAnyThreadCount) {
-  // Enough points for the two-half parallel triangulation, plus the crossing
+  // Enough points for the two-half parallel triangulation, plus crossing
   // break lines: the .tin files must be byte for byte the same.
-  const auto in = makePlainInputs("tin_threads");
-  {
-    std::ofstream f(in.points, std::ios::app);
-    std::mt19937_64 rng(8);
-    std::uniform_real_distribution<double> d(0, 400);
-    char line[96];
-    for (int i = 0; i < 60000; ++i) {
-      const double px = d(rng), py = d(rng);
-      std::snprintf(line, sizeof line, "%.4f %.4f %.6f\n", 431000 + px, 4512000 + py, plane(px, py));
-      f << line;
-    }
-  }
+  const fs::path dir = test::scratchDir("tin_threads");
+  const std::string inputs =
+      "--points 'synthetic:random?n=60300&seed=8&width=400&height=400&x0=431000&y0=4512000' "
+      "--breaklines 'synthetic:lines?layout=random&n=3&vertices=3&seed=5&width=400&height=400"
+      "&x0=431000&y0=4512000'";
   std::string previous;
   for (const char* threads : {"1", "2", "0"}) {
-    const fs::path tin = in.dir / (std::string("t") + threads + ".tin");
-    const auto r = runTinsmith("tin -q --points " + in.points.string() + " --breaklines " +
-                               in.geojson.string() + " --crs EPSG:26912 --threads " + threads +
+    const fs::path tin = dir / (std::string("t") + threads + ".tin");
+    const auto r = runTinsmith("tin -q " + inputs + " --crs EPSG:26912 --threads " + threads +
                                " -o " + tin.string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const std::string bytes = readFile(tin);

@@ -68,7 +68,7 @@ void run(const BuildCliOptions& o) {
   fs::path store = o.output;
   if (store.empty()) store = config.tiles.output;
   if (store.empty()) {
-    SourceLocation where{config.file.filename().string(), {}, {}, {}};
+    SourceLocation where = fileLocation(config.file.filename());
     if (config.tiles.configLine > 0) where.line = config.tiles.configLine;
     throw Error(ErrorKind::Usage, "no tile store to write: no [tiles] output and no -o", where,
                 "add output = \"NAME.3dtiles\" to [tiles], or give -o NAME.3dtiles");
@@ -113,7 +113,7 @@ void run(const BuildCliOptions& o) {
   if (ec) {
     throw ioError("cannot rename " + partialTin.string() + " to " + tinPath.filename().string() +
                       ": " + ec.message(),
-                  {tinPath.string(), {}, {}, {}}, "the store is complete; rename the TIN by hand");
+                  fileLocation(tinPath), "the store is complete; rename the TIN by hand");
   }
 
   if (f.json) {

@@ -18,6 +18,7 @@
 #include "core/fit/multilevel_fit.hpp"
 #include "ingest/readers/raster_reader.hpp"
 #include "ingest/base/atomic_file.hpp"
+#include "ingest/readers/synthetic_reader.hpp"
 #include "ingest/readers/text_points.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
@@ -204,6 +205,13 @@ bool isRasterPath(const std::string& path) {
 }
 
 std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
+  if (ingest::isSyntheticSpec(path)) {
+    ingest::LayerConfig config;
+    config.name = path;
+    config.path = path;
+    config.kind = ingest::LayerKind::Points;
+    return ingest::readSyntheticLayer(config).points;
+  }
   if (!isRasterPath(path)) return ingest::readTextPoints(path);
   const ingest::HeightGrid grid = ingest::readHeightGrid(path);
   if (crs.empty()) crs = grid.crs;
@@ -215,8 +223,9 @@ std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
 /// returns the points. Throws inputError naming the file and line of a weight
 /// that is not a positive finite number.
 std::vector<double> readWeights(const std::string& path, const std::string& column) {
-  if (isRasterPath(path)) {
-    throw usageError("--weights-column needs a text point file, not a raster", "write the points as x y z w text");
+  if (isRasterPath(path) || ingest::isSyntheticSpec(path)) {
+    throw usageError("--weights-column needs a text point file, not a raster or a synthetic spec",
+                     "write the points as x y z w text");
   }
   const ingest::TextPointTable points = ingest::readTextPointTable(path);
   ingest::TextPointOptions wopt;
@@ -260,7 +269,9 @@ void addFitCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("fit", "Fit a multilevel least-squares surface over binary triangulations");
   cmd->add_option("points", o->points,
                   "XYZ/CSV point file (x, y, z; projected metres), or a projected raster "
-                  "(GeoTIFF or any GDAL raster, EXR heightmap) whose valid cells are the points")
+                  "(GeoTIFF or any GDAL raster, EXR heightmap) whose valid cells are the points, "
+                  "or generated points ('synthetic:random?n=5000&surface=franke&scale=1', "
+                  "see config/README.md)")
       ->required();
   cmd->add_option("--tolerance", o->tolerance, "Error criterion: z units (2.5), or a percentage of the z range (0.25%)");
   cmd->add_option("--lambda", o->lambda, "Smoothing weight as a multiple of the default lambda_d (default 1)");

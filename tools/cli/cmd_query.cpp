@@ -46,7 +46,7 @@ std::string shortNum(double v, int digits) {
 
 std::vector<Point2> readQueryPoints(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw inputError("cannot read the query points", {path, {}, {}, {}}, "check the path");
+  if (!in) throw inputError("cannot read the query points", fileLocation(path), "check the path");
   std::vector<Point2> pts;
   std::string line;
   std::int64_t n = 0;
@@ -65,7 +65,8 @@ std::vector<Point2> readQueryPoints(const std::string& path) {
     }
     pts.push_back(p);
   }
-  if (pts.empty()) throw inputError("no points in the file", {path, {}, {}, {}}, "one point per line: x y");
+  if (pts.empty())
+    throw inputError("no points in the file", fileLocation(path), "one point per line: x y");
   return pts;
 }
 
@@ -121,7 +122,7 @@ void addQueryCommand(CLI::App& app) {
       if (opt->json) std::cout << jsonSample(p, s) << "\n";
       if (!s)
         throw inputError("the point " + num(p.x) + ", " + num(p.y) + " is outside the TIN",
-                         {opt->tin, {}, {}, {}}, "query inside its extent (see `tinsmith info`)");
+                         fileLocation(opt->tin), "query inside its extent (see `tinsmith info`)");
       if (!opt->json) std::cout << textSample(p, s) << "\n";
       return;
     }

@@ -5,9 +5,10 @@
 // clean) and applies the terrain rules (builders.tin); the second triangulates
 // plain inputs as they are: XYZ/CSV points, and break lines as GeoJSON (or any
 // OGR format) 3D (Multi)LineStrings or text polylines (x y z per line, a
-// blank line between polylines). A human summary goes to stderr; progress bars
-// too when stderr is a terminal. Outputs are written atomically: a failed run
-// leaves no file behind.
+// blank line between polylines); either may be a synthetic spec instead of a
+// file (`--points 'synthetic:grid?nx=20&ny=20'`, readers/synthetic_reader.hpp).
+// A human summary goes to stderr; progress bars too when stderr is a terminal.
+// Outputs are written atomically: a failed run leaves no file behind.
 #include <unistd.h>
 
 #include <chrono>
@@ -28,6 +29,7 @@
 #include "ingest/config/project_config.hpp"
 #include "ingest/pipeline/load_layers.hpp"
 #include "ingest/readers/layer_reader.hpp"
+#include "ingest/readers/synthetic_reader.hpp"
 #include "ingest/readers/text_points.hpp"
 #include "ingest/base/atomic_file.hpp"
 #include "ingest/tinfile/tin_file.hpp"
@@ -61,6 +63,14 @@ bool isTextPolylineFile(const std::filesystem::path& p) {
   return ext == ".txt" || ext == ".xyz" || ext == ".pl" || ext == ".poly" || ext == ".lines";
 }
 
+ingest::LayerConfig plainLayerConfig(const std::string& spec, ingest::LayerKind kind) {
+  ingest::LayerConfig config;
+  config.name = spec;
+  config.path = spec;
+  config.kind = kind;
+  return config;
+}
+
 // Plain mode: every input as it is; points of kind Other, break lines of kind
 // BreakLine, so a line keeps its z where it passes through a point.
 // Each file's read time goes into `times` as the stage "read FILENAME".
@@ -79,7 +89,11 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
     layer.kindName = "points";
     layer.kind = FeatureKind::Other;
     layer.source = file;
-    if (ingest::isTextPointFile(file)) {
+    if (ingest::isSyntheticSpec(file)) {
+      layer.name = file;
+      layer.points =
+          ingest::readSyntheticLayer(plainLayerConfig(file, ingest::LayerKind::Points)).points;
+    } else if (ingest::isTextPointFile(file)) {
       ingest::TextPointOptions text;
       text.threads = o.threads;
       layer.points = ingest::readTextPoints(file, text);
@@ -90,7 +104,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
       config.kind = ingest::LayerKind::Points;
       const auto read = ingest::readOgrLayer(config);
       if (!read.hasZ)
-        throw inputError("the points have no z", {file, {}, {}, {}},
+        throw inputError("the points have no z", fileLocation(file),
                          "give 3D points, or use a config with a 'z' attribute");
       layer.points = read.points;
     }
@@ -103,7 +117,17 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
     layer.kindName = "breaklines";
     layer.kind = FeatureKind::BreakLine;
     layer.source = file;
-    if (isTextPolylineFile(file)) {
+    if (ingest::isSyntheticSpec(file)) {
+      layer.name = file;
+      const auto read = ingest::readSyntheticLayer(plainLayerConfig(file, ingest::LayerKind::Road));
+      for (const auto& f : read.features) {
+        if (!f.hasZ)
+          throw inputError("break line has no z", {file, {}, f.fid, {}},
+                           "leave z=none out of the spec, or use a config to drape the lines");
+        layer.lines.push_back(
+            {f.vertices, f.closed, true, file + ", line " + std::to_string(f.fid)});
+      }
+    } else if (isTextPolylineFile(file)) {
       for (auto& pl : ingest::readTextPolylines(file))
         layer.lines.push_back({std::move(pl.vertices), pl.closed, true,
                                file + ", line " + std::to_string(pl.firstLine)});
@@ -210,10 +234,15 @@ void addTinCommand(CLI::App& app) {
   auto opt = std::make_shared<TinOptions>();
   auto* cmd = app.add_subcommand("tin", "Build a constrained Delaunay TIN from points and break lines");
   cmd->add_option("config", opt->config, "Project config (TOML); or give --points/--breaklines");
-  cmd->add_option("--points", opt->points, "XYZ/CSV point file(s) (plain mode)");
+  cmd->add_option("--points", opt->points,
+                  "XYZ/CSV point file(s) (plain mode), or generated points: "
+                  "'synthetic:grid?nx=..&ny=..&spacing=..&surface=plane|flat|franke|hill|cone', "
+                  "'synthetic:random?n=..&seed=..', 'synthetic:raster?…' (see config/README.md)");
   cmd->add_option("--breaklines", opt->breaklines,
-                  "Break lines (plain mode): GeoJSON (Multi)LineString with 3D coordinates, or text "
-                  "polylines (.txt/.xyz: x y z per line, a blank line between polylines)");
+                  "Break lines (plain mode): GeoJSON (Multi)LineString with 3D coordinates, text "
+                  "polylines (.txt/.xyz: x y z per line, a blank line between polylines), or "
+                  "generated lines: 'synthetic:lines?n=..&layout=hatch|cross|star|random', "
+                  "'synthetic:rings?n=..&interval=..'");
   addOutputOption(*cmd, opt->output, "The .tin file to write")->required();
   cmd->add_option("--report", opt->report, "Also write the build report as JSON to this file");
   cmd->add_option("--snap", opt->snap, "Plain mode: merge points closer than this (metres; default 0)");

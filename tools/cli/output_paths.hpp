@@ -26,8 +26,7 @@ inline void checkOutputDirectory(const std::filesystem::path& path, const char* 
   if (problem) {
     throw ioError(
         std::string("cannot write ") + option + " there: '" + dir.string() + "' " + problem,
-        {path.string(), {}, {}, {}},
-        "create the directory, or choose another path you may write to");
+        fileLocation(path), "create the directory, or choose another path you may write to");
   }
 }
 

@@ -20,7 +20,8 @@
 
 #include "core/base/error.hpp"
 #include "core/fit/multilevel_fit.hpp"
-#include "tests/support/franke_function.hpp"
+#include "core/base/split_mix.hpp"
+#include "core/surface/franke_function.hpp"
 
 using namespace tinsmith;
 using namespace tinsmith::fit;
@@ -43,15 +44,9 @@ double peakMegabytes() {
 std::vector<Point3> frankeUniform(std::size_t n, std::uint64_t seed) {
   std::vector<Point3> pts;
   pts.reserve(n);
-  std::uint64_t s = seed;
-  auto next = [&] {
-    std::uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
-  };
+  SplitMix64 random(seed);
   for (std::size_t i = 0; i < n; ++i) {
-    const double x = next(), y = next();
+    const double x = random.uniform(), y = random.uniform();
     pts.push_back({x * 10000.0, y * 10000.0, 1000.0 * frankeFunction(x, y)});
   }
   return pts;

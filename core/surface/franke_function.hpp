@@ -1,10 +1,12 @@
-// Franke's test function on [0, 1]² (the book's (8.14)): the surface of the
-// fitter's tests and benchmarks. Test data, so it lives with the tests.
+// Franke's function on [0, 1]² (the book's (8.14)): the classic test surface
+// of scattered-data fitting. The fitter's tests and benchmarks compare against
+// it, and readers.synthetic samples it (surface=franke). Values lie in about
+// [0, 1.22]; smooth, with two peaks and a dip.
 #pragma once
 
 #include <cmath>
 
-namespace tinsmith::fit {
+namespace tinsmith {
 
 inline double frankeFunction(double x, double y) {
   return 0.75 * std::exp(-((9 * x - 2) * (9 * x - 2) + (9 * y - 2) * (9 * y - 2)) / 4) +
@@ -13,4 +15,4 @@ inline double frankeFunction(double x, double y) {
          0.2 * std::exp(-(9 * x - 4) * (9 * x - 4) - (9 * y - 7) * (9 * y - 7));
 }
 
-}  // namespace tinsmith::fit
+}  // namespace tinsmith

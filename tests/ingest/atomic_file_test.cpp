@@ -1,0 +1,116 @@
+// AtomicFile and AtomicPath: the target appears whole or not at all, a temp
+// file never outlives its writer, and two writers of one target each get
+// their own temp file.
+#include "ingest/base/atomic_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/base/error.hpp"
+#include "tests/support/run_command.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::size_t filesIn(const fs::path& dir) {
+  return static_cast<std::size_t>(
+      std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+TEST(AtomicPath, CommitRenamesTheTempFileOntoTheTarget) {
+  const auto dir = test::scratchDir("atomic_path_commit");
+  const auto target = dir / "out.tif";
+  std::ofstream(target) << "old";
+  AtomicPath out(target);
+  EXPECT_EQ(out.temp().parent_path(), dir);
+  EXPECT_TRUE(fs::exists(out.temp()));  // reserved: created empty
+  EXPECT_EQ(test::readFile(target), "old");
+  std::ofstream(out.temp(), std::ios::binary) << "new";
+  out.commit();
+  EXPECT_EQ(test::readFile(target), "new");
+  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_THROW(out.commit(), Error);
+}
+
+TEST(AtomicPath, WithoutCommitTheTempFileGoesAndTheTargetStays) {
+  const auto dir = test::scratchDir("atomic_path_abandon");
+  const auto target = dir / "out.exr";
+  std::ofstream(target) << "old";
+  {
+    AtomicPath out(target);
+    std::ofstream(out.temp(), std::ios::binary) << "half";
+  }
+  EXPECT_EQ(test::readFile(target), "old");
+  EXPECT_EQ(filesIn(dir), 1u);
+  AtomicPath discarded(target);
+  discarded.discard();
+  EXPECT_FALSE(fs::exists(discarded.temp()));
+}
+
+TEST(AtomicPath, TwoWritersOfOneTargetDoNotCollide) {
+  const auto dir = test::scratchDir("atomic_path_two");
+  const auto target = dir / "out.tif";
+  AtomicPath first(target);
+  AtomicPath second(target);
+  EXPECT_NE(first.temp(), second.temp());
+  std::ofstream(first.temp(), std::ios::binary) << "first";
+  std::ofstream(second.temp(), std::ios::binary) << "second";
+  second.commit();
+  EXPECT_EQ(test::readFile(target), "second");
+  first.commit();  // the last to finish wins, whole
+  EXPECT_EQ(test::readFile(target), "first");
+  EXPECT_EQ(filesIn(dir), 1u);
+}
+
+TEST(AtomicPath, ARenameThatFailsRemovesTheTempFile) {
+  const auto dir = test::scratchDir("atomic_path_rename");
+  const auto target = dir / "taken";
+  fs::create_directories(target / "inside");  // a non-empty directory: rename fails
+  AtomicPath out(target);
+  std::ofstream(out.temp(), std::ios::binary) << "bytes";
+  try {
+    out.commit();
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Io);
+    EXPECT_EQ(e.where().file, target.string());
+  }
+  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_TRUE(fs::is_directory(target));
+}
+
+TEST(AtomicPath, AMissingDirectoryIsAnIoErrorNamingIt) {
+  const auto dir = test::scratchDir("atomic_path_missing");
+  try {
+    AtomicPath out(dir / "no-such-dir" / "out.tif");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Io);
+    EXPECT_NE(std::string(e.what()).find("no-such-dir' does not exist"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(AtomicFile, WritesWholeOrNothing) {
+  const auto dir = test::scratchDir("atomic_file");
+  const auto target = dir / "report.json";
+  {
+    AtomicFile file(target);
+    file.write("{\"a\": 1}");
+    EXPECT_EQ(filesIn(dir), 1u);  // only the temp file
+    EXPECT_FALSE(fs::exists(target));
+  }
+  EXPECT_EQ(filesIn(dir), 0u);
+  AtomicFile file(target);
+  file.write("{\"a\": 2}");
+  file.writeAt(6, "3", 1);
+  file.commit();
+  EXPECT_EQ(test::readFile(target), "{\"a\": 3}");
+  EXPECT_EQ(filesIn(dir), 1u);
+}
+
+}  // namespace
+}  // namespace tinsmith::ingest
