@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <future>
 #include <tuple>
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/base/parallel.hpp"
 #include "ingest/base/atomic_file.hpp"
 #include "ingest/tinfile/tin_view.hpp"
 
@@ -83,7 +85,10 @@ std::uint64_t payloadSize(const Source& tin) {
 template <class Sink>
 class PayloadWriter {
  public:
-  explicit PayloadWriter(Sink& sink) : sink_(sink), buffer_(kBuffer) {}
+  /// With `overlapChecksum`, the checksum of a large block is computed on a
+  /// second thread while the sink takes it.
+  PayloadWriter(Sink& sink, bool overlapChecksum)
+      : sink_(sink), buffer_(kBuffer), overlapChecksum_(overlapChecksum) {}
   template <class T>
   void put(T value) {
     if (used_ + sizeof(T) > kBuffer) flush();
@@ -111,20 +116,30 @@ class PayloadWriter {
 
  private:
   static constexpr std::size_t kBuffer = 1 << 16;
+  static constexpr std::size_t kOverlapFrom = std::size_t{1} << 22;
   void emit(const std::uint8_t* data, std::size_t size) {
     if (size == 0) return;
+    if (overlapChecksum_ && size >= kOverlapFrom) {
+      // If the sink throws, the future's destructor waits for the checksum.
+      auto crc = std::async(std::launch::async,
+                            [data, size, before = crc_] { return crc32({data, size}, before); });
+      sink_(data, size);
+      crc_ = crc.get();
+      return;
+    }
     crc_ = crc32({data, size}, crc_);
     sink_(data, size);
   }
   Sink& sink_;
   std::vector<std::uint8_t> buffer_;
+  bool overlapChecksum_;
   std::size_t used_ = 0;
   std::uint32_t crc_ = 0;
 };
 
 template <class Source, class Sink>
-std::uint32_t writePayload(const Source& tin, Sink& sink) {
-  PayloadWriter<Sink> w(sink);
+std::uint32_t writePayload(const Source& tin, Sink& sink, bool overlapChecksum = false) {
+  PayloadWriter<Sink> w(sink, overlapChecksum);
   w.putString(tin.crs());
   w.put(static_cast<std::uint64_t>(tin.points().size()));
   // The file is little-endian: on such a host the vertex and triangle arrays
@@ -324,14 +339,14 @@ std::string encodeTin(const TinData& tin) {
 namespace {
 
 template <class Source>
-void writeFile(const std::filesystem::path& path, const Source& tin) {
+void writeFile(const std::filesystem::path& path, const Source& tin, unsigned threads) {
   checkContract(tin, path.string(), true);
   AtomicFile file(path);
   const std::uint64_t size = payloadSize(tin);
   const auto placeholder = makeHeader(size, 0);
   file.write(placeholder.data(), placeholder.size());
   auto sink = [&file](const std::uint8_t* data, std::size_t n) { file.write(data, n); };
-  const std::uint32_t crc = writePayload(tin, sink);
+  const std::uint32_t crc = writePayload(tin, sink, resolveThreads(threads) > 1);
   const auto header = makeHeader(size, crc);
   file.writeAt(0, header.data(), header.size());
   file.commit();
@@ -339,12 +354,12 @@ void writeFile(const std::filesystem::path& path, const Source& tin) {
 
 }  // namespace
 
-void writeTinFile(const std::filesystem::path& path, const TinData& tin) {
-  writeFile(path, TinSource{{tin}});
+void writeTinFile(const std::filesystem::path& path, const TinData& tin, unsigned threads) {
+  writeFile(path, TinSource{{tin}}, threads);
 }
 
-void writeTinFile(const std::filesystem::path& path, const Mesh& mesh) {
-  writeFile(path, MeshSource(mesh));
+void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned threads) {
+  writeFile(path, MeshSource(mesh), threads);
 }
 
 TinData decodeTin(std::string_view bytes, const std::string& name) {

@@ -38,11 +38,14 @@ inline constexpr std::size_t kTinHeaderSize = 32;
 /// Writes `tin` atomically (temp file + rename; a failure leaves no file).
 /// Throws internalError when `tin` breaks the TinData contract (an index out of
 /// range, a non-finite coordinate) and ioError when the file cannot be written.
-void writeTinFile(const std::filesystem::path& path, const TinData& tin);
+/// With threads other than 1 (0: every core), the checksum of the large
+/// arrays is computed on a second thread while they are written; the bytes are
+/// the same.
+void writeTinFile(const std::filesystem::path& path, const TinData& tin, unsigned threads = 1);
 /// Writes a mesh as writeTinFile(path, mesh.toTinData()) would — the same
 /// bytes — without the TinData copy (only the constrained-edge records, 12
 /// bytes each, are made).
-void writeTinFile(const std::filesystem::path& path, const Mesh& mesh);
+void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned threads = 1);
 
 /// Reads a `.tin` file. Throws inputError naming the file for: a missing or
 /// unreadable file, a wrong magic (not a .tin file), a newer format version, a

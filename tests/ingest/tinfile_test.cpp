@@ -103,6 +103,24 @@ TEST(TinFile, BytesAreDeterministicAndMatchTheDocumentedLayout) {
   EXPECT_EQ(a.substr(36, tin.crs.size()), tin.crs);
 }
 
+TEST(TinFile, TheChecksumOnASecondThreadWritesTheSameBytes) {
+  // Arrays large enough (over 4 MiB) for their checksum to run beside the write.
+  TinData tin = sampleTin();
+  const std::uint32_t n = 250000;
+  for (std::uint32_t i = 0; i < n; ++i)
+    tin.vertices.push_back({431000.0 + i % 500, 4512000.0 + i / 500, 1500.0 + (i % 97) / 7.0});
+  for (std::uint32_t i = 0; i + 2 < n; i += 3) tin.triangles.push_back({5 + i, 6 + i, 7 + i});
+  const auto dir = test::scratchDir("tinfile-threads");
+  writeTinFile(dir / "one.tin", tin, 1);
+  writeTinFile(dir / "two.tin", tin, 2);
+  writeTinFile(dir / "mesh.tin", Mesh::fromTinData(tin), 0);
+  const std::string one = test::readFile(dir / "one.tin");
+  EXPECT_EQ(one, encodeTin(tin));
+  EXPECT_EQ(one, test::readFile(dir / "two.tin"));
+  EXPECT_EQ(one, test::readFile(dir / "mesh.tin"));
+  expectSame(readTinFile(dir / "two.tin"), tin);
+}
+
 TEST(TinFile, WrongMagicIsRefusedNamingTheFile) {
   const auto dir = test::scratchDir("tinfile-magic");
   std::ofstream(dir / "x.tin") << "solid ascii\nnot a tin at all, just text\n";

@@ -181,10 +181,10 @@ void run(const TinOptions& o) {
   // With --trim-hull the mesh is copied once, trimmed and written.
   std::size_t trimmed = 0;
   auto writeTin = [&o, &trimmed](const Mesh& mesh) {
-    if (!o.trimHull) return ingest::writeTinFile(o.output, mesh);
+    if (!o.trimHull) return ingest::writeTinFile(o.output, mesh, o.threads);
     TinData tin = mesh.toTinData();
     trimmed = trimHull(tin, *o.trimHull);
-    ingest::writeTinFile(o.output, tin);
+    ingest::writeTinFile(o.output, tin, o.threads);
   };
   // The options both modes take from the command line.
   auto withFlags = [&o](ingest::BuildOptions options) {
@@ -256,7 +256,7 @@ void addTinCommand(CLI::App& app) {
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
-  addThreadsOption(*cmd, opt->threads, "Threads for reading XYZ/CSV points, the triangulation and its check", "the TIN is the same for any count");
+  addThreadsOption(*cmd, opt->threads, "Threads for reading XYZ/CSV points, the triangulation, its check and the .tin checksum", "the TIN is the same for any count");
   addQuietFlag(*cmd, opt->quiet, "No summary and no progress on stderr");
   cmd->callback([opt] { run(*opt); });
 }
