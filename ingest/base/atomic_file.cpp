@@ -25,7 +25,7 @@ AtomicPath::AtomicPath(std::filesystem::path target) : target_(std::move(target)
   std::string pattern = (dir / ("." + target_.filename().string() + ".XXXXXX.part")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
-  fd_ = ::mkstemps(name.data(), 5);
+  fd_ = ::mkostemps(name.data(), 5, O_CLOEXEC);  // not inherited by child processes
   if (fd_ < 0)
     throw ioError(
         std::string("cannot create a file in '") + dir.string() + "': " + std::strerror(errno),
@@ -53,6 +53,7 @@ void AtomicPath::discard() noexcept {
   if (!temp_.empty()) {
     std::error_code ec;
     std::filesystem::remove(temp_, ec);
+    temp_.clear();  // the name may be someone else's next
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -113,7 +114,8 @@ class Spec {
   double positive(const std::string& key, double fallback) const {
     const double v = number(key, fallback);
     if (!(v > 0))
-      fail(key + " = " + values_.at(key) + " is out of range", key + " must be greater than 0");
+      fail(key + " = " + (values_.count(key) ? values_.at(key) : fmt(v)) + " is out of range",
+           key + " must be greater than 0");
     return v;
   }
 
@@ -135,12 +137,14 @@ class Spec {
     throw inputError(problem, fileLocation(std::string(text_)), hint);
   }
 
- private:
+  /// A number as the messages write it (fixed notation, shortest).
   static std::string fmt(double v) {
     char buf[32];
     const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed);
     return {buf, r.ptr};
   }
+
+ private:
   static std::string patternList() {
     std::string list;
     for (const auto& p : kPatterns) list += (list.empty() ? "" : ", ") + std::string(p.name);
@@ -231,7 +235,7 @@ Params paramsOf(const Spec& spec) {
     p.spacing = spec.positive("spacing", 10.0);
     if (static_cast<double>(p.nx) * static_cast<double>(p.ny) > kMaxPoints) {
       spec.fail("nx × ny = " + std::to_string(p.nx * p.ny) + " points is too many",
-                "at most 100000000");
+                "at most " + Spec::fmt(kMaxPoints));
     }
     // A grid's extent runs from the first point to the last, a raster's
     // from cell corner to cell corner. A one-row grid has no extent across:
@@ -276,6 +280,22 @@ Params paramsOf(const Spec& spec) {
       p.interval = spec.positive("interval", 10);
       break;
   }
+  // What the layer will hold, all told: never more than kMaxPoints.
+  const double total =
+      p.pattern == Pattern::Grid     ? static_cast<double>(p.nx) * p.ny + p.duplicates
+      : p.pattern == Pattern::Random ? static_cast<double>(p.n) + p.duplicates
+      : p.pattern == Pattern::Raster ? static_cast<double>(p.nx) * p.ny
+                                     : static_cast<double>(p.n) * p.vertices *
+                                           (p.layout == Layout::Cross ? 2 : 1);
+  if (total > kMaxPoints)
+    spec.fail("the layer would hold " + Spec::fmt(total) + " points or vertices, too many",
+              "at most " + Spec::fmt(kMaxPoints) + " in all (n × vertices for lines and rings)");
+  // Each value finite alone can still overflow together.
+  if (!std::isfinite(t.x0 + t.width) || !std::isfinite(t.y0 + t.height))
+    spec.fail("the extent (x0, y0 plus the width, height or nx, ny × spacing) is not finite",
+              "give coordinates within the range of a double");
+  if (!std::isfinite(std::abs(t.z0) + std::abs(t.scale) + t.noise))
+    spec.fail("z0, scale and noise together are not finite", "give heights a double can hold");
   return p;
 }
 

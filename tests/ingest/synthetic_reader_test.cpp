@@ -166,6 +166,14 @@ TEST(SyntheticReader, BadSpecsNameTheSpecAndTheKey) {
       {"synthetic:grid?nx=2.5", LayerKind::Points, "nx = 2.5 is not a whole number", ""},
       {"synthetic:grid?nx=1&ny=2", LayerKind::Points, "less than 3 points", ""},
       {"synthetic:grid?nx=100000&ny=100000", LayerKind::Points, "is too many", ""},
+      // Each count within its range, the total not.
+      {"synthetic:lines?n=100000000&vertices=100000000", LayerKind::Road,
+       "would hold 10000000000000000 points or vertices, too many", "n × vertices"},
+      {"synthetic:rings?n=20000&vertices=20000", LayerKind::Contours, "too many", ""},
+      {"synthetic:random?n=60000000&duplicates=60000000", LayerKind::Points, "too many", ""},
+      // Each value finite, their sum not.
+      {"synthetic:random?x0=1e308&width=1e308", LayerKind::Points, "extent", ""},
+      {"synthetic:grid?z0=1e308&scale=1e308", LayerKind::Points, "not finite", ""},
       {"synthetic:grid?spacing=abc", LayerKind::Points, "spacing = 'abc' is not a number", ""},
       {"synthetic:grid?spacing=-1", LayerKind::Points, "spacing = -1 is out of range",
        "greater than 0"},
