@@ -277,27 +277,13 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
           if (!t.valid()) {
             ++c.boundary;
             c.boundaryHalfedges.push_back(h);
-            if (m.isConstrained(h)) ++c.constrained;
           } else {
             ++c.interiorHalf;
             if (t.value > i && t.value < nh && m.twin(t) == h) {
               ++c.pairs;
-              if (m.origin(t) != m.target(h) || m.target(t) != m.origin(h)) {
+              if (m.origin(t) != m.target(h) || m.target(t) != m.origin(h))
                 found.add("half-edge " + std::to_string(i) + " (" + edgeName(m, h) +
                           ") and its twin " + edgeName(m, t) + " do not join the same vertices");
-                continue;
-              }
-              const auto fa = m.edgeFeatures(h), fb = m.edgeFeatures(t);
-              if (!std::equal(fa.begin(), fa.end(), fb.begin(), fb.end())) {
-                found.add("edge " + edgeName(m, h) +
-                          " has different constraint features on its sides");
-              }
-              if (m.isConstrained(h)) ++c.constrained;
-            }
-          }
-          for (std::uint32_t f : m.edgeFeatures(h)) {
-            if (f >= m.features().size()) {
-              found.add("edge " + edgeName(m, h) + " names unknown feature " + std::to_string(f));
             }
           }
         }
@@ -310,6 +296,24 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
         counts.boundaryHalfedges.insert(counts.boundaryHalfedges.end(),
                                         c.boundaryHalfedges.begin(), c.boundaryHalfedges.end());
       });
+  // Constraint flags and features, from the constrained half-edges only:
+  // both sides of an edge carry the same features, each known; an edge
+  // counts once (a boundary edge has one side).
+  const std::size_t featureCount = m.features().size();
+  m.forEachConstrained([&](HalfedgeId h) {
+    const HalfedgeId t = m.twin(h);
+    const bool twinConstrained = t.valid() && t.value < nh && m.isConstrained(t);
+    if (!twinConstrained || h < t) ++counts.constrained;
+    const auto fa = m.edgeFeatures(h);
+    if (t.valid() && t.value < nh && (!twinConstrained || h < t)) {
+      const auto fb = m.edgeFeatures(t);
+      if (!std::equal(fa.begin(), fa.end(), fb.begin(), fb.end()))
+        problems.add("edge " + edgeName(m, h) + " has different constraint features on its sides");
+    }
+    for (std::uint32_t f : fa)
+      if (f >= featureCount)
+        problems.add("edge " + edgeName(m, h) + " names unknown feature " + std::to_string(f));
+  });
   if (2 * counts.pairs != counts.interiorHalf) {
     checkHalfedges(m, threads, maxProblems, problems, [&](HalfedgeId h, Problems& found) {
       const HalfedgeId t = m.twin(h);

@@ -79,6 +79,7 @@ class Spec {
   }
 
   [[nodiscard]] Pattern pattern() const { return pattern_; }
+  [[nodiscard]] bool has(const std::string& key) const { return values_.count(key) > 0; }
   [[nodiscard]] const std::string& name() const { return name_; }
 
   double number(const std::string& key, double fallback) const {
@@ -280,6 +281,18 @@ Params paramsOf(const Spec& spec) {
       p.interval = spec.positive("interval", 10);
       break;
   }
+  // Keys every pattern takes, given where they do nothing, are refused like
+  // unknown ones.
+  auto unused = [&](std::initializer_list<const char*> keys, const std::string& why) {
+    for (const char* key : keys)
+      if (spec.has(key))
+        spec.fail("key '" + std::string(key) + "' does nothing " + why, "leave it out");
+  };
+  if (p.pattern == Pattern::Rings)
+    unused({"surface", "scale", "noise", "seed"},
+           "for pattern rings (their heights step by interval from z0)");
+  if (p.pattern == Pattern::Lines && !p.linesHaveZ)
+    unused({"surface", "z0", "scale", "noise"}, "for lines with z=none (they have no heights)");
   // What the layer will hold, all told: never more than kMaxPoints.
   const double total =
       p.pattern == Pattern::Grid     ? static_cast<double>(p.nx) * p.ny + p.duplicates

@@ -157,6 +157,22 @@ TEST(Validator, FindsTwinsThatAreNotEachOthers) {
   }
 }
 
+TEST(Validator, FindsAnEdgeConstrainedOnOneSideOnly) {
+  // The diagonal's two half-edges (2 and 3) both carry the road; take it off
+  // one of them, either one.
+  for (const std::uint32_t side : {2u, 3u}) {
+    MeshStorage storage = Mesh::fromTinData(square()).release();
+    ASSERT_EQ(storage.consBits.at(0), (std::uint64_t{1} << 2) | (std::uint64_t{1} << 3));
+    storage.consBits[0] &= ~(std::uint64_t{1} << side);
+    storage.featureBegin = {0, 1};
+    storage.featureIds = {0};
+    const ValidationReport r = validate(Mesh::adopt(std::move(storage)));
+    EXPECT_FALSE(r.ok);
+    EXPECT_TRUE(mentions(r, "different constraint features on its sides")) << side << ": " << r.summary();
+    EXPECT_EQ(r.constrainedEdges, 1u) << side;
+  }
+}
+
 // A grid of n × n squares, two triangles each.
 TinData grid(std::uint32_t n) {
   TinData tin;

@@ -171,6 +171,11 @@ TEST(SyntheticReader, BadSpecsNameTheSpecAndTheKey) {
        "would hold 10000000000000000 points or vertices, too many", "n × vertices"},
       {"synthetic:rings?n=20000&vertices=20000", LayerKind::Contours, "too many", ""},
       {"synthetic:random?n=60000000&duplicates=60000000", LayerKind::Points, "too many", ""},
+      // Keys every pattern takes, where they do nothing.
+      {"synthetic:rings?surface=hill", LayerKind::Contours,
+       "key 'surface' does nothing for pattern rings", "leave it out"},
+      {"synthetic:lines?z=none&scale=5", LayerKind::Road,
+       "key 'scale' does nothing for lines with z=none", ""},
       // Each value finite, their sum not.
       {"synthetic:random?x0=1e308&width=1e308", LayerKind::Points, "extent", ""},
       {"synthetic:grid?z0=1e308&scale=1e308", LayerKind::Points, "not finite", ""},
