@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -32,13 +33,8 @@ inline std::pair<VertexId, VertexId> edgeOfKey(std::uint64_t k) {
 /// edge per vertex.
 class EdgeFeatureMap {
  public:
-  struct View {
-    const FeatureId* data = nullptr;
-    std::size_t size = 0;
-    [[nodiscard]] const FeatureId* begin() const { return data; }
-    [[nodiscard]] const FeatureId* end() const { return data + size; }
-    [[nodiscard]] bool empty() const { return size == 0; }
-  };
+  /// An edge's features (empty: not constrained), valid until the map changes.
+  using View = std::span<const FeatureId>;
 
   [[nodiscard]] View find(std::uint64_t key) const {
     const Entry* e = table_.find(key);

@@ -21,10 +21,8 @@
 // neither does the mesh.
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <string>
-#include <thread>
 #include <unordered_map>
 #include <utility>
 
@@ -199,36 +197,20 @@ bool ConstrainedTriangulation::insertAsTwoHalves(std::vector<VertexId>& order) {
   right.edgeFeatures.reserve(rightSegments.size());
 
   // Each half is triangulated and classified on its own thread.
+  // The left half on the calling thread; with one thread, left then right.
+  // An exception of the left half wins over one of the right.
   IdVector<TriangleId, std::uint8_t> unsafeLeft, unsafeRight;
-  std::exception_ptr rightError;
-  auto buildRight = [&] {
-    try {
+  parallelParts(2, 2, threadCount(), [&](std::size_t, std::size_t, unsigned half) {
+    if (half == 0) {
+      insertInOrder(leftOrder);
+      insertSegments(leftSegments);
+      unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
+    } else {
       right.insertInOrder(rightOrder);
       right.insertPendingSegments();
       unsafeRight = right.unsafeTriangles(false, leftMax, rightMin);
-    } catch (...) {
-      rightError = std::current_exception();
     }
-  };
-  auto buildLeft = [&] {
-    insertInOrder(leftOrder);
-    insertSegments(leftSegments);
-    unsafeLeft = unsafeTriangles(true, leftMax, rightMin);
-  };
-  if (threadCount() >= 2) {
-    std::thread worker(buildRight);
-    try {
-      buildLeft();
-    } catch (...) {
-      worker.join();
-      throw;
-    }
-    worker.join();
-  } else {
-    buildLeft();
-    buildRight();
-  }
-  if (rightError) std::rethrow_exception(rightError);
+  });
   std::vector<VertexId>().swap(leftOrder);
   std::vector<VertexId>().swap(rightOrder);
 

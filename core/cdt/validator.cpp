@@ -56,13 +56,13 @@ ValidationReport Cdt::validateCounting(const ValidationOptions& options,
   if (!m.domain.hasBoundary && !m.domain.hasHole) {
     const Mesh& me = mesh();
     std::vector<std::vector<std::pair<std::uint32_t, FeatureId>>> adj(me.vertexCount());
-    for (std::uint32_t h = 0; h < me.halfedgeCount(); ++h) {
-      const std::uint32_t o = me.origin(HalfedgeId(h)).value, t = me.target(HalfedgeId(h)).value;
-      for (FeatureId f : me.edgeFeatures(HalfedgeId(h))) {
+    me.forEachConstrained([&](HalfedgeId h) {
+      const std::uint32_t o = me.origin(h).value, t = me.target(h).value;
+      for (FeatureId f : me.edgeFeatures(h)) {
         adj[o].emplace_back(t, f);
         adj[t].emplace_back(o, f);
       }
-    }
+    });
     // A crossing moved to a vertex beyond the tolerance is reported (forced);
     // it bends both features' constraints, and later crossings may split the
     // bent edges, so their segments are checked for connectivity only.

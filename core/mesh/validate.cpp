@@ -255,7 +255,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   // involution exactly when the pairs cover them all (2 · pairs ==
   // interiorHalf). When they do not, a second pass names the culprits.
   struct HalfedgeCounts {
-    std::size_t boundary = 0, interiorHalf = 0, pairs = 0, constrained = 0;
+    std::size_t boundary = 0, interiorHalf = 0, pairs = 0;
     std::vector<HalfedgeId> boundaryHalfedges;
   };
   HalfedgeCounts counts;
@@ -292,7 +292,6 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
         counts.boundary += c.boundary;
         counts.interiorHalf += c.interiorHalf;
         counts.pairs += c.pairs;
-        counts.constrained += c.constrained;
         counts.boundaryHalfedges.insert(counts.boundaryHalfedges.end(),
                                         c.boundaryHalfedges.begin(), c.boundaryHalfedges.end());
       });
@@ -300,10 +299,11 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   // both sides of an edge carry the same features, each known; an edge
   // counts once (a boundary edge has one side).
   const std::size_t featureCount = m.features().size();
+  std::size_t constrainedEdges = 0;
   m.forEachConstrained([&](HalfedgeId h) {
     const HalfedgeId t = m.twin(h);
     const bool twinConstrained = t.valid() && t.value < nh && m.isConstrained(t);
-    if (!twinConstrained || h < t) ++counts.constrained;
+    if (!twinConstrained || h < t) ++constrainedEdges;
     const auto fa = m.edgeFeatures(h);
     if (t.valid() && t.value < nh && (!twinConstrained || h < t)) {
       const auto fb = m.edgeFeatures(t);
@@ -324,7 +324,7 @@ ValidationReport validate(const Mesh& m, const ValidationOptions& options) {
   }
   r.boundaryEdges = counts.boundary;
   r.edges = counts.boundary + counts.interiorHalf / 2;
-  r.constrainedEdges = counts.constrained;
+  r.constrainedEdges = constrainedEdges;
 
   // Boundary loops, their orientation, and pinched vertices.
   const BoundaryLoops loops = traceBoundaryLoops(m, counts.boundaryHalfedges, problems);

@@ -1,8 +1,21 @@
 #include "server/app/metrics.hpp"
 
 #include <cstdio>
+#include <string>
 
 namespace tinsmith::server {
+namespace {
+
+/// A metric with one value, as the exposition format writes it: its HELP and
+/// TYPE lines, then `name value`.
+void appendSingle(std::string& out, const char* name, const char* type, const char* help,
+                  const std::string& value) {
+  out.append("# HELP ").append(name).append(" ").append(help).append("\n");
+  out.append("# TYPE ").append(name).append(" ").append(type).append("\n");
+  out.append(name).append(" ").append(value).append("\n");
+}
+
+}  // namespace
 
 std::size_t Metrics::statusSlot(int status) {
   for (std::size_t i = 0; i + 1 < kStatusSlots; ++i)
@@ -70,38 +83,23 @@ std::string Metrics::prometheusText() const {
                 static_cast<double>(latencyNanos_.load(kRelaxed)) * 1e-9,
                 static_cast<unsigned long long>(cumulative));
   out += line;
-  char tail[768];
-  std::snprintf(tail, sizeof tail,
-                "# HELP tinsmith_tile_cache_hits_total Tiles and tileset files served from memory.\n"
-                "# TYPE tinsmith_tile_cache_hits_total counter\n"
-                "tinsmith_tile_cache_hits_total %llu\n"
-                "# HELP tinsmith_tile_cache_misses_total Tiles and tileset files read from a store.\n"
-                "# TYPE tinsmith_tile_cache_misses_total counter\n"
-                "tinsmith_tile_cache_misses_total %llu\n"
-                "# HELP tinsmith_open_connections Connections open now.\n"
-                "# TYPE tinsmith_open_connections gauge\n"
-                "tinsmith_open_connections %lld\n",
-                static_cast<unsigned long long>(cacheHits_.load(kRelaxed)),
-                static_cast<unsigned long long>(cacheMisses_.load(kRelaxed)),
-                static_cast<long long>(openConnections_.load(kRelaxed)));
-  out += tail;
-  std::snprintf(tail, sizeof tail,
-                "# HELP tinsmith_tiles_built_on_demand_total Tiles built from a store's TIN "
-                "(--on-demand), each once.\n"
-                "# TYPE tinsmith_tiles_built_on_demand_total counter\n"
-                "tinsmith_tiles_built_on_demand_total %llu\n"
-                "# HELP tinsmith_on_demand_waits_total Requests that waited for a tile another "
-                "request was building.\n"
-                "# TYPE tinsmith_on_demand_waits_total counter\n"
-                "tinsmith_on_demand_waits_total %llu\n"
-                "# HELP tinsmith_on_demand_build_seconds_total Time spent building tiles on "
-                "demand.\n"
-                "# TYPE tinsmith_on_demand_build_seconds_total counter\n"
-                "tinsmith_on_demand_build_seconds_total %.6f\n",
-                static_cast<unsigned long long>(tilesBuilt_.load(kRelaxed)),
-                static_cast<unsigned long long>(buildWaits_.load(kRelaxed)),
-                static_cast<double>(buildNanos_.load(kRelaxed)) * 1e-9);
-  out += tail;
+  appendSingle(out, "tinsmith_tile_cache_hits_total", "counter",
+               "Tiles and tileset files served from memory.",
+               std::to_string(cacheHits_.load(kRelaxed)));
+  appendSingle(out, "tinsmith_tile_cache_misses_total", "counter",
+               "Tiles and tileset files read from a store.",
+               std::to_string(cacheMisses_.load(kRelaxed)));
+  appendSingle(out, "tinsmith_open_connections", "gauge", "Connections open now.",
+               std::to_string(static_cast<long long>(openConnections_.load(kRelaxed))));
+  appendSingle(out, "tinsmith_tiles_built_on_demand_total", "counter",
+               "Tiles built from a store's TIN (--on-demand), each once.",
+               std::to_string(tilesBuilt_.load(kRelaxed)));
+  appendSingle(out, "tinsmith_on_demand_waits_total", "counter",
+               "Requests that waited for a tile another request was building.",
+               std::to_string(buildWaits_.load(kRelaxed)));
+  appendSingle(out, "tinsmith_on_demand_build_seconds_total", "counter",
+               "Time spent building tiles on demand.",
+               std::to_string(static_cast<double>(buildNanos_.load(kRelaxed)) * 1e-9));  // %f
   return out;
 }
 

@@ -237,7 +237,8 @@ const ingest::TileRebuilder& Tileset::rebuilder() const {
 
 bool Tileset::keep(const std::string& key, std::string_view bytes, std::string& why) const {
   std::lock_guard lock(writerMutex_);
-  if (writerFailed_) return false;
+  // Writing was tried (writesInPlace_) and the writer is gone: it failed.
+  if (writesInPlace_ && !writer_) return false;
   try {
     if (!writer_) {
       // Said before the opening, which already changes the file (an archive
@@ -250,7 +251,6 @@ bool Tileset::keep(const std::string& key, std::string_view bytes, std::string& 
     return true;
   } catch (const std::exception& e) {
     // A read-only store (or disk): serve from memory, and say so once.
-    writerFailed_ = true;
     writer_.reset();
     why = e.what();
     return false;

@@ -101,7 +101,6 @@ class Tileset {
   mutable std::string rebuilderError_;
   mutable std::mutex writerMutex_;
   mutable std::unique_ptr<store::TileStore> writer_;
-  mutable bool writerFailed_ = false;
   mutable std::atomic<bool> writesInPlace_{false};
   mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
   mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;

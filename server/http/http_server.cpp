@@ -319,8 +319,7 @@ HttpServer::HttpServer(ServerOptions options, Handler handler, Observer observer
   m.handler = std::move(handler);
   m.observer = std::move(observer);
   m.connectionObserver = std::move(connections);
-  int threads = m.options.threads;
-  if (threads <= 0) threads = static_cast<int>(resolveThreads(0));
+  const int threads = static_cast<int>(resolveThreads(m.options.threads));
   for (int i = 0; i < threads; ++i) {
     m.contexts.push_back(std::make_unique<asio::io_context>(1));
     m.guards.push_back(asio::make_work_guard(*m.contexts.back()));

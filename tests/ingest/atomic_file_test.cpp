@@ -15,11 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::size_t filesIn(const fs::path& dir) {
-  return static_cast<std::size_t>(
-      std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
-}
-
 TEST(AtomicPath, CommitRenamesTheTempFileOntoTheTarget) {
   const auto dir = test::scratchDir("atomic_path_commit");
   const auto target = dir / "out.tif";
@@ -31,7 +26,7 @@ TEST(AtomicPath, CommitRenamesTheTempFileOntoTheTarget) {
   std::ofstream(out.temp(), std::ios::binary) << "new";
   out.commit();
   EXPECT_EQ(test::readFile(target), "new");
-  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_EQ(test::filesIn(dir), 1u);
   EXPECT_THROW(out.commit(), Error);
 }
 
@@ -44,7 +39,7 @@ TEST(AtomicPath, WithoutCommitTheTempFileGoesAndTheTargetStays) {
     std::ofstream(out.temp(), std::ios::binary) << "half";
   }
   EXPECT_EQ(test::readFile(target), "old");
-  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_EQ(test::filesIn(dir), 1u);
   AtomicPath discarded(target);
   discarded.discard();
   EXPECT_FALSE(fs::exists(discarded.temp()));
@@ -62,7 +57,7 @@ TEST(AtomicPath, TwoWritersOfOneTargetDoNotCollide) {
   EXPECT_EQ(test::readFile(target), "second");
   first.commit();  // the last to finish wins, whole
   EXPECT_EQ(test::readFile(target), "first");
-  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_EQ(test::filesIn(dir), 1u);
 }
 
 TEST(AtomicPath, ARenameThatFailsRemovesTheTempFile) {
@@ -78,7 +73,7 @@ TEST(AtomicPath, ARenameThatFailsRemovesTheTempFile) {
     EXPECT_EQ(e.kind(), ErrorKind::Io);
     EXPECT_EQ(e.where().file, target.string());
   }
-  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_EQ(test::filesIn(dir), 1u);
   EXPECT_TRUE(fs::is_directory(target));
 }
 
@@ -100,16 +95,16 @@ TEST(AtomicFile, WritesWholeOrNothing) {
   {
     AtomicFile file(target);
     file.write("{\"a\": 1}");
-    EXPECT_EQ(filesIn(dir), 1u);  // only the temp file
+    EXPECT_EQ(test::filesIn(dir), 1u);  // only the temp file
     EXPECT_FALSE(fs::exists(target));
   }
-  EXPECT_EQ(filesIn(dir), 0u);
+  EXPECT_EQ(test::filesIn(dir), 0u);
   AtomicFile file(target);
   file.write("{\"a\": 2}");
   file.writeAt(6, "3", 1);
   file.commit();
   EXPECT_EQ(test::readFile(target), "{\"a\": 3}");
-  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_EQ(test::filesIn(dir), 1u);
 }
 
 }  // namespace

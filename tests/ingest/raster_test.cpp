@@ -32,11 +32,6 @@ HeightGrid sampleGrid() {
   return g;
 }
 
-std::size_t filesIn(const std::filesystem::path& dir) {
-  return static_cast<std::size_t>(std::distance(std::filesystem::directory_iterator(dir),
-                                                std::filesystem::directory_iterator()));
-}
-
 void expectSameGrid(const HeightGrid& a, const HeightGrid& b) {
   EXPECT_EQ(a.width, b.width);
   EXPECT_EQ(a.height, b.height);
@@ -55,7 +50,7 @@ TEST(RasterIo, GeoTiffRoundTrip) {
   const auto dir = test::scratchDir("raster_tif");
   const auto grid = sampleGrid();
   writeGeoTiff(grid, dir / "h.tif");
-  EXPECT_EQ(filesIn(dir), 1u);  // no temp file left beside it
+  EXPECT_EQ(test::filesIn(dir), 1u);  // no temp file left beside it
   const auto back = readHeightGrid(dir / "h.tif");
   expectSameGrid(grid, back);
   EXPECT_EQ(back.crs, "EPSG:26912");
@@ -142,19 +137,19 @@ TEST(RasterIo, AFailedWriteLeavesNoTempFileAndNoPartialTarget) {
   auto bad = sampleGrid();
   bad.crs = "not a CRS";  // GDAL fails after the file is created
   EXPECT_THROW(writeGeoTiff(bad, dir / "h.tif"), Error);
-  EXPECT_EQ(filesIn(dir), 0u);
+  EXPECT_EQ(test::filesIn(dir), 0u);
   // Over an existing target: the old file stays, byte for byte.
   writeGeoTiff(sampleGrid(), dir / "h.tif");
   const std::string before = test::readFile(dir / "h.tif");
   EXPECT_THROW(writeGeoTiff(bad, dir / "h.tif"), Error);
   EXPECT_EQ(test::readFile(dir / "h.tif"), before);
-  EXPECT_EQ(filesIn(dir), 1u);
+  EXPECT_EQ(test::filesIn(dir), 1u);
   // A target that cannot be replaced (a folder): the finished temp file goes.
   std::filesystem::create_directories(dir / "taken.exr" / "inside");
   std::filesystem::create_directories(dir / "taken.tif" / "inside");
   EXPECT_THROW(writeExr(sampleGrid(), dir / "taken.exr"), Error);
   EXPECT_THROW(writeGeoTiff(sampleGrid(), dir / "taken.tif"), Error);
-  EXPECT_EQ(filesIn(dir), 3u);
+  EXPECT_EQ(test::filesIn(dir), 3u);
 }
 
 TEST(RasterIo, TwoWritersOfOneTargetDoNotCollide) {
@@ -183,7 +178,7 @@ TEST(RasterIo, TwoWritersOfOneTargetDoNotCollide) {
     const auto back = readHeightGrid(target);
     expectSameGrid(back.z[0] == other.z[0] ? other : sampleGrid(), back);
   }
-  EXPECT_EQ(filesIn(dir), 2u);
+  EXPECT_EQ(test::filesIn(dir), 2u);
 }
 
 TEST(RasterIo, RedButteDem) {

@@ -73,10 +73,6 @@ PlainInputs makePlainInputs(const std::string& name) {
   return in;
 }
 
-std::size_t filesIn(const fs::path& dir) {
-  return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
-}
-
 TEST(TinCli, PlainPointsAndBreakLinesMakeAValidTinThatTheCheckerAccepts) {
   const auto in = makePlainInputs("cli-plain");
   const fs::path tin = in.dir / "out.tin", obj = in.dir / "out.obj";
@@ -422,7 +418,7 @@ TEST(TinCli, BadInputFailsClearlyAndLeavesNoFile) {
     EXPECT_EQ(r.exitCode, c.exitCode) << c.name << ": " << r.err;
     EXPECT_EQ(r.err.rfind("ERROR: ", 0), 0u) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.mentions), std::string::npos) << c.name << ": " << r.err;
-    EXPECT_EQ(filesIn(out.parent_path()), 0u) << c.name << " left a file behind";
+    EXPECT_EQ(test::filesIn(out.parent_path()), 0u) << c.name << " left a file behind";
   }
 }
 
@@ -434,7 +430,7 @@ TEST(TinCli, AFailedRunKeepsTheOldOutputAndAMissingDirectoryIsAnIoError) {
   auto r = runTinsmith("tin --points " + (in.dir / "bad.xyz").string() + " -o " + out.string());
   EXPECT_EQ(r.exitCode, 3);
   EXPECT_EQ(readFile(out), "previous");
-  const auto before = filesIn(in.dir);
+  const auto before = test::filesIn(in.dir);
   r = runTinsmith("tin --points " + in.points.string() + " -o " + (in.dir / "no/such/dir/x.tin").string());
   EXPECT_EQ(r.exitCode, 5) << r.err;
   EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
@@ -442,7 +438,7 @@ TEST(TinCli, AFailedRunKeepsTheOldOutputAndAMissingDirectoryIsAnIoError) {
                   (in.dir / "nope/r.json").string());
   EXPECT_EQ(r.exitCode, 5) << r.err;
   EXPECT_EQ(readFile(out), "previous");
-  EXPECT_EQ(filesIn(in.dir), before);
+  EXPECT_EQ(test::filesIn(in.dir), before);
 }
 
 // A .tin written by hand from the documented layout (ingest/tinfile/tin_file.hpp):
@@ -527,7 +523,7 @@ TEST(TinCli, StrictMakesContourCrossingsFatalAndWritesNothing) {
   auto r = runTinsmith("tin " + config + " -o " + (dir / "c.tin").string() + " --strict");
   EXPECT_EQ(r.exitCode, 3) << r.err;
   EXPECT_NE(r.err.find("cross"), std::string::npos) << r.err;
-  EXPECT_EQ(filesIn(dir), 0u);
+  EXPECT_EQ(test::filesIn(dir), 0u);
   // Without --strict the same crossings are reported and the TIN is built.
   r = runTinsmith("tin " + config + " -o " + (dir / "c.tin").string() + " --report " + (dir / "r.json").string());
   EXPECT_EQ(r.exitCode, 0) << r.err;
