@@ -188,6 +188,15 @@ PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span
   return sys;
 }
 
+PenalizedSystem assembleSystem(std::size_t vertexCount, std::span<const Triangle> triangles,
+                               std::span<const TriangleMoments> moments,
+                               std::optional<SparseMatrix> energy, double lambdaFactor,
+                               std::optional<double> lambdaAbsolute) {
+  if (energy) return assemblePenalized(triangles, moments, *energy, lambdaFactor, lambdaAbsolute);
+  NormalEquations eq = scatterMoments(vertexCount, triangles, moments);
+  return {std::move(eq.btb), std::move(eq.btz)};
+}
+
 SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
   checkTriangles(vertices.size(), triangles);
   // E = GᵀG with two rows per triangle, √A_t ∇g_t = (Σ η_i c_i, Σ μ_i c_i) / (2√A_t):
@@ -503,20 +512,14 @@ LeastSquaresResult fitLeastSquares(std::span<const Point2> vertices, std::span<c
   // smoothing matrix's pattern (or alone without smoothing).
   const std::vector<TriangleMoments> moments = triangleMoments(vertices.size(), triangles, samples);
   LeastSquaresResult result;
-  SparseMatrix a;
-  Vector b;
-  if (options.smoothing != Smoothing::None) {
-    PenalizedSystem sys = assemblePenalized(triangles, moments, smoothingMatrix(options.smoothing, vertices, triangles),
-                                            options.lambdaFactor, options.lambdaAbsolute);
-    result.lambdaDefault = sys.lambdaDefault;
-    result.lambda = sys.lambda;
-    a = std::move(sys.a);
-    b = std::move(sys.b);
-  } else {
-    NormalEquations eq = scatterMoments(vertices.size(), triangles, moments);
-    a = std::move(eq.btb);
-    b = std::move(eq.btz);
-  }
+  std::optional<SparseMatrix> energy;
+  if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, vertices, triangles);
+  PenalizedSystem sys = assembleSystem(vertices.size(), triangles, moments, std::move(energy),
+                                       options.lambdaFactor, options.lambdaAbsolute);
+  result.lambdaDefault = sys.lambdaDefault;
+  result.lambda = sys.lambda;
+  SparseMatrix& a = sys.a;
+  Vector& b = sys.b;
   applyFixedVertices(a, b, options.fixed);
   result.coefficients = initial.size() == b.size() ? initial : Vector::Zero(b.size());
   result.report = solveSystem(a, b, result.coefficients, options.solver, options.control);

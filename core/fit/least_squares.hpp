@@ -115,6 +115,13 @@ struct PenalizedSystem {
 PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
                                   const SparseMatrix& energy, double lambdaFactor,
                                   std::optional<double> lambdaAbsolute);
+/// The system a fit solves: assemblePenalized with `energy` (freed on
+/// return, before the solve), or without smoothing (no energy) the moments
+/// alone, scatterMoments, with λ 0.
+PenalizedSystem assembleSystem(std::size_t vertexCount, std::span<const Triangle> triangles,
+                               std::span<const TriangleMoments> moments,
+                               std::optional<SparseMatrix> energy, double lambdaFactor,
+                               std::optional<double> lambdaAbsolute);
 
 /// Membrane energy matrix (section 8.6): symmetric PSD, annihilates constants.
 SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles);

@@ -157,24 +157,16 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
 
     // The smoothing matrix first: its temporaries are gone before the
     // per-part moments are allocated (lower peak memory).
-    SparseMatrix energy;
+    std::optional<SparseMatrix> energy;
     if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
     const std::vector<TriangleMoments>& moments =
         levelMoments(mesh, level, data, tris, triIndex, triVerts, positions, triOf, previousTris,
                      previousMoments, threads);
-    SparseMatrix a;
-    Vector rhs;
-    if (options.smoothing != Smoothing::None) {
-      PenalizedSystem sys = assemblePenalized(triVerts, moments, energy, options.lambdaFactor, options.lambdaAbsolute);
-      st.lambda = sys.lambda;
-      energy = SparseMatrix();
-      a = std::move(sys.a);
-      rhs = std::move(sys.b);
-    } else {
-      NormalEquations eq = scatterMoments(nv, triVerts, moments);
-      a = std::move(eq.btb);
-      rhs = std::move(eq.btz);
-    }
+    PenalizedSystem sys = assembleSystem(nv, triVerts, moments, std::move(energy),
+                                         options.lambdaFactor, options.lambdaAbsolute);
+    st.lambda = sys.lambda;
+    SparseMatrix& a = sys.a;
+    Vector& rhs = sys.b;
     applyFixedVertices(a, rhs, fixed);
     st.solver = level <= options.directLevels ? SolverKind::Direct : options.solver;
     const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 
@@ -380,7 +381,7 @@ ProjectConfig parseProjectConfig(std::string_view text, const std::filesystem::p
 
   ProjectConfig config;
   config.file = std::filesystem::absolute(file).lexically_normal();
-  checkKeys(ctx, root, "the config", {"project", "layer", "tin", "fit", "tiles", "server"});
+  checkKeys(ctx, root, "the config", {std::begin(kConfigTables), std::end(kConfigTables)});
 
   const auto* projectNode = root.get("project");
   if (!projectNode) ctx.fail("no [project] table", 1, "add [project] with crs = \"EPSG:...\"");

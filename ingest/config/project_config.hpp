@@ -23,6 +23,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/tin/tin_data.hpp"
@@ -63,6 +64,16 @@ struct LayerConfig {
   std::optional<double> nodata;  ///< `nodata` override of the raster's own
   std::int64_t configLine = 0;   ///< line of the [[layer]] in the config file
 };
+
+/// A layer named on the command line, not in a config: its name, its file
+/// (or synthetic spec) and its kind; every other key at its default.
+inline LayerConfig commandLineLayer(std::string name, std::filesystem::path path, LayerKind kind) {
+  LayerConfig config;
+  config.name = std::move(name);
+  config.path = std::move(path);
+  config.kind = kind;
+  return config;
+}
 
 struct TinOptions {
   double snapTolerance = 0.001;  ///< metres: points and vertices closer than this are merged

@@ -26,4 +26,8 @@ inline const char* typeName(const toml::node& node) {
   }
 }
 
+/// The top-level tables of a project config; [server] is read by the server
+/// (server/app/server_config), the others by ingest/config.
+inline constexpr const char* kConfigTables[] = {"project", "layer", "tin", "fit", "tiles", "server"};
+
 }  // namespace tinsmith::ingest

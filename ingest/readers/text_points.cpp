@@ -7,7 +7,6 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
-#include <sstream>
 #include <string_view>
 
 #include "core/base/error.hpp"

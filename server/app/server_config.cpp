@@ -31,10 +31,6 @@ namespace {
 using ingest::lineOf;
 using ingest::typeName;
 
-/// Top-level tables of a build config (ingest/config): allowed beside
-/// [server] and not read here.
-constexpr const char* kBuildTables[] = {"project", "layer", "tin", "fit", "tiles"};
-
 struct Reader {
   fs::path file;
   ServerSettings& settings;
@@ -182,8 +178,8 @@ std::set<std::string> applyServerConfigText(std::string_view text, const fs::pat
   }
   for (const auto& [key, node] : root) {
     const std::string name(key.str());
-    bool known = name == "server";
-    for (const char* t : kBuildTables) known = known || name == t;
+    bool known = false;  // [server], or a table of the build config, not read here
+    for (const char* t : ingest::kConfigTables) known = known || name == t;
     if (!known)
       reader.fail("unknown top-level key '" + name + "'", lineOf(node),
                   "tinsmith serve reads [server]; a build config may also have [project], "

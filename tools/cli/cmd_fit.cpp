@@ -206,11 +206,8 @@ bool isRasterPath(const std::string& path) {
 
 std::vector<Point3> readFitInput(const std::string& path, std::string& crs) {
   if (ingest::isSyntheticSpec(path)) {
-    ingest::LayerConfig config;
-    config.name = path;
-    config.path = path;
-    config.kind = ingest::LayerKind::Points;
-    return ingest::readSyntheticLayer(config).points;
+    return ingest::readSyntheticLayer(ingest::commandLineLayer(path, path, ingest::LayerKind::Points))
+        .points;
   }
   if (!isRasterPath(path)) return ingest::readTextPoints(path);
   const ingest::HeightGrid grid = ingest::readHeightGrid(path);

@@ -63,14 +63,6 @@ bool isTextPolylineFile(const std::filesystem::path& p) {
   return ext == ".txt" || ext == ".xyz" || ext == ".pl" || ext == ".poly" || ext == ".lines";
 }
 
-ingest::LayerConfig plainLayerConfig(const std::string& spec, ingest::LayerKind kind) {
-  ingest::LayerConfig config;
-  config.name = spec;
-  config.path = spec;
-  config.kind = kind;
-  return config;
-}
-
 // Plain mode: every input as it is; points of kind Other, break lines of kind
 // BreakLine, so a line keeps its z where it passes through a point.
 // Each file's read time goes into `times` as the stage "read FILENAME".
@@ -92,17 +84,14 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
     if (ingest::isSyntheticSpec(file)) {
       layer.name = file;
       layer.points =
-          ingest::readSyntheticLayer(plainLayerConfig(file, ingest::LayerKind::Points)).points;
+          ingest::readSyntheticLayer(ingest::commandLineLayer(file, file, ingest::LayerKind::Points)).points;
     } else if (ingest::isTextPointFile(file)) {
       ingest::TextPointOptions text;
       text.threads = o.threads;
       layer.points = ingest::readTextPoints(file, text);
     } else {
-      ingest::LayerConfig config;
-      config.name = layer.name;
-      config.path = file;
-      config.kind = ingest::LayerKind::Points;
-      const auto read = ingest::readOgrLayer(config);
+      const auto read =
+          ingest::readOgrLayer(ingest::commandLineLayer(layer.name, file, ingest::LayerKind::Points));
       if (!read.hasZ)
         throw inputError("the points have no z", fileLocation(file),
                          "give 3D points, or use a config with a 'z' attribute");
@@ -119,7 +108,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
     layer.source = file;
     if (ingest::isSyntheticSpec(file)) {
       layer.name = file;
-      const auto read = ingest::readSyntheticLayer(plainLayerConfig(file, ingest::LayerKind::Road));
+      const auto read = ingest::readSyntheticLayer(ingest::commandLineLayer(file, file, ingest::LayerKind::Road));
       for (const auto& f : read.features) {
         if (!f.hasZ)
           throw inputError("break line has no z", {file, {}, f.fid, {}},
@@ -132,11 +121,9 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
         layer.lines.push_back({std::move(pl.vertices), pl.closed, true,
                                file + ", line " + std::to_string(pl.firstLine)});
     } else {
-      ingest::LayerConfig config;
-      config.name = layer.name;
-      config.path = file;
-      config.kind = ingest::LayerKind::Road;  // any line kind: read the lines as they are
-      const auto read = ingest::readOgrLayer(config);
+      // Any line kind: the lines are read as they are.
+      const auto read =
+          ingest::readOgrLayer(ingest::commandLineLayer(layer.name, file, ingest::LayerKind::Road));
       for (const auto& f : read.features) {
         const std::string where = file + ", feature " + std::to_string(f.fid) +
                                   (f.part > 0 ? ", part " + std::to_string(f.part) : "");
