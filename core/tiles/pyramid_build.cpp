@@ -15,11 +15,9 @@ double skirtDepth(const Tiler& tiler, const TileId& id, double error) {
   return std::max(2.0 * error, tiler.zoomTolerance(id.z));
 }
 
-PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
-                            int threads, const PyramidCallbacks& callbacks, int untilZoom) {
+void requireInPyramid(const Tiler& tiler, const TileId& root) {
   if (!tiler.geometry().inside(root))
     throw usageError("tile " + root.name() + " is outside the pyramid");
-  // A subtree's root must be in the pyramid: every ancestor refines.
   for (TileId a = root; a.z > 0;) {
     a = a.parent();
     const TileSurface s = tiler.buildTile(a);
@@ -30,6 +28,12 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
           "choose a subtree under a refined tile (tinsmith info lists them)");
     }
   }
+}
+
+PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
+                            int threads, const PyramidCallbacks& callbacks, int untilZoom) {
+  if (!tiler.geometry().inside(root))
+    throw usageError("tile " + root.name() + " is outside the pyramid");
   const unsigned workers = resolveThreads(threads);
 
   PyramidSummary summary;

@@ -32,10 +32,15 @@ struct PyramidSummary {
 /// The skirt depth of a tile: twice its error, at least its zoom's tolerance.
 double skirtDepth(const Tiler& tiler, const TileId& id, double error);
 
-/// Builds the pyramid under `root` (the whole pyramid for 0/0/0). A root
-/// below zoom 0 must be a tile of the pyramid: its ancestors are built (not
-/// emitted) to check that each refines; throws usageError otherwise. Tiles
-/// at `untilZoom` and below are left out (the walk stops above them).
+/// Throws usageError unless `root` is a tile of the pyramid: inside its
+/// grid, and every ancestor refines (the ancestors are built, not emitted, to
+/// see). A caller checks this before it touches any output.
+void requireInPyramid(const Tiler& tiler, const TileId& root);
+
+/// Builds the pyramid under `root` (the whole pyramid for 0/0/0), which
+/// must be a tile of the pyramid (requireInPyramid; only its grid is checked
+/// here). Tiles at `untilZoom` and below are left out (the walk stops above
+/// them).
 PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
                             int threads, const PyramidCallbacks& callbacks,
                             int untilZoom = 1 << 20);

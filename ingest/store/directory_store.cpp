@@ -7,12 +7,14 @@
 // not fsynced one by one (a tileset has many thousands of files): they are
 // atomic against readers and failures, not against a power cut.
 #include <fcntl.h>
+#include <stdio.h>  // renameat2
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <vector>
 
 #include "core/base/error.hpp"
 #include "ingest/store/store_detail.hpp"
@@ -189,6 +191,101 @@ class TempFolder {
 
 }  // namespace
 
+FolderSurvey surveyFolder(const fs::path& folder) {
+  FolderSurvey survey;
+  std::error_code ec;
+  fs::recursive_directory_iterator it(folder, ec);
+  for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    std::error_code entry;
+    const fs::file_status status = it->symlink_status(entry);
+    if (fs::is_directory(status)) continue;
+    ++survey.files;
+    const std::string key = it->path().lexically_relative(folder).generic_string();
+    if (key == kStoreMarkerKey) survey.marker = true;
+    const bool ours = fs::is_regular_file(status) &&
+                      (isTempName(it->path().filename().string()) ||
+                       (isValidKey(key) && isStoreKey(key)));
+    if (ours) continue;
+    if (survey.foreign++ == 0) survey.firstForeign = key;
+  }
+  if (ec)
+    throw ioError("cannot list the folder's files: " + ec.message(), fileLocation(folder),
+                  "check permissions");
+  return survey;
+}
+
+void removeStoreFolder(const fs::path& folder) {
+  std::error_code ec;
+  const fs::path marker = folder / fs::path(std::string(kStoreMarkerKey));
+  const fs::path markerFolder = marker.parent_path();
+  auto fail = [&](const std::error_code& e) {
+    return ioError("cannot remove the old tile folder: " + e.message(), fileLocation(folder),
+                   "check permissions");
+  };
+  // Everything but the marker's folder, then that folder but the marker.
+  for (const fs::path& dir : {folder, markerFolder}) {
+    fs::directory_iterator it(dir, ec);
+    if (ec == std::errc::no_such_file_or_directory) continue;
+    if (ec) throw fail(ec);
+    std::vector<fs::path> doomed;
+    for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+      if (it->path() != markerFolder && it->path() != marker) doomed.push_back(it->path());
+    }
+    if (ec) throw fail(ec);
+    for (const fs::path& p : doomed) {
+      fs::remove_all(p, ec);
+      if (ec) throw fail(ec);
+    }
+  }
+  fs::remove_all(folder, ec);
+  if (ec) throw fail(ec);
+}
+
+void moveFolderStore(const fs::path& staged, const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(target, ec))) {
+    fs::rename(staged, target, ec);
+    if (ec)
+      throw ioError("cannot move the finished folder into place: " + ec.message(),
+                    fileLocation(target), "check that the target's folder is writable");
+    return;
+  }
+  // One atomic step where the filesystem has it: the new store takes the
+  // name and the old one takes the staged name, to be removed.
+  if (::renameat2(AT_FDCWD, staged.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) == 0) {
+    try {
+      removeStoreFolder(staged);
+    } catch (const Error&) {
+      // The new store is in place; the old one stays under the staged name,
+      // which the next run empties.
+    }
+    return;
+  }
+  if (errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
+    throw ioError("cannot move the finished folder into place: " + errnoText(),
+                  fileLocation(target), "check that the target's folder is writable");
+  // Elsewhere, two renames: the old folder moves aside first, and comes back
+  // if the new one cannot take its place.
+  const fs::path aside = tempSibling(target);
+  fs::rename(target, aside, ec);
+  if (ec)
+    throw ioError("cannot move the old folder aside: " + ec.message(), fileLocation(target),
+                  "check that the target's folder is writable");
+  fs::rename(staged, target, ec);
+  if (ec) {
+    std::error_code back;
+    fs::rename(aside, target, back);
+    throw ioError("cannot move the finished folder into place: " + ec.message() +
+                      (back ? "; the old folder is now '" + aside.string() + "'" : std::string()),
+                  fileLocation(target), "check that the target's folder is writable");
+  }
+  try {
+    removeStoreFolder(aside);
+  } catch (const Error&) {
+    // Left under a temporary name for removeStaleTemps.
+  }
+}
+
 std::unique_ptr<TileStore> openDirectory(const fs::path& path, Access access) {
   std::error_code ec;
   const bool folder = fs::is_directory(path, ec);
@@ -201,12 +298,7 @@ std::unique_ptr<TileStore> openDirectory(const fs::path& path, Access access) {
   if (!folder && fs::exists(fs::symlink_status(path, ec)))
     throw ioError("the tile folder's path is taken by a file", fileLocation(path),
                   "remove it or choose another output path (an archive's name ends in .3dtiles)");
-  if (folder && access == Access::Fresh) {
-    fs::remove_all(path, ec);
-    if (ec)
-      throw ioError("cannot empty the old tile folder: " + ec.message(), fileLocation(path),
-                    "check permissions");
-  }
+  if (folder && access == Access::Fresh) removeStoreFolder(path);
   createFolderFor(path, path);
   return std::make_unique<DirectoryStore>(path, access);
 }
@@ -231,33 +323,7 @@ void writeDirectory(const TileStore& source, std::span<const std::string> keys,
       out.put(key, bytesForCopy(source, key));
     }
   }
-  if (!exists) {
-    fs::rename(staged.path(), target, ec);
-    if (ec)
-      throw ioError("cannot move the finished folder into place: " + ec.message(),
-                    fileLocation(target), "check that the target's folder is writable");
-    staged.release();
-    return;
-  }
-  // A folder cannot be renamed over a non-empty one: the old one moves aside
-  // first, and comes back if the new one cannot take its place.
-  TempFolder old(tempSibling(target));
-  fs::rename(target, old.path(), ec);
-  if (ec) {
-    old.release();
-    throw ioError("cannot move the old folder aside: " + ec.message(), fileLocation(target),
-                  "check that the target's folder is writable");
-  }
-  fs::rename(staged.path(), target, ec);
-  if (ec) {
-    const fs::path aside = old.path();
-    old.release();
-    std::error_code back;
-    fs::rename(aside, target, back);
-    throw ioError("cannot move the finished folder into place: " + ec.message() +
-                      (back ? "; the old folder is now '" + aside.string() + "'" : std::string()),
-                  fileLocation(target), "check that the target's folder is writable");
-  }
+  moveFolderStore(staged.path(), target);
   staged.release();
 }
 

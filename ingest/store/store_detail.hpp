@@ -38,6 +38,25 @@ void createFolderFor(const std::filesystem::path& folder, const std::filesystem:
 /// the source when the key is invalid or missing.
 std::string bytesForCopy(const TileStore& source, const std::string& key);
 
+/// What a folder holds, for requireReplaceable: whether it has the marker
+/// key, and the files that are not the store's (not a store key, not a
+/// put's temporary file; symbolic links and special files count too).
+struct FolderSurvey {
+  bool marker = false;
+  std::size_t files = 0;
+  std::size_t foreign = 0;
+  std::string firstForeign;  ///< relative path of one foreign file
+};
+FolderSurvey surveyFolder(const std::filesystem::path& folder);
+
+/// Removes a folder store (one that requireReplaceable accepts) with its
+/// marker key last, so a removal cut short leaves a replaceable store.
+/// Throws ioError naming `folder` when it cannot.
+void removeStoreFolder(const std::filesystem::path& folder);
+
+/// moveStore without the replaceable check (writeDirectory's own staged folder).
+void moveFolderStore(const std::filesystem::path& staged, const std::filesystem::path& target);
+
 std::unique_ptr<TileStore> openArchive(const std::filesystem::path& path, Access access);
 std::unique_ptr<TileStore> openDirectory(const std::filesystem::path& path, Access access);
 

@@ -3,11 +3,15 @@
 // archive or directory implementation.
 #include "ingest/store/tile_store.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
+#include <string>
+#include <vector>
 
 #include "core/base/error.hpp"
 #include "ingest/store/store_detail.hpp"
@@ -41,6 +45,13 @@ StoreKind storeKindFor(const std::filesystem::path& path) {
       std::equal(tail.begin(), tail.end(), kArchiveSuffix.begin(),
                  [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; });
   return archive ? StoreKind::Archive : StoreKind::Directory;
+}
+
+bool isStoreKey(std::string_view key) {
+  if (key == "tileset.json") return true;
+  for (const std::string_view folder : {"tiles/", "tilesets/", "tinsmith/"})
+    if (key.size() > folder.size() && key.starts_with(folder)) return true;
+  return false;
 }
 
 bool isValidKey(std::string_view key) {
@@ -110,6 +121,66 @@ std::string bytesForCopy(const TileStore& source, const std::string& key) {
 
 }  // namespace detail
 
+namespace {
+
+[[noreturn]] void refuseReplacing(const std::filesystem::path& path, const std::string& problem) {
+  throw ioError(problem, fileLocation(path),
+                "choose another output path, or move what is there away: tinsmith replaces "
+                "only a tile store it wrote (one holding " + std::string(kStoreMarkerKey) + ")");
+}
+
+std::string foreignText(std::size_t count, const std::string& first) {
+  return "it holds '" + first + "'" +
+         (count > 1 ? " and " + std::to_string(count - 1) + " other file" +
+                          (count > 2 ? "s" : "") + " that are not a tile store's"
+                    : std::string(", which is not a tile store's"));
+}
+
+}  // namespace
+
+void requireReplaceable(const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  const fs::path clean = withoutTrailingSlash(path);
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(clean, ec);
+  if (!fs::exists(status)) return;
+  if (fs::is_symlink(status))
+    refuseReplacing(clean, "is a symbolic link, not a tile store (give the path it points to)");
+  if (fs::is_directory(status)) {
+    if (storeKindFor(clean) == StoreKind::Archive)
+      refuseReplacing(clean, "is a folder, not a .3dtiles archive");
+    const detail::FolderSurvey survey = detail::surveyFolder(clean);
+    if (survey.foreign > 0)
+      refuseReplacing(clean, "is a folder that is not a tinsmith tile store: " +
+                                 foreignText(survey.foreign, survey.firstForeign));
+    if (!survey.marker && survey.files > 0)
+      refuseReplacing(clean, "is a folder that is not a tinsmith tile store (it has no " +
+                                 std::string(kStoreMarkerKey) + ")");
+    return;
+  }
+  if (!fs::is_regular_file(status) || storeKindFor(clean) != StoreKind::Archive)
+    refuseReplacing(clean, "is a file, not a tile folder");
+  std::vector<std::string> keys;
+  try {
+    keys = detail::openArchive(clean, detail::Access::Read)->keys();
+  } catch (const Error& e) {
+    refuseReplacing(clean, "is not a tinsmith tile archive (" + e.problem() + ")");
+  }
+  std::size_t foreign = 0;
+  std::string first;
+  bool marker = false;
+  for (const std::string& key : keys) {
+    marker = marker || key == kStoreMarkerKey;
+    if (!isStoreKey(key) && foreign++ == 0) first = key;
+  }
+  if (foreign > 0)
+    refuseReplacing(clean,
+                    "is an archive that is not a tinsmith tile store: " + foreignText(foreign, first));
+  if (!marker && !keys.empty())
+    refuseReplacing(clean, "is an archive that is not a tinsmith tile store (it has no " +
+                               std::string(kStoreMarkerKey) + ")");
+}
+
 std::unique_ptr<TileStore> openStoreForReading(const std::filesystem::path& path) {
   const std::filesystem::path clean = withoutTrailingSlash(path);
   std::error_code ec;
@@ -125,19 +196,64 @@ std::unique_ptr<TileStore> openStoreForWriting(const std::filesystem::path& path
                                                bool keepExisting) {
   const std::filesystem::path clean = withoutTrailingSlash(path);
   if (clean.empty()) throw ioError("the tile store path is empty", {}, "give an output path");
+  if (!keepExisting) requireReplaceable(clean);
   const detail::Access access = keepExisting ? detail::Access::Resume : detail::Access::Fresh;
-  if (storeKindFor(clean) == StoreKind::Archive) return detail::openArchive(clean, access);
-  return detail::openDirectory(clean, access);
+  std::unique_ptr<TileStore> store = storeKindFor(clean) == StoreKind::Archive
+                                         ? detail::openArchive(clean, access)
+                                         : detail::openDirectory(clean, access);
+  // Kept content must be a store's: tiles are never added to other files.
+  if (keepExisting && !store->contains(kStoreMarkerKey) && !store->keys().empty())
+    refuseReplacing(clean, "is not a tinsmith tile store (it has no " +
+                               std::string(kStoreMarkerKey) + ")");
+  return store;
 }
 
 void writeStore(const TileStore& source, std::span<const std::string> keys,
                 const std::filesystem::path& target) {
   const std::filesystem::path clean = withoutTrailingSlash(target);
   if (clean.empty()) throw ioError("the tile store path is empty", {}, "give an output path");
+  requireReplaceable(clean);
   if (storeKindFor(clean) == StoreKind::Archive)
     detail::writeArchive(source, keys, clean);
   else
     detail::writeDirectory(source, keys, clean);
+}
+
+void moveStore(const std::filesystem::path& staged, const std::filesystem::path& target) {
+  const std::filesystem::path clean = withoutTrailingSlash(target);
+  if (storeKindFor(clean) != StoreKind::Directory)
+    throw internalError("moveStore is for folder stores, not '" + clean.string() + "'");
+  requireReplaceable(clean);
+  detail::moveFolderStore(withoutTrailingSlash(staged), clean);
+}
+
+void removeStaleTemps(const std::filesystem::path& target) {
+  namespace fs = std::filesystem;
+  const fs::path clean = withoutTrailingSlash(target);
+  const std::string prefix = clean.filename().string() + std::string(kTempMarker);
+  const fs::path folder = clean.has_parent_path() ? clean.parent_path() : fs::path(".");
+  std::error_code ec;
+  const bool targetExists = fs::exists(clean, ec);
+  std::vector<fs::path> stale;
+  fs::directory_iterator it(folder, ec);
+  for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    std::string name = it->path().filename().string();
+    if (!name.starts_with(prefix)) continue;
+    for (const std::string_view sidecar : {"-journal", "-wal", "-shm"})
+      if (name.ends_with(sidecar)) name.resize(name.size() - sidecar.size());
+    if (!detail::isTempName(name) || name.rfind(kTempMarker) != prefix.size() - kTempMarker.size())
+      continue;
+    const std::string numbers = name.substr(prefix.size());
+    const long pid = std::stol(numbers.substr(0, numbers.find('-')));
+    if (pid <= 0 || pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
+      continue;  // its writer may still run
+    std::error_code entry;
+    // A folder may be the only copy of an old store (moved aside by a run
+    // killed before the new one took its name): kept unless the target is there.
+    if (it->is_directory(entry) && !targetExists) continue;
+    stale.push_back(it->path());
+  }
+  for (const fs::path& p : stale) fs::remove_all(p, ec);
 }
 
 }  // namespace tinsmith::store

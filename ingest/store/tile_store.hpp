@@ -11,6 +11,12 @@
 //     the target and renames it over (atomic on POSIX).
 // Readers may run while a writer writes (SQLite WAL for a staging archive;
 // readers open read-only).
+//
+// Ownership: a store never deletes what is not its own. Writing over an
+// existing path (openStoreForWriting without keepExisting, writeStore,
+// moveStore) first requires it to be replaceable (requireReplaceable): absent,
+// an empty folder, or a tinsmith store — it holds kStoreMarkerKey and nothing
+// but store keys. Anything else is refused, naming a file that would be lost.
 #pragma once
 
 #include <filesystem>
@@ -30,6 +36,21 @@ StoreKind storeKindFor(const std::filesystem::path& path);
 
 /// Whether a key is acceptable (see the file comment).
 bool isValidKey(std::string_view key);
+
+/// The key every tinsmith store holds, written first by the tile job: what
+/// marks a folder or an archive as a tinsmith store.
+inline constexpr std::string_view kStoreMarkerKey = "tinsmith/build.json";
+
+/// Whether `key` is one a tinsmith store writes: "tileset.json", or a key
+/// under "tiles/", "tilesets/" or "tinsmith/".
+bool isStoreKey(std::string_view key);
+
+/// Throws ioError naming `path` unless a new store may take its place with
+/// nothing lost: nothing is there, or an empty folder, or an archive or
+/// folder store that holds kStoreMarkerKey and only store keys (a folder
+/// store may also hold the temporary files of a put, and empty folders). The
+/// message names a file that is not the store's and says how many there are.
+void requireReplaceable(const std::filesystem::path& path);
 
 /// Every member may be called from several threads at once: an archive
 /// opened for reading hands each call one of a few SQLite connections (get()
@@ -58,8 +79,10 @@ class TileStore {
 std::unique_ptr<TileStore> openStoreForReading(const std::filesystem::path& path);
 
 /// Opens a store for writing, creating it (and its parent folder) when absent.
-/// `keepExisting` false empties an existing store first. Throws ioError
-/// naming the path when it cannot be created or written.
+/// `keepExisting` false empties an existing store first, which must be
+/// replaceable (requireReplaceable); `keepExisting` true requires an existing
+/// non-empty one to hold kStoreMarkerKey. Throws ioError naming the path when it
+/// is not a store or cannot be created or written.
 std::unique_ptr<TileStore> openStoreForWriting(const std::filesystem::path& path,
                                                bool keepExisting);
 
@@ -69,8 +92,23 @@ std::unique_ptr<TileStore> openStoreForWriting(const std::filesystem::path& path
 /// written as a sibling folder and renamed over). An archive written from the
 /// same keys and bytes in the same order has the same bytes, so one run, a
 /// resumed run and merged shards give identical files. Throws inputError for
-/// a key missing from `source`, ioError when the target cannot be written.
+/// a key missing from `source`, ioError when the target is not replaceable
+/// (requireReplaceable) or cannot be written.
 void writeStore(const TileStore& source, std::span<const std::string> keys,
                 const std::filesystem::path& target);
+
+/// Moves the finished folder store `staged` to `target` (a folder store's
+/// path, which must be replaceable), atomically: readers of `target` see the
+/// old store or the new one, and a process killed at any point leaves one of
+/// them whole under `target`. The old store is then removed, its marker key
+/// last (a removal cut short leaves a store that is still replaceable).
+/// Throws ioError naming the paths when the move fails; `staged` is then
+/// left as it was.
+void moveStore(const std::filesystem::path& staged, const std::filesystem::path& target);
+
+/// Removes temporary siblings of `target` (tempSibling names) that processes
+/// no longer running left behind: half-written archives and folders, and old
+/// stores that were moved aside. Best effort; errors are ignored.
+void removeStaleTemps(const std::filesystem::path& target);
 
 }  // namespace tinsmith::store

@@ -24,6 +24,11 @@ namespace {
 
 constexpr const char* kBuildKey = "tinsmith/build.json";
 constexpr const char* kTinKey = "tinsmith/terrain.tin";
+/// A shard's part of the pyramid: {"subtree": "Z/X/Y"} or {"untilZoom": Z}.
+/// Only shard stores hold it; merge reads it to know which tiles a shard
+/// answers for (a refined tile's child missing from its shard is empty).
+constexpr const char* kShardKey = "tinsmith/shard.json";
+static_assert(std::string_view(kBuildKey) == store::kStoreMarkerKey);
 
 /// What the tiles are a function of (and nothing else: no subtree, no
 /// threads, no time), so shards and resumed runs can be checked against it.
@@ -55,12 +60,26 @@ std::string buildRecord(const TinData& tin, const std::string& tinBytes, const s
   return j.dump(2) + "\n";
 }
 
-/// The canonical order of a finished store's keys: the build record and the
-/// TIN, the tiles in `records` (already in rowMajorLess order), then the
-/// tileset files.
+/// The shard record of a run: empty for a whole pyramid.
+std::string shardRecord(const TileJobOptions& o) {
+  nlohmann::ordered_json j;
+  if (o.subtree) {
+    j["subtree"] = o.subtree->name();
+  } else if (o.untilZoom) {
+    j["untilZoom"] = *o.untilZoom;
+  } else {
+    return {};
+  }
+  return j.dump() + "\n";
+}
+
+/// The canonical order of a finished store's keys: the build record, the
+/// TIN and a shard's record, the tiles in `records` (already in rowMajorLess
+/// order), then the tileset files.
 std::vector<std::string> canonicalKeys(const std::vector<TileRecord>& records,
-                                       std::vector<std::string> tilesetKeys) {
+                                       std::vector<std::string> tilesetKeys, bool shard = false) {
   std::vector<std::string> out{kBuildKey, kTinKey};
+  if (shard) out.push_back(kShardKey);
   for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
   std::sort(tilesetKeys.begin(), tilesetKeys.end());
   out.insert(out.end(), tilesetKeys.begin(), tilesetKeys.end());
@@ -133,28 +152,92 @@ std::vector<TileRecord> storeRecords(const store::TileStore& st) {
   return records;
 }
 
-/// Writes the tileset files from the records and, for an archive, the
-/// finished store in canonical order; removes the staging archive.
-void finish(store::TileStore& stage, const fs::path& output, const std::vector<TileRecord>& records,
+/// The path a store is named by: without trailing '/', and with "." and
+/// ".." resolved, so that its staging sibling and its folder are known.
+fs::path storePathFor(const fs::path& given) {
+  fs::path p = given;
+  while (!p.has_filename() && p.has_relative_path()) p = p.parent_path();
+  if (p.filename() == "." || p.filename() == "..") {
+    p = fs::absolute(p).lexically_normal();
+    while (!p.has_filename() && p.has_relative_path()) p = p.parent_path();
+  }
+  if (p.empty() || !p.has_filename())
+    throw usageError("'" + given.string() + "' cannot be a tile store",
+                     "give an output path such as out/site.3dtiles or out/site");
+  return p;
+}
+
+/// Where a store is built before it takes its name: "X.partial.3dtiles" for
+/// an archive X.3dtiles, the folder "X.partial" for a folder X.
+fs::path stagingPath(const fs::path& output) {
+  fs::path stage = output;
+  if (store::storeKindFor(output) == store::StoreKind::Directory) {
+    stage += ".partial";
+  } else {
+    stage.replace_extension(".partial.3dtiles");
+  }
+  return stage;
+}
+
+bool samePath(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::equivalent(a, b, ec)) return true;
+  return fs::absolute(a).lexically_normal() == fs::absolute(b).lexically_normal();
+}
+
+/// Gives the finished stage the output's name: an archive is written out
+/// in `keys` order and the stage removed; a folder is moved into place.
+/// Either way the output is replaced atomically.
+void publish(std::unique_ptr<store::TileStore>& stage, const fs::path& stagePath,
+             const fs::path& output, const std::vector<std::string>& keys) {
+  if (store::storeKindFor(output) == store::StoreKind::Archive) {
+    store::writeStore(*stage, keys, output);
+    stage.reset();
+    std::error_code ec;
+    fs::remove(stagePath, ec);
+  } else {
+    stage.reset();
+    store::moveStore(stagePath, output);
+  }
+}
+
+/// Writes the tileset files from the records into the stage and publishes
+/// it as the finished store.
+void finish(std::unique_ptr<store::TileStore>& stage, const fs::path& stagePath,
+            const fs::path& output, const std::vector<TileRecord>& records,
             const std::string& build, int storeUntilZoom = 1 << 20) {
   tiles::TilesetOptions tileset;
   tileset.extras = tilesetExtras(build);
   std::vector<std::string> tilesetKeys;
   for (const auto& [key, json] : tiles::tilesetFiles(records, tileset)) {
-    stage.put(key, json);
+    stage->put(key, json);
     tilesetKeys.push_back(key);
   }
   std::vector<TileRecord> stored;
   for (const auto& r : records)
     if (r.id.z < storeUntilZoom) stored.push_back(r);
-  if (stage.path() != output) store::writeStore(stage, canonicalKeys(stored, tilesetKeys), output);
+  publish(stage, stagePath, output, canonicalKeys(stored, tilesetKeys));
 }
 
-fs::path stagingPath(const fs::path& output) {
-  if (store::storeKindFor(output) == store::StoreKind::Directory) return output;
-  fs::path stage = output;
-  stage.replace_extension(".partial.3dtiles");
-  return stage;
+/// --resume: a store this run may take tiles from (its staging store or the
+/// finished output) must have been built from the same TIN and options (a
+/// tile is a function of those and its id), and for a shard as the same
+/// shard (a shard's store holds its part only). Throws usageError naming it
+/// otherwise; nullptr when nothing is there.
+std::unique_ptr<store::TileStore> resumableStore(const fs::path& path, const std::string& build,
+                                                 const std::string& shard) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return nullptr;
+  auto st = store::openStoreForReading(path);
+  const auto previousBuild = st->get(kBuildKey);
+  if (!previousBuild) return nullptr;  // an empty store (a run stopped at its start)
+  if (*previousBuild != build)
+    throw usageError("the store " + path.string() + " was built from another TIN or other options",
+                     "run without --resume to start over, or with the options it was built with");
+  if (!shard.empty() && st->get(kShardKey).value_or("") != shard)
+    throw usageError("the store " + path.string() + " was built as another shard",
+                     "resume with the --subtree / --until-zoom it was built with");
+  return st;
 }
 
 }  // namespace
@@ -242,27 +325,47 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   const Point3 centre{o.x + half, o.y + half, 0.0};
   geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
 
+  // Everything that can refuse the run is checked before the output is touched.
+  const TileId root = options.subtree.value_or(TileId{});
+  tiles::requireInPyramid(tiler, root);
   const std::string tinBytes = encodeTin(tin);
   const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler, content);
-  const fs::path stagePath = stagingPath(output);
-  auto stage = store::openStoreForWriting(stagePath, options.resume);
+  const std::string shard = shardRecord(options);
+  const fs::path out = storePathFor(output);
+  const fs::path stagePath = stagingPath(out);
+  store::requireReplaceable(out);
+  store::requireReplaceable(stagePath);
+  std::unique_ptr<store::TileStore> previous;  // the finished output's tiles, for --resume
   if (options.resume) {
-    const auto previous = stage->get(kBuildKey);
-    if (previous && *previous != build) {
-      throw usageError(
-          "the store " + stagePath.string() + " was built from another TIN or other options",
-          "run without --resume to start over, or with the options it was built with");
-    }
+    (void)resumableStore(stagePath, build, shard);
+    previous = resumableStore(out, build, shard);
   }
+  store::removeStaleTemps(out);
+  store::removeStaleTemps(stagePath);
+
+  auto stage = store::openStoreForWriting(stagePath, options.resume);
   stage->put(kBuildKey, build);
   if (!stage->contains(kTinKey)) stage->put(kTinKey, tinBytes);
+  if (!shard.empty()) {
+    stage->put(kShardKey, shard);
+  } else if (store::storeKindFor(out) == store::StoreKind::Directory) {
+    // A whole run resumed from a shard's tiles is no shard (an archive's
+    // canonical keys leave the record out).
+    std::error_code ec;
+    fs::remove(stagePath / kShardKey, ec);
+  }
 
   tiles::PyramidCallbacks callbacks;
   if (options.resume) {
     callbacks.existing = [&](const TileId& id) -> std::optional<TileRecord> {
       const std::string key = tiles::tileContentKey(id);
-      const auto bytes = stage->get(key);
-      return bytes ? std::optional(recordOfTile(key, *bytes, stagePath)) : std::nullopt;
+      if (const auto bytes = stage->get(key)) return recordOfTile(key, *bytes, stagePath);
+      if (!previous) return std::nullopt;
+      const auto bytes = previous->get(key);
+      if (!bytes) return std::nullopt;
+      TileRecord record = recordOfTile(key, *bytes, out);
+      stage->put(key, *bytes);  // the stage becomes the whole new store
+      return record;
     };
   }
   const int untilZoom = options.untilZoom.value_or(1 << 20);
@@ -273,20 +376,19 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
     reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
   };
-  const TileId root = options.subtree.value_or(TileId{});
   const tiles::PyramidSummary walked =
       tiles::buildPyramid(tiler, content, root, options.threads, callbacks, untilZoom);
+  previous.reset();
 
   // The walk's records are the stage's tiles: those it built and those a
-  // resumed run found there.
+  // resumed run found.
   const std::vector<TileRecord>& records = walked.records;
-  if (!options.subtree && !options.untilZoom) {
-    finish(*stage, output, records, build, storeUntilZoom);
-  } else if (stagePath != output) {
+  if (shard.empty()) {
+    finish(stage, stagePath, out, records, build, storeUntilZoom);
+  } else {
     // A shard: no tileset.json of its own; `tinsmith merge` writes it.
-    store::writeStore(*stage, canonicalKeys(records, {}), output);
+    publish(stage, stagePath, out, canonicalKeys(records, {}, true));
   }
-  if (stagePath != output) fs::remove(stagePath);
   TileJobSummary summary = summarize(records, build);
   summary.built = walked.built;
   summary.reused = walked.reused;
@@ -295,57 +397,131 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   return summary;
 }
 
+namespace {
+
+/// Which tiles a merge input answers for: a shard its part (kShardKey), a
+/// finished store every tile.
+struct ShardCoverage {
+  std::optional<TileId> subtree;
+  std::optional<int> untilZoom;
+
+  [[nodiscard]] bool covers(const TileId& id) const {
+    if (untilZoom) return id.z < *untilZoom;
+    if (!subtree) return true;
+    const int dz = id.z - subtree->z;
+    return dz >= 0 && (id.x >> dz) == subtree->x && (id.y >> dz) == subtree->y;
+  }
+};
+
+ShardCoverage coverageOf(const store::TileStore& in) {
+  const auto record = in.get(kShardKey);
+  if (!record) {
+    if (in.contains("tileset.json")) return {};
+    throw inputError(
+        "the store is neither a shard (no " + std::string(kShardKey) + ") nor finished (no tileset.json)",
+        fileLocation(in.path().string()),
+        "build the shard again with tinsmith tile --subtree or --until-zoom");
+  }
+  const auto j = nlohmann::json::parse(*record, nullptr, false);
+  ShardCoverage c;
+  if (j.is_object() && j.contains("subtree") && j["subtree"].is_string()) {
+    c.subtree = tiles::parseTileId(j["subtree"].get<std::string>(), kShardKey);
+  } else if (j.is_object() && j.contains("untilZoom") && j["untilZoom"].is_number_integer()) {
+    c.untilZoom = j["untilZoom"].get<int>();
+  } else {
+    throw inputError("the shard record " + std::string(kShardKey) + " is not one tinsmith writes",
+                     fileLocation(in.path().string()), "build the shard again");
+  }
+  return c;
+}
+
+}  // namespace
+
 TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::path& output) {
   if (inputs.empty())
     throw usageError("nothing to merge", "name the shard stores: tinsmith merge A B … -o ALL");
-  const fs::path stagePath = stagingPath(output);
-  auto stage = store::openStoreForWriting(stagePath, false);
+  const fs::path out = storePathFor(output);
+  const fs::path stagePath = stagingPath(out);
+  // Every check before the output is touched: the inputs are all shards of
+  // one job, none of them is the output.
+  std::vector<std::unique_ptr<store::TileStore>> shards;
+  std::vector<ShardCoverage> coverage;
   std::string build;
-  std::vector<TileRecord> records;
   for (const auto& path : inputs) {
+    if (samePath(path, out) || samePath(path, stagePath))
+      throw usageError("the output " + out.string() + " is also an input (" + path.string() + ")",
+                       "write the merged store to a new path");
     auto in = store::openStoreForReading(path);
     const auto b = in->get(kBuildKey);
     if (!b)
       throw inputError(path.string() + " is not a tinsmith tile store (no " + kBuildKey + ")");
     if (build.empty()) {
       build = *b;
-      stage->put(kBuildKey, build);
-      if (auto tin = in->get(kTinKey)) stage->put(kTinKey, *tin);
     } else if (*b != build) {
       throw usageError(
           path.string() + " was built from another TIN or other options than " + inputs[0].string(),
           "merge only shards of one job");
     }
-    for (const auto& key : in->keys()) {
-      if (key.rfind("tiles/", 0) != 0) continue;
-      const auto bytes = in->get(key);
-      if (const auto there = stage->get(key)) {
-        if (*there != *bytes) throw usageError("tile " + key + " differs between the shards");
-        continue;
+    coverage.push_back(coverageOf(*in));
+    shards.push_back(std::move(in));
+  }
+  store::requireReplaceable(out);
+  store::requireReplaceable(stagePath);
+  store::removeStaleTemps(out);
+  store::removeStaleTemps(stagePath);
+
+  auto stage = store::openStoreForWriting(stagePath, false);
+  std::vector<TileRecord> records;
+  try {
+    stage->put(kBuildKey, build);
+    for (const auto& in : shards) {
+      if (!stage->contains(kTinKey))
+        if (auto tin = in->get(kTinKey)) stage->put(kTinKey, *tin);
+      for (const auto& key : in->keys()) {
+        if (key.rfind("tiles/", 0) != 0) continue;
+        const auto bytes = in->get(key);
+        if (!bytes) continue;
+        if (const auto there = stage->get(key)) {
+          if (*there != *bytes) throw usageError("tile " + key + " differs between the shards");
+          continue;
+        }
+        records.push_back(recordOfTile(key, *bytes, in->path()));
+        stage->put(key, *bytes);
       }
-      records.push_back(recordOfTile(key, *bytes, path));
-      stage->put(key, *bytes);
     }
-  }
-  sortRecords(records);
-  // Every refined tile must have children from some shard.
-  const auto b = nlohmann::json::parse(build);
-  const double tolerance = b["options"]["tolerance"].get<double>();
-  const int maxZoom = b["options"]["maxZoom"].get<int>();
-  std::set<TileId> present;
-  for (const auto& r : records) present.insert(r.id);
-  for (const auto& r : records) {
-    if (!tiles::tileRefines(r.error, r.id.z, tolerance, maxZoom)) continue;
-    bool any = false;
-    for (int c = 0; c < 4; ++c) any = any || present.contains(r.id.child(c));
-    if (!any) {
-      throw usageError(
-          "tile " + r.id.name() + " is refined but none of its children is in the shards",
-          "add the shard of subtree " + r.id.child(0).name() + " (and its siblings)");
+    sortRecords(records);
+    // Every child of a refined tile is in the shards, or in the part of one
+    // that holds no terrain there (a shard that answers for it found it empty).
+    const auto b = nlohmann::json::parse(build);
+    const double tolerance = b["options"]["tolerance"].get<double>();
+    const int maxZoom = b["options"]["maxZoom"].get<int>();
+    std::set<TileId> present;
+    for (const auto& r : records) present.insert(r.id);
+    for (const auto& r : records) {
+      if (!tiles::tileRefines(r.error, r.id.z, tolerance, maxZoom)) continue;
+      for (int c = 0; c < 4; ++c) {
+        const TileId child = r.id.child(c);
+        if (present.contains(child)) continue;
+        const bool answered = std::any_of(coverage.begin(), coverage.end(),
+                                          [&](const ShardCoverage& s) { return s.covers(child); });
+        if (!answered)
+          throw usageError("tile " + r.id.name() + " is refined but its child " + child.name() +
+                               " is in none of the shards",
+                           "add the shard of subtree " + child.name() + " (or one above it)");
+      }
     }
+    finish(stage, stagePath, out, records, build);
+  } catch (...) {
+    // The stage was made by this merge and is of no use to another.
+    stage.reset();
+    std::error_code ec;
+    if (fs::is_directory(stagePath, ec)) {
+      fs::remove_all(stagePath, ec);
+    } else {
+      fs::remove(stagePath, ec);
+    }
+    throw;
   }
-  finish(*stage, output, records, build);
-  if (stagePath != output) fs::remove(stagePath);
   TileJobSummary summary = summarize(records, build);
   summary.reused = records.size();
   return summary;

@@ -160,15 +160,29 @@ TEST_P(TileStoreTest, InvalidKeysAreRefusedAndNothingIsWrittenOutsideTheRoot) {
 
 TEST_P(TileStoreTest, KeepExistingResumesAndFalseEmpties) {
   const fs::path path = scratch("resume") / nameFor(GetParam());
-  openStoreForWriting(path, false)->put("a.glb", "first");
+  {
+    auto first = openStoreForWriting(path, false);
+    first->put(kStoreMarkerKey, "{}");
+    first->put("tiles/a.glb", "first");
+  }
   {
     auto resumed = openStoreForWriting(path, true);
-    EXPECT_EQ(resumed->get("a.glb"), "first");
-    resumed->put("b/c.glb", "second");
+    EXPECT_EQ(resumed->get("tiles/a.glb"), "first");
+    resumed->put("tiles/b/c.glb", "second");
   }
-  EXPECT_EQ(openStoreForReading(path)->keys(), (std::vector<std::string>{"a.glb", "b/c.glb"}));
+  EXPECT_EQ(openStoreForReading(path)->keys(),
+            (std::vector<std::string>{"tiles/a.glb", "tiles/b/c.glb", "tinsmith/build.json"}));
   EXPECT_TRUE(openStoreForWriting(path, false)->keys().empty());
   EXPECT_TRUE(openStoreForReading(path)->keys().empty());
+}
+
+TEST_P(TileStoreTest, KeepExistingRefusesAStoreWithoutTheMarker) {
+  const fs::path path = scratch("resume-foreign") / nameFor(GetParam());
+  openStoreForWriting(path, false)->put("tiles/a.glb", "not marked");
+  const Thrown thrown = thrownBy([&] { (void)openStoreForWriting(path, true); });
+  EXPECT_EQ(thrown.kind, ErrorKind::Io) << thrown.message;
+  EXPECT_NE(thrown.message.find("tinsmith/build.json"), std::string::npos) << thrown.message;
+  EXPECT_EQ(openStoreForReading(path)->get("tiles/a.glb"), "not marked");
 }
 
 TEST_P(TileStoreTest, KeepExistingCreatesAMissingStoreAndItsParents) {
@@ -250,13 +264,53 @@ TEST_P(TileStoreTest, WriteStoreIsDeterministicAndKeepsTheGivenKeys) {
 TEST_P(TileStoreTest, WriteStoreReplacesAnExistingTarget) {
   const fs::path dir = scratch("replace");
   const fs::path source = dir / "s.3dtiles";
-  openStoreForWriting(source, false)->put("new.glb", "new");
+  openStoreForWriting(source, false)->put("tiles/new.glb", "new");
   const fs::path target = dir / nameFor(GetParam());
-  openStoreForWriting(target, false)->put("old.glb", "old");
-  const std::vector<std::string> keys = {"new.glb"};
+  {
+    auto old = openStoreForWriting(target, false);
+    old->put(kStoreMarkerKey, "{}");
+    old->put("tiles/old.glb", "old");
+  }
+  const std::vector<std::string> keys = {"tiles/new.glb"};
   writeStore(*openStoreForReading(source), keys, target);
   EXPECT_EQ(openStoreForReading(target)->keys(), keys);
-  EXPECT_EQ(treeOf(dir).size(), GetParam() == StoreKind::Archive ? 2u : 3u);
+  EXPECT_EQ(treeOf(dir).size(), GetParam() == StoreKind::Archive ? 2u : 4u);
+}
+
+TEST_P(TileStoreTest, NothingButAStoreIsEverReplacedOrEmptied) {
+  const fs::path dir = scratch("foreign");
+  const fs::path source = dir / "s.3dtiles";
+  openStoreForWriting(source, false)->put("tiles/new.glb", "new");
+  const std::vector<std::string> keys = {"tiles/new.glb"};
+  // A store's keys but no marker; a marker and a user's file as well.
+  for (const bool marked : {false, true}) {
+    const fs::path target = dir / ((marked ? "marked-" : "plain-") + nameFor(GetParam()));
+    {
+      auto st = openStoreForWriting(target, false);
+      st->put("tiles/old.glb", "old");
+      if (marked) {
+        st->put(kStoreMarkerKey, "{}");
+        st->put("notes.txt", "the user's");
+      }
+    }
+    const auto before = treeOf(dir);
+    const std::string archiveBefore =
+        GetParam() == StoreKind::Archive ? test::readFile(target) : std::string();
+    for (const Thrown& t :
+         {thrownBy([&] { writeStore(*openStoreForReading(source), keys, target); }),
+          thrownBy([&] { (void)openStoreForWriting(target, false); }),
+          thrownBy([&] { requireReplaceable(target); })}) {
+      EXPECT_EQ(t.kind, ErrorKind::Io) << t.message;
+      EXPECT_NE(t.message.find(target.string()), std::string::npos) << t.message;
+      EXPECT_NE(t.message.find(marked ? "notes.txt" : "tinsmith/build.json"), std::string::npos)
+          << t.message;
+    }
+    EXPECT_EQ(treeOf(dir), before);
+    if (GetParam() == StoreKind::Archive) {
+      EXPECT_EQ(test::readFile(target), archiveBefore);
+    }
+    EXPECT_EQ(openStoreForReading(target)->get("tiles/old.glb"), "old");
+  }
 }
 
 TEST_P(TileStoreTest, WriteStoreWithAMissingKeyIsAnInputErrorAndLeavesNoTarget) {
@@ -426,6 +480,99 @@ TEST(DirectoryStore, KeysSkipTemporaryFiles) {
   store->put("tiles/b.glb", "b");
   EXPECT_EQ(treeOf(root / "tiles"),
             (std::vector<std::string>{"a.glb", "b.glb", "b.glb.tmp-123-4"}));
+}
+
+TEST(StoreKey, StoreKeysAreTheTilesetsTilesAndTinsmithFolders) {
+  for (const char* key : {"tileset.json", "tiles/0/0/0.glb", "tilesets/1/0/0.json",
+                          "tinsmith/build.json", "tinsmith/terrain.tin"})
+    EXPECT_TRUE(isStoreKey(key)) << key;
+  for (const char* key : {"index.html", "tiles", "tiles/", "tileset.json.bak", "a/tileset.json",
+                          "tinsmithx/build.json"})
+    EXPECT_FALSE(isStoreKey(key)) << key;
+}
+
+TEST(Replaceable, OnlyNothingAnEmptyFolderOrAStoreMayBeReplaced) {
+  const fs::path dir = test::scratchDir("replaceable");
+  EXPECT_NO_THROW(requireReplaceable(dir / "absent"));
+  EXPECT_NO_THROW(requireReplaceable(dir / "absent.3dtiles"));
+  fs::create_directories(dir / "empty" / "sub");
+  EXPECT_NO_THROW(requireReplaceable(dir / "empty"));
+  // Temporary files of a put and a store's own keys.
+  fs::create_directories(dir / "store" / "tinsmith");
+  fs::create_directories(dir / "store" / "tiles" / "0" / "0");
+  std::ofstream(dir / "store" / "tinsmith" / "build.json") << "{}";
+  std::ofstream(dir / "store" / "tiles" / "0" / "0" / "0.glb") << "glb";
+  std::ofstream(dir / "store" / "tiles" / "0" / "0" / "1.glb.tmp-123-4") << "half";
+  EXPECT_NO_THROW(requireReplaceable(dir / "store"));
+  EXPECT_NO_THROW(requireReplaceable(dir / "store/"));
+
+  const auto refused = [](const fs::path& path, const std::string& expected) {
+    const Thrown t = thrownBy([&] { requireReplaceable(path); });
+    EXPECT_EQ(t.kind, ErrorKind::Io) << path;
+    EXPECT_NE(t.message.find(expected), std::string::npos) << t.message;
+  };
+  fs::create_directories(dir / "home" / "photos");
+  std::ofstream(dir / "home" / "photos" / "a.jpg") << "a";
+  std::ofstream(dir / "home" / "b.txt") << "b";
+  std::ofstream(dir / "home" / "c.txt") << "c";
+  refused(dir / "home", "and 2 other files");
+  fs::create_directory_symlink(dir / "store", dir / "link");
+  refused(dir / "link", "symbolic link");
+  std::ofstream(dir / "plain") << "a file";
+  refused(dir / "plain", "is a file");
+  std::ofstream(dir / "text.3dtiles") << "not SQLite";
+  refused(dir / "text.3dtiles", "not a tinsmith tile archive");
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "other.3dtiles").c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db,
+                           "CREATE TABLE media (key TEXT PRIMARY KEY, content BLOB);"
+                           "INSERT INTO media VALUES ('tileset.json', '{}');",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(db);
+  }
+  refused(dir / "other.3dtiles", "no tinsmith/build.json");
+}
+
+TEST(MoveStore, AFolderStoreTakesTheNameAndTheOldOneGoes) {
+  const fs::path dir = test::scratchDir("move-store");
+  const auto makeStore = [](const fs::path& path, const std::string& tile) {
+    auto st = openStoreForWriting(path, false);
+    st->put(kStoreMarkerKey, "{}");
+    st->put("tiles/" + tile + ".glb", tile);
+  };
+  makeStore(dir / "site", "old");
+  makeStore(dir / "site.partial", "new");
+  moveStore(dir / "site.partial", dir / "site");
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"site", "site/tiles", "site/tiles/new.glb",
+                                                   "site/tinsmith", "site/tinsmith/build.json"}));
+  // A target that is not a store: both stay as they were.
+  makeStore(dir / "staged", "newer");
+  fs::create_directories(dir / "mine");
+  std::ofstream(dir / "mine" / "thesis.tex") << "years of work";
+  const Thrown t = thrownBy([&] { moveStore(dir / "staged", dir / "mine"); });
+  EXPECT_EQ(t.kind, ErrorKind::Io) << t.message;
+  EXPECT_NE(t.message.find("thesis.tex"), std::string::npos) << t.message;
+  EXPECT_EQ(test::readFile(dir / "mine" / "thesis.tex"), "years of work");
+  EXPECT_EQ(openStoreForReading(dir / "staged")->get("tiles/newer.glb"), "newer");
+}
+
+TEST(StaleTemps, OnlyTheLeftoversOfProcessesThatAreGoneAreRemoved) {
+  const fs::path dir = test::scratchDir("stale-temps");
+  // A pid no process has (above the kernel's pid_max) and init's, which runs.
+  const std::string gone = "4194399", alive = "1";
+  std::ofstream(dir / "site.3dtiles") << "x";
+  for (const std::string& name : std::vector<std::string>{
+           "site.3dtiles.tmp-" + gone + "-0", "site.3dtiles.tmp-" + gone + "-0-journal",
+        "site.3dtiles.tmp-" + alive + "-3", "other.3dtiles.tmp-" + gone + "-1",
+        "site.3dtiles.tmp-x-1"})
+    std::ofstream(dir / name) << "x";
+  fs::create_directories(dir / ("site.3dtiles.tmp-" + gone + "-7") / "tiles");
+  removeStaleTemps(dir / "site.3dtiles");
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"other.3dtiles.tmp-" + gone + "-1",
+                                                   "site.3dtiles", "site.3dtiles.tmp-" + alive + "-3",
+                                                   "site.3dtiles.tmp-x-1"}));
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 // under its name (an archive's STEM.partial.3dtiles staging stays, for
 // --resume; the TIN is built again on resume, the same bytes).
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -21,6 +22,7 @@
 #include "core/base/error.hpp"
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/config/project_config.hpp"
+#include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
@@ -62,6 +64,21 @@ ingest::Progress prefixed(const TerminalProgress& bar, const std::string& prefix
   return p;
 }
 
+/// The TIN beside the store replaces only a .tin file (one from an earlier
+/// build): anything else there is the user's and stays.
+void requireTinOrNothing(const fs::path& tin) {
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(tin, ec))) return;
+  constexpr std::string_view kMagic("\x89TIN\r\n\x1a\n", 8);
+  std::string head(kMagic.size(), '\0');
+  std::ifstream in(tin, std::ios::binary);
+  const bool isTin = fs::is_regular_file(tin, ec) && in.read(head.data(), head.size()) &&
+                     head == kMagic;
+  if (!isTin)
+    throw ioError("is in the way of the TIN written beside the tile store, and is not a .tin file",
+                  fileLocation(tin), "move it away, or name the store otherwise");
+}
+
 void run(const BuildCliOptions& o) {
   const ingest::ProjectConfig config = ingest::loadProjectConfig(o.config);
   const ingest::TileJobOptions tileOptions = withTileFlags(config.tiles.job, o.flags);
@@ -82,6 +99,8 @@ void run(const BuildCliOptions& o) {
   fs::path partialTin = tinPath;
   partialTin.replace_extension(".partial.tin");
   checkOutputDirectory(store, "the tile store");
+  store::requireReplaceable(store);
+  requireTinOrNothing(tinPath);
   // The project CRS and geoid must place tiles on the globe: checked now, not
   // after the TIN is built.
   (void)ingest::ProjGeoReference(config.crs, tileOptions.geoid);

@@ -3,6 +3,7 @@
 #include <draco/core/draco_version.h>
 #include <GeographicLib/Config.h>
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -29,6 +30,9 @@ int main(int argc, char** argv) {
   using namespace tinsmith;
   using namespace tinsmith::cli;
   returnLargeBlocksToSystem();
+  // Past a file-size limit (ulimit -f) a write fails with EFBIG and is
+  // reported, naming the file, instead of the process dying by signal.
+  std::signal(SIGXFSZ, SIG_IGN);
 
   CLI::App app{"tinsmith — constrained Delaunay terrain TINs, multilevel least-squares\n"
                "level-of-detail tiles and a 3D Tiles 1.1 server.",
