@@ -4,6 +4,7 @@
 #include "ingest/store/tile_store.hpp"
 
 #include <signal.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -129,6 +130,25 @@ namespace {
                 "only a tile store it wrote (one holding " + std::string(kStoreMarkerKey) + ")");
 }
 
+// An archive a run was killed in before it made its table: an empty file or
+// a SQLite database without tables holds nothing to lose.
+bool holdsNoTable(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::file_size(path, ec) == 0 && !ec) return true;
+  sqlite3* db = nullptr;
+  bool empty = false;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_stmt* count = nullptr;
+    if (sqlite3_prepare_v2(db, "SELECT count(*) FROM sqlite_master", -1, &count, nullptr) ==
+            SQLITE_OK &&
+        sqlite3_step(count) == SQLITE_ROW)
+      empty = sqlite3_column_int(count, 0) == 0;
+    sqlite3_finalize(count);
+  }
+  sqlite3_close_v2(db);
+  return empty;
+}
+
 std::string foreignText(std::size_t count, const std::string& first) {
   return "it holds '" + first + "'" +
          (count > 1 ? " and " + std::to_string(count - 1) + " other file" +
@@ -160,6 +180,7 @@ void requireReplaceable(const std::filesystem::path& path) {
   }
   if (!fs::is_regular_file(status) || storeKindFor(clean) != StoreKind::Archive)
     refuseReplacing(clean, "is a file, not a tile folder");
+  if (holdsNoTable(clean)) return;
   std::vector<std::string> keys;
   try {
     keys = detail::openArchive(clean, detail::Access::Read)->keys();
