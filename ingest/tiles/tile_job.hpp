@@ -8,11 +8,17 @@
 //                         for the local frame, "enuOrigin": [lon°, lat°, h m]
 //                         (WGS84, ellipsoidal), the origin of the tiles'
 //                         east-north-up axes
-// An archive output X.3dtiles is staged in "X.partial.3dtiles" (resumable) and written
-// out at the end in one canonical key order, atomically, so one run, a resumed
-// run and merged shards give the same bytes and a half-done archive never
-// appears under the output's name. A directory output is written in place,
-// each file atomically, tileset.json last.
+// An output is built beside its name — an archive X.3dtiles in
+// "X.partial.3dtiles", a folder X in the folder "X.partial" — and takes the
+// name only when complete, atomically (an archive is written out in one
+// canonical key order and renamed, so one run, a resumed run and merged
+// shards give the same bytes; a folder is exchanged with the old one). A run
+// killed at any moment leaves the old store or the new one, whole, under
+// the name, and a failed run keeps the stage for --resume. What is at the
+// name or the stage is replaced only when it is a tinsmith store
+// (store::requireReplaceable), and every option is checked before either is
+// touched. A shard's store also holds tinsmith/shard.json, the part of the
+// pyramid it answers for.
 #pragma once
 
 #include <filesystem>
@@ -78,8 +84,10 @@ struct TileJobSummary {
 };
 
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into
-/// `output`. Throws usageError for bad options (a --resume whose store was
-/// built from other input or options), ioError when the store cannot be
+/// `output`. With `resume`, tiles are taken from the stage and from a
+/// finished store at `output`. Throws usageError for bad options (a --resume
+/// whose store was built from other input or options, a subtree not in the
+/// pyramid), ioError when the output is not a tinsmith store or cannot be
 /// written (nothing half-written is left under the output's name).
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
                           const std::filesystem::path& output, const TileJobOptions& options,
@@ -87,8 +95,11 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
 
 /// Joins stores built from the same TIN and options (shards: subtrees and the
 /// tiles above them) into one, as one run would have written it. Throws
-/// usageError when they disagree (other input or options, a tile with
-/// different bytes) or a refined tile's children are missing from all.
+/// usageError, before the output is touched, when the output is one of the
+/// inputs or they disagree (other input or options), and without leaving a
+/// stage when a tile differs between them or a child of a refined tile is in
+/// none of them (a shard that answers for the child and lacks it found it
+/// empty).
 TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs,
                                const std::filesystem::path& output);
 

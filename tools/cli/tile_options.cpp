@@ -31,8 +31,8 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig) {
                  "egm96: the TIN's z are EGM96 heights; \"\": ellipsoidal" + dflt("geoid", "\"\""));
   addThreadsOption(cmd, flags.threads, "Worker threads", "the same bytes for any count");
   cmd.add_flag("--resume", flags.resume,
-               "Keep tiles already in the store (or its .partial staging archive) and build only "
-               "the missing ones");
+               "Keep tiles already in the store (finished, or its .partial stage from a stopped run) "
+               "and build only the missing ones");
   addQuietFlag(cmd, flags.quiet, "No summary, no progress bar");
   addJsonFlag(cmd, flags.json, "Print the summary as JSON on stdout");
 }
