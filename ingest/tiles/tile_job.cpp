@@ -113,6 +113,10 @@ TileJobSummary summarize(const std::vector<TileRecord>& records, const std::stri
     z.bytes += r.bytes;
     z.breakLineVertices += r.breakLineVertices;
     z.maxError = std::max(z.maxError, r.error);
+    if (r.error > z.tolerance) {
+      ++z.overTolerance;
+      s.missed.push_back({r.id, r.error, z.tolerance});
+    }
     s.bytes += r.bytes;
   }
   for (auto& [z, summary] : zooms) s.zooms.push_back(summary);

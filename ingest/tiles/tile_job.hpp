@@ -72,10 +72,20 @@ struct ZoomSummary {
   double tolerance = 0;
   std::size_t tiles = 0, triangles = 0, vertices = 0, bytes = 0, breakLineVertices = 0;
   double maxError = 0;
+  std::size_t overTolerance = 0;  ///< tiles whose measured error is over the zoom's tolerance
+};
+
+/// A tile whose measured error (its geometricError) is over its zoom's
+/// tolerance: a client that picks tiles by the zoom's error sees it coarser
+/// than asked.
+struct MissedTile {
+  tiles::TileId id;
+  double error = 0, tolerance = 0;
 };
 
 struct TileJobSummary {
   std::vector<ZoomSummary> zooms;
+  std::vector<MissedTile> missed;  ///< in (z, y, x) order
   std::size_t tiles = 0, built = 0, reused = 0, bytes = 0;
   int finestZoom = 0;
   int levelsPerTile = 0;

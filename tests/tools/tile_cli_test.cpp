@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "tests/support/run_command.hpp"
 
@@ -85,6 +86,47 @@ TEST(TileCli, BadInputFailsClearlyAndLeavesNoStore) {
   for (const char* name : {"a.3dtiles", "b.3dtiles", "c.3dtiles", "d.3dtiles"}) {
     EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
   }
+}
+
+TEST(TileCli, TilesOverTheirZoomsToleranceAreSaidAndStrictFails) {
+  const auto dir = scratchDir("tile-cli-missed");
+  const auto tin = smallTin(dir);
+  // 64 triangles a tile cannot hold the hill within 5 cm.
+  const std::string tight = "tile " + tin.string() + " --tolerance 0.05 --max-triangles 64 ";
+  auto r = runTinsmith(tight + "--json -o " + (dir / "a.3dtiles").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("WARNING"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("over their zoom's tolerance"), std::string::npos) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["withinTolerance"].get<bool>());
+  ASSERT_FALSE(j["overTolerance"].empty());
+  std::size_t counted = 0;
+  for (const auto& z : j["zooms"]) counted += z["overTolerance"].get<std::size_t>();
+  EXPECT_EQ(counted, j["overTolerance"].size());
+  // Each over its tolerance; the worst is named in the warning.
+  nlohmann::json worst;
+  for (const auto& m : j["overTolerance"]) {
+    EXPECT_GT(m["error"].get<double>(), m["tolerance"].get<double>()) << m;
+    const auto ratio = [](const nlohmann::json& t) {
+      return t["error"].get<double>() / t["tolerance"].get<double>();
+    };
+    if (worst.is_null() || ratio(m) > ratio(worst)) worst = m;
+  }
+  EXPECT_NE(r.err.find(worst["tile"].get<std::string>()), std::string::npos) << worst;
+  // --strict: the same store, and exit code 1.
+  r = runTinsmith(tight + "-q --strict -o " + (dir / "b.3dtiles").string());
+  EXPECT_EQ(r.exitCode, 1) << r.err;
+  EXPECT_NE(r.err.find("WARNING"), std::string::npos) << r.err;
+  EXPECT_EQ(readFile(dir / "a.3dtiles"), readFile(dir / "b.3dtiles"));
+  // Within tolerance: no warning, and --strict passes.
+  r = runTinsmith("tile " + tin.string() +
+                  " --tolerance 0.5 --max-triangles 2048 --strict --json -o " +
+                  (dir / "c.3dtiles").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err.find("WARNING"), std::string::npos) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["withinTolerance"].get<bool>());
+  EXPECT_TRUE(j["overTolerance"].empty());
 }
 
 }  // namespace

@@ -142,10 +142,14 @@ void run(const BuildCliOptions& o) {
                 {"report", nlohmann::ordered_json::parse(report.toJson())}};
     j["tiles"] = tileSummaryObject(tiles, store.string());
     std::cout << j.dump(2) << "\n";
+    std::cerr << missedToleranceText(tiles);
   } else if (!f.quiet) {
     std::cerr << report.summary() << "wrote " << tinPath.string() << "\n";
     reportTileJob(tiles, store.string(), false, false);
+  } else {
+    std::cerr << missedToleranceText(tiles);
   }
+  requireWithinTolerance(tiles, f);
 }
 
 }  // namespace

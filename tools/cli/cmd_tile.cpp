@@ -69,6 +69,7 @@ void addTileCommand(CLI::App& app) {
     const auto summary = ingest::runTileJob(tin, opt->tin, opt->output, o, bar.get());
     bar.bar.reset();
     reportTileJob(summary, opt->output, f.json, f.quiet);
+    requireWithinTolerance(summary, f);
   });
 
   auto merge = std::make_shared<MergeCliOptions>();

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "core/base/error.hpp"
+#include "tools/cli/exit_codes.hpp"
 #include "tools/cli/shared_options.hpp"
 #include "tools/cli/tile_summary.hpp"
 
@@ -33,6 +34,9 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig) {
   cmd.add_flag("--resume", flags.resume,
                "Keep tiles already in the store (finished, or its .partial stage from a stopped run) "
                "and build only the missing ones");
+  cmd.add_flag("--strict", flags.strict,
+               "Exit with code 1 (the store is still written) when a tile's measured error is "
+               "over its zoom's tolerance");
   addQuietFlag(cmd, flags.quiet, "No summary, no progress bar");
   addJsonFlag(cmd, flags.json, "Print the summary as JSON on stdout");
 }
@@ -67,6 +71,11 @@ void reportTileJob(const ingest::TileJobSummary& summary, const std::string& out
   } else if (!quiet) {
     std::cerr << "wrote " << output << "\n" << tileSummaryText(summary);
   }
+  std::cerr << missedToleranceText(summary);
+}
+
+void requireWithinTolerance(const ingest::TileJobSummary& summary, const TileFlags& flags) {
+  if (flags.strict && !summary.missed.empty()) throw CheckFailed{};
 }
 
 }  // namespace tinsmith::cli

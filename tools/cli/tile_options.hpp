@@ -21,6 +21,7 @@ struct TileFlags {
   std::optional<std::string> compression, frame, geoid;
   int threads = 0;
   bool resume = false;
+  bool strict = false;
   bool quiet = false;
   bool json = false;
 };
@@ -36,8 +37,13 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig);
 ingest::TileJobOptions withTileFlags(ingest::TileJobOptions base, const TileFlags& flags);
 
 /// The summary of a finished job: JSON on stdout with --json, else text on
-/// stderr unless -q.
+/// stderr unless -q; tiles over their zoom's tolerance are warned of on
+/// stderr in any case.
 void reportTileJob(const ingest::TileJobSummary& summary, const std::string& output, bool json,
                    bool quiet);
+
+/// With --strict, throws CheckFailed (exit code 1) when a tile is over its
+/// zoom's tolerance; the store is written and reported first.
+void requireWithinTolerance(const ingest::TileJobSummary& summary, const TileFlags& flags);
 
 }  // namespace tinsmith::cli

@@ -1,5 +1,6 @@
 #include "tools/cli/tile_summary.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
@@ -34,6 +35,26 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
   return out;
 }
 
+std::string missedToleranceText(const ingest::TileJobSummary& s) {
+  if (s.missed.empty()) return {};
+  std::vector<ingest::MissedTile> worst = s.missed;
+  std::stable_sort(worst.begin(), worst.end(), [](const auto& a, const auto& b) {
+    return a.error / a.tolerance > b.error / b.tolerance;
+  });
+  std::string zooms;
+  for (const auto& z : s.zooms)
+    if (z.overTolerance > 0) zooms += (zooms.empty() ? "" : ", ") + std::to_string(z.z);
+  std::string out = format("WARNING: %zu of %zu tiles are over their zoom's tolerance (zoom%s ",
+                           s.missed.size(), s.tiles, zooms.find(',') != std::string::npos ? "s" : "");
+  out += zooms + "); the worst:";
+  for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 5); ++i)
+    out += format("%s %s %.3f m against %.3f m", i ? "," : "", worst[i].id.name().c_str(),
+                  worst[i].error, worst[i].tolerance);
+  out += "\n  their geometricError is what they measure, so viewers refine them sooner; "
+         "a larger --max-triangles or a looser --tolerance may meet it (--strict: exit code 1)\n";
+  return out;
+}
+
 nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
                                          const std::string& output) {
   nlohmann::ordered_json j;
@@ -55,9 +76,15 @@ nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
                      {"vertices", z.vertices},
                      {"bytes", z.bytes},
                      {"maxError", z.maxError},
+                     {"overTolerance", z.overTolerance},
                      {"breakLineVertices", z.breakLineVertices}});
   }
   j["zooms"] = zooms;
+  auto missed = nlohmann::ordered_json::array();
+  for (const auto& m : s.missed)
+    missed.push_back({{"tile", m.id.name()}, {"error", m.error}, {"tolerance", m.tolerance}});
+  j["withinTolerance"] = s.missed.empty();
+  j["overTolerance"] = missed;
   return j;
 }
 
