@@ -104,8 +104,10 @@ void checkProjectCrs(const std::string& crs, const std::string& where) {
   const double unit = srs.GetLinearUnits(&unitName);
   if (std::abs(unit - 1.0) > 1e-9) {
     throw inputError(where + ": '" + crs + "' has linear unit '" + (unitName ? unitName : "?") +
-                         "'; tinsmith needs metres",
-                     {}, "choose a projected CRS in metres");
+                         "'; tinsmith needs metres (heights and tolerances are metres)",
+                     {},
+                     "choose a projected CRS in metres (e.g. the data's UTM zone; a config "
+                     "reprojects layers given in feet into it, and heights must be metres)");
   }
 }
 

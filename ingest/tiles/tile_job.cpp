@@ -10,6 +10,7 @@
 #include "core/base/error.hpp"
 #include "core/tiles/pyramid_build.hpp"
 #include "core/tiles/tileset_json.hpp"
+#include "ingest/config/project_config.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tinfile/tin_file.hpp"
@@ -310,6 +311,8 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
                           const TileJobOptions& options, const Progress* progress) {
   checkTileJobOptions(options);
   const auto start = std::chrono::steady_clock::now();
+  // Heights and tolerances are metres: a TIN in a CRS of feet is refused.
+  checkProjectCrs(tin.crs, "the CRS of " + tinName);
   // Both frames place the tiles through the TIN's CRS (the local frame's
   // east-north-up axes stand at the pyramid's centre); a CRS PROJ cannot use
   // fails here, before the planning.

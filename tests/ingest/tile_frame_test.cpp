@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
 #include "core/encode/frames.hpp"
 #include "core/encode/glb.hpp"
@@ -137,6 +138,21 @@ TEST(LocalFrame, DecodedTilesAreTheTileMeshesInTheDeclaredEnuFrame) {
     ++tilesChecked;
   }
   EXPECT_GT(tilesChecked, 1u);
+}
+
+TEST(TileUnits, ATinInACrsOfFeetIsRefusedBeforeAnyTile) {
+  TinData tin = ridgeTin();
+  tin.crs = "EPSG:2227";  // California zone 3, US survey feet
+  const fs::path dir = test::scratchDir("tile-feet");
+  try {
+    runTileJob(tin, "feet.tin", dir / "feet.3dtiles", TileJobOptions{});
+    ADD_FAILURE() << "a TIN in feet was tiled as metres";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("US survey foot"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("feet.tin"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(test::filesIn(dir), 0u);
 }
 
 }  // namespace

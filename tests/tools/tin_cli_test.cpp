@@ -545,5 +545,19 @@ TEST(TinCli, ProgressBarsOnlyOnATerminal) {
   EXPECT_NE(r.out.find("100%"), std::string::npos) << r.out;
 }
 
+TEST(TinCli, APlainRunRefusesACrsThatIsNotInMetres) {
+  const auto dir = test::scratchDir("tin-cli-feet");
+  for (const char* crs : {"EPSG:2227", "EPSG:4326"}) {
+    const auto r = runTinsmith(
+        std::string("tin --points 'synthetic:grid?nx=5&ny=5&spacing=10&x0=6000000&y0=2000000' "
+                    "--crs ") +
+        crs + " -q -o " + (dir / "t.tin").string());
+    EXPECT_EQ(r.exitCode, 3) << crs << ": " << r.err;
+    EXPECT_NE(r.err.find(crs), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("metres"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "t.tin"));
+  }
+}
+
 }  // namespace
 }  // namespace tinsmith

@@ -157,6 +157,8 @@ void run(const TinOptions& o) {
   if (o.snap && !(*o.snap >= 0)) throw usageError("--snap must be a distance in metres, 0 or more");
   if (o.trimHull && !(*o.trimHull > 0))
     throw usageError("--trim-hull must be a length in metres greater than 0");
+  // The TIN's x, y and z are metres: a CRS in feet would put 1000 ft at 1000 m.
+  if (plain && !o.crs.empty()) ingest::checkProjectCrs(o.crs, "--crs");
   checkOutputDirectory(o.output, "the TIN (-o)");
   if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
 
