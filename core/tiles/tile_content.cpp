@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/base/error.hpp"
+#include "core/tiles/lon_range.hpp"
 
 namespace tinsmith::tiles {
 
@@ -19,6 +20,41 @@ Point3 sub(const Point3& a, const Point3& b) {
 }
 Point3 cross(const Point3& a, const Point3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+/// What a tile's rectangle is on the globe: the longitude of its centre, and
+/// which pole its sides go around (+1 north, −1 south, 0 none; their
+/// longitudes wind once around it).
+struct BoundsOnGlobe {
+  double centreLon = 0;
+  int pole = 0;
+};
+
+BoundsOnGlobe boundsOnGlobe(const Rect& r, const GeoReference& geo) {
+  constexpr int kPerSide = 16;
+  std::vector<Point3> ring;
+  ring.reserve(4 * kPerSide + 1);
+  const Point2 corners[] = {{r.x0, r.y0}, {r.x1, r.y0}, {r.x1, r.y1}, {r.x0, r.y1}};
+  for (int side = 0; side < 4; ++side) {
+    const Point2 a = corners[side], b = corners[(side + 1) % 4];
+    for (int k = 0; k < kPerSide; ++k) {
+      const double t = static_cast<double>(k) / kPerSide;
+      ring.push_back({a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), 0.0});
+    }
+  }
+  ring.push_back({0.5 * (r.x0 + r.x1), 0.5 * (r.y0 + r.y1), 0.0});
+  std::vector<encode::Geodetic> g(ring.size());
+  geo.toGeodetic(ring, g);
+  BoundsOnGlobe out;
+  out.centreLon = g.back().lon * kDegree;
+  double winding = 0, lat = 0;
+  const std::size_t n = ring.size() - 1;
+  for (std::size_t i = 0; i < n; ++i) {
+    winding += wrapLongitude((g[(i + 1) % n].lon - g[i].lon) * kDegree);
+    lat += g[i].lat;
+  }
+  if (std::abs(winding) > std::numbers::pi) out.pole = lat > 0 ? 1 : -1;
+  return out;
 }
 
 }  // namespace
@@ -115,16 +151,25 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   std::vector<Point3> frame(project.size());
   if (options.frame == ContentFrame::Ecef) {
     for (std::size_t i = 0; i < project.size(); ++i) frame[i] = encode::geodeticToEcef(geodetic[i]);
-    double w = HUGE_VAL, s = HUGE_VAL, e = -HUGE_VAL, n = -HUGE_VAL, h0 = HUGE_VAL, h1 = -HUGE_VAL;
-    for (const auto& g : geodetic) {
-      w = std::min(w, g.lon);
-      e = std::max(e, g.lon);
-      s = std::min(s, g.lat);
-      n = std::max(n, g.lat);
+    double s = HUGE_VAL, n = -HUGE_VAL, h0 = HUGE_VAL, h1 = -HUGE_VAL;
+    std::vector<double> lons(geodetic.size());
+    for (std::size_t i = 0; i < geodetic.size(); ++i) {
+      const auto& g = geodetic[i];
+      lons[i] = g.lon * kDegree;
+      s = std::min(s, g.lat * kDegree);
+      n = std::max(n, g.lat * kDegree);
       h0 = std::min(h0, g.height);
       h1 = std::max(h1, g.height);
     }
-    record.region = {w * kDegree, s * kDegree, e * kDegree, n * kDegree, h0, h1};
+    // Longitudes from the tile's centre, so a tile across ±180° has a range
+    // across it (east < west); a tile around a pole has every longitude and
+    // reaches the pole.
+    const BoundsOnGlobe globe = boundsOnGlobe(tile.bounds, *options.geo);
+    LonRange lon = lonRangeAround(globe.centreLon, lons);
+    if (globe.pole > 0) n = std::numbers::pi / 2;
+    if (globe.pole < 0) s = -std::numbers::pi / 2;
+    if (globe.pole != 0) lon = LonRange{};
+    record.region = {lon.west, s, lon.east, n, h0, h1};
   } else {
     const encode::EnuFrame enu(options.localOrigin);
     for (std::size_t i = 0; i < project.size(); ++i) frame[i] = enu.fromGeodetic(geodetic[i]);

@@ -5,8 +5,10 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 #include "core/base/error.hpp"
+#include "core/tiles/lon_range.hpp"
 
 namespace tinsmith::tiles {
 
@@ -46,9 +48,10 @@ void grow(TileRecord& a, const TileRecord& b) {
     }
     return;
   }
-  a.region[0] = std::min(a.region[0], b.region[0]);
+  const LonRange lon = lonUnion({a.region[0], a.region[2]}, {b.region[0], b.region[2]});
+  a.region[0] = lon.west;
   a.region[1] = std::min(a.region[1], b.region[1]);
-  a.region[2] = std::max(a.region[2], b.region[2]);
+  a.region[2] = lon.east;
   a.region[3] = std::max(a.region[3], b.region[3]);
   a.region[4] = std::min(a.region[4], b.region[4]);
   a.region[5] = std::max(a.region[5], b.region[5]);
@@ -139,9 +142,15 @@ std::vector<std::pair<std::string, std::string>> tilesetFiles(std::span<const Ti
   } else {
     constexpr double kEarthRadius = 6371000.0;
     const double south = top.region[1], north = top.region[3];
-    const double width = (top.region[2] - top.region[0]) * kEarthRadius *
-                         std::cos(0.5 * (south + north));
-    diagonal = std::hypot(width, (north - south) * kEarthRadius);
+    const LonRange lon{top.region[0], top.region[2]};
+    const double halfPi = 0.5 * std::numbers::pi;
+    if (isEveryLongitude(lon) && (north >= halfPi || south <= -halfPi)) {
+      // A cap around a pole: its diameter.
+      diagonal = 2.0 * (north >= halfPi ? halfPi - south : north + halfPi) * kEarthRadius;
+    } else {
+      const double width = lonSpan(lon) * kEarthRadius * std::cos(0.5 * (south + north));
+      diagonal = std::hypot(width, (north - south) * kEarthRadius);
+    }
   }
   tileset["geometricError"] = std::max(2.0 * nodes[root].declaredError, diagonal);
   tileset["root"] = tileJson(root, "", true);
