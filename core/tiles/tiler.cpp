@@ -372,6 +372,17 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
   for (const auto& piece : input.lines) {
     for (const auto& p : piece.points) addToSides(p, true);
   }
+  // A line vertex on a side is kept there even when the line only touches
+  // the tile (both its segments in the neighbour, so no piece was clipped
+  // here): the neighbour keeps it, and a side without it would be a crack.
+  for (std::size_t i = 0; i < zd.lines.size(); ++i) {
+    if (!zd.lineBoxes[i].overlaps(rect)) continue;
+    for (const auto& p : zd.lines[i].points) {
+      if (rect.contains(p.xy()) &&
+          (p.x == rect.x0 || p.x == rect.x1 || p.y == rect.y0 || p.y == rect.y1))
+        addToSides(p, true);
+    }
+  }
 
   // Each side is the TIN's section along it, simplified (vertically, to
   // kEdgeShare of the zoom's tolerance) between the points it must keep; those take the
@@ -411,8 +422,12 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       if (!sp.onLine) {
         // The section, else the TIN at the point (a corner on the TIN's
         // boundary is where a section may start just after it), else — off
-        // the TIN — the fit.
-        auto z = tinZ(sp.along);
+        // the TIN — the fit. A corner is on two sides of each of four
+        // tiles, whose sections reach it in different arithmetic: it takes
+        // the TIN at the point in all of them.
+        const bool corner =
+            (sp.p.x == rect.x0 || sp.p.x == rect.x1) && (sp.p.y == rect.y0 || sp.p.y == rect.y1);
+        auto z = corner ? index_.z(sp.p.xy()) : tinZ(sp.along);
         if (!z) z = index_.z(sp.p.xy());
         must.back().p.z = z ? *z : fit.evaluate(sp.p.xy());
       }
