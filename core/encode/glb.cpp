@@ -283,6 +283,12 @@ GlbResult encodeGlb(const MeshBuffers& mesh, const Matrix4& rootMatrix, const Gl
   primitive["attributes"] = {{"POSITION", 0}, {"NORMAL", 1}};
   primitive["indices"] = 2;
   primitive["mode"] = gf::kTriangles;
+  // Matte ground: without a material a client draws glTF's default, metallic
+  // 1 and roughness 1 (dark grey metal where no environment map is set).
+  primitive["material"] = 0;
+  doc["materials"] = Json::array(
+      {{{"name", "terrain"},
+        {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}}});
 
   GlbResult result;
   std::string bin;

@@ -279,6 +279,11 @@ TEST(EncodeGlb, JsonIsWhatALoaderNeeds) {
     EXPECT_FALSE(j["nodes"][0].contains("matrix")) << "identity is omitted";
     const auto& primitive = j["meshes"][0]["primitives"][0];
     EXPECT_EQ(primitive["mode"], 4);
+    // A matte material, not glTF's default metal.
+    ASSERT_TRUE(primitive.contains("material"));
+    const auto& pbr = j["materials"][primitive["material"].get<int>()]["pbrMetallicRoughness"];
+    EXPECT_EQ(pbr["metallicFactor"], 0.0);
+    EXPECT_EQ(pbr["roughnessFactor"], 1.0);
     const auto& position = j["accessors"][primitive["attributes"]["POSITION"].get<int>()];
     EXPECT_EQ(position["componentType"], 5126);
     EXPECT_EQ(position["type"], "VEC3");
