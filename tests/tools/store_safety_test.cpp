@@ -45,6 +45,21 @@ std::string tileArgs(const fs::path& tin, double tolerance) {
          std::to_string(tolerance);
 }
 
+/// The shards of a job: the tiles above zoom 1 (top.3dtiles), then the
+/// four zoom-1 subtrees (part0..3.3dtiles), in `dir`.
+std::vector<std::string> makeShards(const fs::path& dir, const std::string& common) {
+  std::vector<std::string> shards{(dir / "top.3dtiles").string()};
+  auto r = runTinsmith(common + " --until-zoom 1 -o " + shards[0]);
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  for (int k = 0; k < 4; ++k) {
+    shards.push_back((dir / ("part" + std::to_string(k) + ".3dtiles")).string());
+    const std::string id = "1/" + std::to_string(k & 1) + "/" + std::to_string(k >> 1);
+    r = runTinsmith(common + " --subtree " + id + " -o " + shards.back());
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+  }
+  return shards;
+}
+
 /// Every file under `path` (or the file itself, as ""), with its bytes.
 using Snapshot = std::map<std::string, std::string>;
 Snapshot snapshot(const fs::path& path) {
@@ -240,18 +255,10 @@ TEST(StoreSafety, MergeNeverWritesOverAnInputAndNeedsEveryChild) {
   const auto tin = hillTin(dir);
   const std::string common = tileArgs(tin, 0.5);
   ASSERT_EQ(runTinsmith(common + " -o " + (dir / "whole.3dtiles").string()).exitCode, 0);
-  ASSERT_EQ(runTinsmith(common + " --until-zoom 1 -o " + (dir / "top.3dtiles").string()).exitCode,
-            0);
-  std::vector<std::string> parts;
-  for (int k = 0; k < 4; ++k) {
-    const auto part = dir / ("part" + std::to_string(k) + ".3dtiles");
-    const std::string id = "1/" + std::to_string(k & 1) + "/" + std::to_string(k >> 1);
-    const auto r = runTinsmith(common + " --subtree " + id + " -o " + part.string());
-    ASSERT_EQ(r.exitCode, 0) << r.err;
-    parts.push_back(part.string());
-  }
+  const std::vector<std::string> shards = makeShards(dir, common);
+  const std::vector<std::string> parts(shards.begin() + 1, shards.end());
   const auto allNames = namesIn(dir);
-  const std::string top = (dir / "top.3dtiles").string();
+  const std::string& top = shards[0];
   const std::string topBytes = readFile(top);
 
   // One of the four shards missing: refused, naming the child.
@@ -301,17 +308,9 @@ TEST(StoreSafety, AKilledMergeOrBuildLeavesTheOldStoreWhole) {
   ASSERT_EQ(runTinsmith(tileArgs(tin, 0.5) + " -o " + store.string()).exitCode, 0);
   const Snapshot before = snapshot(store);
   // Merge: the shards of the 0.2 m job.
-  std::string shards;
   const std::string common = tileArgs(tin, 0.2);
-  ASSERT_EQ(runTinsmith(common + " --until-zoom 1 -o " + (dir / "top.3dtiles").string()).exitCode,
-            0);
-  shards += (dir / "top.3dtiles").string();
-  for (int k = 0; k < 4; ++k) {
-    const auto part = dir / ("part" + std::to_string(k) + ".3dtiles");
-    const std::string id = "1/" + std::to_string(k & 1) + "/" + std::to_string(k >> 1);
-    ASSERT_EQ(runTinsmith(common + " --subtree " + id + " -o " + part.string()).exitCode, 0);
-    shards += " " + part.string();
-  }
+  std::string shards;
+  for (const std::string& shard : makeShards(dir, common)) shards += " " + shard;
   ASSERT_EQ(runTinsmith(common + " -o " + (dir / "whole.3dtiles").string()).exitCode, 0);
   const Snapshot after = snapshot(dir / "whole.3dtiles");
   killAtAnyMoment(kTinsmith + " merge -q " + shards + " -o " + store.string(), store, before, after,
