@@ -42,7 +42,8 @@ constexpr double kEdgeShare = 0.4;
 /// triangles where its vertices are sparse (a triangle whose longest edge
 /// exceeds twice the median longest edge gets the interior points of a
 /// barycentric grid at about that median's spacing, z on the triangle's
-/// plane; a DEM's even grid gets none).
+/// plane; a DEM's even grid gets none). The samples are at most as many as
+/// the TIN's vertices: where the median asks for more, the spacing grows.
 /// `zoomFit` leaves out what the tile meshes hold exactly — vertices of break
 /// lines, and samples of the triangles at them —
 /// so a zoom's binary fit is not driven to tiny cells by the steps a break
@@ -62,31 +63,41 @@ FitData fitData(const TinData& tin) {
   }
   for (std::size_t v = 0; v < tin.vertices.size(); ++v)
     if (!held[v]) data.zoomFit.push_back(tin.vertices[v]);
+  const auto longestEdge = [&](const auto& t) {
+    const Point3& a = tin.vertices[t[0]];
+    const Point3& b = tin.vertices[t[1]];
+    const Point3& c = tin.vertices[t[2]];
+    return std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
+                     std::hypot(a.x - c.x, a.y - c.y)});
+  };
   std::vector<double> lengths;
   lengths.reserve(tin.triangles.size());
   for (std::size_t k = 0; k < tin.triangles.size();
        k += std::max<std::size_t>(1, tin.triangles.size() / 20000)) {
-    const auto& t = tin.triangles[k];
-    const Point3& a = tin.vertices[t[0]];
-    const Point3& b = tin.vertices[t[1]];
-    const Point3& c = tin.vertices[t[2]];
-    lengths.push_back(std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
-                                std::hypot(a.x - c.x, a.y - c.y)}));
+    lengths.push_back(longestEdge(tin.triangles[k]));
   }
   if (lengths.empty()) return data;
   std::nth_element(lengths.begin(),
                    lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2),
                    lengths.end());
-  const double spacing = lengths[lengths.size() / 2];
+  double spacing = lengths[lengths.size() / 2];
   if (!(spacing > 0)) return data;
+  // The budget: at most as many samples as the TIN has vertices. Contours
+  // far apart on a plain below close ones on a cliff (a median edge of a few
+  // metres, triangles of hundreds) asked for 17 M samples from 127 k
+  // vertices (2.9 GB, 160 s); the spacing grows until the estimate fits.
+  double sparseArea = 0;
+  for (const auto& t : tin.triangles)
+    if (longestEdge(t) > 2 * spacing)
+      sparseArea += 0.5 * std::abs(geometry::orient2dInexact(tin.vertices[t[0]], tin.vertices[t[1]],
+                                                             tin.vertices[t[2]]));
+  const double budget = static_cast<double>(tin.vertices.size());
+  if (sparseArea / (spacing * spacing) > budget) spacing = std::sqrt(sparseArea / budget);
   for (const auto& t : tin.triangles) {
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
     const Point3& c = tin.vertices[t[2]];
-    const double longest =
-        std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
-                  std::hypot(a.x - c.x, a.y - c.y)});
-    if (longest <= 2 * spacing) continue;
+    if (longestEdge(t) <= 2 * spacing) continue;
     const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
     // About one sample per spacing² of area (a barycentric grid of n steps
     // has n²/2 points): a long sliver on the hull gets a few, not thousands.

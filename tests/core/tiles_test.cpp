@@ -338,6 +338,30 @@ TEST(Tiles, BreakLineVerticesKeepTheTinsHeightAndTilesArePure) {
   EXPECT_GE(held, 2u);
 }
 
+// Cliffs: dense contours on a wall beside sparse ones on a plain put the
+// median edge at metres and the plain's triangles at hundreds; each of those
+// got a 64-step grid of samples (a 127 k-vertex mesa: 17 M fit points,
+// 2.9 GB). The samples stay within the TIN's vertex count.
+TEST(Tiles, FitSamplesStayWithinTheTinsVertexCount) {
+  Cdt cdt;
+  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+  std::vector<Point3> points;
+  const double x0 = 500000, y0 = 4500000;
+  for (int j = 0; j <= 10; ++j)  // the plain: 10 km at 1 km
+    for (int i = 0; i <= 10; ++i) points.push_back({x0 + i * 1000.0, y0 + j * 1000.0, 100.0 + i});
+  for (int j = 0; j < 60; ++j)  // the wall: 60 m × 60 m at 1 m, 50 m high
+    for (int i = 0; i < 60; ++i)
+      points.push_back({x0 + 4200 + i * 1.0 + 0.3 * (j % 2), y0 + 4200 + j * 1.0, 100.0 + 50.0 * (i > 30)});
+  cdt.insertPoints(points, spots);
+  cdt.finalize();
+  const TinData tin = cdt.toTinData();
+  TilerOptions options;
+  options.tolerance = 1;
+  const Tiler tiler(tin, options);
+  EXPECT_GT(tiler.dataPointCount(), tin.vertices.size());  // the plain is sampled
+  EXPECT_LE(tiler.dataPointCount(), 2 * tin.vertices.size());
+}
+
 TEST(Tiles, BadOptionsAreUsageErrors) {
   const TinData tin = syntheticTin();
   TilerOptions options;
