@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 namespace tinsmith::tiles {
 
@@ -27,6 +29,29 @@ struct Plane {
     const double wc = geometry::orient2dInexact(a, b, p) * inv;
     return za + wb * (zb - za) + wc * (zc - za);
   }
+};
+
+/// Which triangles a query has met, each once, in O(1) a triangle: a mark
+/// per triangle holding the number of the query that last met it.
+class SeenMarks {
+ public:
+  void begin(std::size_t triangles) {
+    if (marks_.size() < triangles) marks_.resize(triangles, 0);
+    if (++query_ == 0) {  // wrapped: old marks could equal the new number
+      std::fill(marks_.begin(), marks_.end(), 0);
+      query_ = 1;
+    }
+  }
+  /// True the first time `t` is met in this query.
+  bool insert(std::uint32_t t) {
+    if (marks_[t] == query_) return false;
+    marks_[t] = query_;
+    return true;
+  }
+
+ private:
+  std::vector<std::uint32_t> marks_;
+  std::uint32_t query_ = 0;
 };
 
 /// Inexact side test (the result is within rounding of the exact overlay,
@@ -98,17 +123,23 @@ void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const
   out.clear();
   if (!grid_) return;
   // The triangles listed in the grid cells the segment passes through (the
-  // box of a long diagonal segment holds far more).
+  // box of a long diagonal segment holds far more), each once: a triangle
+  // larger than a cell is listed in every cell it covers, and on a cliff's
+  // contours beside a plain's that is hundreds (sorting the list to drop
+  // them was a sixth of a tile job's time).
+  thread_local SeenMarks seen;
+  seen.begin(tin_.triangles.size());
   std::vector<std::uint32_t> candidates;
   grid_->forEachCellOfSegment(a.x, a.y, b.x, b.y, [&](std::size_t c) {
-    grid_->forEachInCell(c, [&](std::uint32_t t) { candidates.push_back(t); });
+    grid_->forEachInCell(c, [&](std::uint32_t t) {
+      if (seen.insert(t)) candidates.push_back(t);
+    });
   });
-  std::sort(candidates.begin(), candidates.end());
-  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
   // Each triangle's stretch of the segment, by clipping t ∈ [0, 1] to the
   // left of its three (CCW) edges; relative to a for precision.
   struct Stretch {
     double t0, t1, z0, z1;
+    std::uint32_t triangle;
   };
   std::vector<Stretch> stretches;
   const P2 d{b.x - a.x, b.y - a.y};
@@ -135,10 +166,13 @@ void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const
     if (t0 > t1) continue;
     const Plane plane(c[0], c[1], c[2], tin_.vertices[tri[0]].z, tin_.vertices[tri[1]].z,
                       tin_.vertices[tri[2]].z);
-    stretches.push_back({t0, t1, plane.at({t0 * d.x, t0 * d.y}), plane.at({t1 * d.x, t1 * d.y})});
+    stretches.push_back(
+        {t0, t1, plane.at({t0 * d.x, t0 * d.y}), plane.at({t1 * d.x, t1 * d.y}), k});
   }
-  std::stable_sort(stretches.begin(), stretches.end(),
-                   [](const Stretch& x, const Stretch& y) { return x.t0 < y.t0; });
+  // By t, ties by triangle id: the merge below keeps the lower id's z.
+  std::sort(stretches.begin(), stretches.end(), [](const Stretch& x, const Stretch& y) {
+    return x.t0 != y.t0 ? x.t0 < y.t0 : x.triangle < y.triangle;
+  });
   constexpr double kMerge = 1e-12;
   double reach = -1.0;
   auto push = [&](double t, double z) {
