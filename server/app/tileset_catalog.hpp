@@ -113,8 +113,11 @@ class TilesetCatalog {
  public:
   /// Each path is a store (a .3dtiles file, or a directory with a
   /// tileset.json) or a folder of stores (every *.3dtiles file and store
-  /// directory directly in it). The id is the file name without
-  /// ".3dtiles" (characters other than [A-Za-z0-9_.-] become '-'). Throws
+  /// directory directly in it, but for a tile job's staging names:
+  /// "*.partial.3dtiles", "*.partial", "*.tmp-N-N"). The id is the file name
+  /// without ".3dtiles", every byte other than [A-Za-z0-9_.-] a '-' (so a
+  /// name that is not UTF-8 is served too; the list's "name" shows such
+  /// bytes as \xNN). Throws
   /// usageError for a path that is neither or two stores with one id, and
   /// what Tileset throws for a store that cannot be served.
   explicit TilesetCatalog(const std::vector<std::filesystem::path>& paths);
