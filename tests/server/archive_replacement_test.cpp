@@ -100,6 +100,35 @@ TEST(ArchiveReplacement, ConcurrentAnswersAreAllOldUntilTheReloadThenAllNew) {
   EXPECT_NE(newEtag, before.header("etag"));
 }
 
+TEST(ArchiveReplacement, ATileBuiltFromTheOldStoreIsNotWrittenIntoTheNewOne) {
+  const auto dir = scratchDir("archive-replaced-keep-" + std::to_string(::getpid()));
+  const auto live = dir / "live.3dtiles";
+  {
+    const auto source = store::openStoreForReading(testStoreDir() / "hill.3dtiles");
+    std::vector<std::string> keys;
+    for (const auto& k : source->keys())
+      if (!k.starts_with("tiles/") || std::stoi(k.substr(6)) < 2) keys.push_back(k);
+    store::writeStore(*source, keys, live);
+  }
+  const auto coarse = store::openStoreForReading(coarseStore());
+  std::string missing;  // a deep tile of the old store that the new one lacks
+  for (const auto& k : store::openStoreForReading(testStoreDir() / "hill.3dtiles")->keys())
+    if (k.starts_with("tiles/") && std::stoi(k.substr(6)) >= 2 && !coarse->contains(k)) missing = k;
+  ASSERT_FALSE(missing.empty());
+
+  auto options = RunningServer::defaults();
+  options.stores = {live};
+  options.reloadInterval = std::chrono::milliseconds(0);
+  options.service.onDemand = true;
+  RunningServer server(options);
+  ASSERT_EQ(httpGet(server.port(), "/tilesets/live/tileset.json").status, 200);
+  fs::copy_file(coarseStore(), dir / "next.3dtiles");
+  fs::rename(dir / "next.3dtiles", live);
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/live/" + missing).status, 200);
+  EXPECT_FALSE(store::openStoreForReading(live)->contains(missing))
+      << "the old store's tile was written into the archive renamed over it";
+}
+
 TEST(ArchiveReplacement, SighupReloadsTheCliAndItGoesOnServing) {
   const auto dir = scratchDir("serve-sighup-" + std::to_string(::getpid()));
   fs::create_directories(dir / "stores");
