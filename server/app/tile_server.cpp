@@ -117,7 +117,8 @@ std::vector<std::string> TileServer::reload() {
   std::lock_guard lock(reloadMutex_);
   auto lines = catalog_.refresh();
   if (options_.notices)
-    for (const auto& line : lines) std::fprintf(options_.notices, "tinsmith serve: %s\n", line.c_str());
+    for (const auto& line : lines)
+      std::fprintf(options_.notices, "tinsmith serve: %s\n", line.c_str());
   return lines;
 }
 

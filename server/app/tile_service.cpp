@@ -403,8 +403,8 @@ Response TileService::serveContent(const Request& request, const Content& conten
       r.status = 304;
       return r;
     }
-    return errorResponse(412, ErrorKind::Input,
-                         "If-None-Match matches the current representation", "If-None-Match");
+    return errorResponse(412, ErrorKind::Input, "If-None-Match matches the current representation",
+                         "If-None-Match");
   }
   if (brotli) r.addHeader("Content-Encoding", "br");
   if (gzip) r.addHeader("Content-Encoding", "gzip");

@@ -45,22 +45,25 @@ bool isArchive(const fs::path& p) {
 /// when there is none.
 std::size_t utf8SequenceAt(std::string_view text) {
   const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
-  const unsigned char lead = byte(0);
-  if (lead < 0x80) return 1;
-  std::size_t length = 0;
-  unsigned char low = 0x80, high = 0xbf;  // the range of the second byte
-  if (lead >= 0xc2 && lead <= 0xdf) length = 2;
-  else if (lead == 0xe0) length = 3, low = 0xa0;
-  else if (lead == 0xed) length = 3, high = 0x9f;
-  else if (lead >= 0xe1 && lead <= 0xef) length = 3;
-  else if (lead == 0xf0) length = 4, low = 0x90;
-  else if (lead == 0xf4) length = 4, high = 0x8f;
-  else if (lead >= 0xf1 && lead <= 0xf3) length = 4;
-  if (length == 0 || text.size() < length) return 0;
-  if (byte(1) < low || byte(1) > high) return 0;
-  for (std::size_t i = 2; i < length; ++i)
-    if (byte(i) < 0x80 || byte(i) > 0xbf) return 0;
-  return length;
+  if (byte(0) < 0x80) return 1;
+  // Lead bytes, the sequence's length and the range of its second byte.
+  struct Lead {
+    unsigned char first, last;
+    std::size_t length;
+    unsigned char low, high;
+  };
+  static constexpr Lead kLeads[] = {{0xc2, 0xdf, 2, 0x80, 0xbf}, {0xe0, 0xe0, 3, 0xa0, 0xbf},
+                                    {0xe1, 0xec, 3, 0x80, 0xbf}, {0xed, 0xed, 3, 0x80, 0x9f},
+                                    {0xee, 0xef, 3, 0x80, 0xbf}, {0xf0, 0xf0, 4, 0x90, 0xbf},
+                                    {0xf1, 0xf3, 4, 0x80, 0xbf}, {0xf4, 0xf4, 4, 0x80, 0x8f}};
+  for (const Lead& lead : kLeads) {
+    if (byte(0) < lead.first || byte(0) > lead.last) continue;
+    if (text.size() < lead.length || byte(1) < lead.low || byte(1) > lead.high) return 0;
+    for (std::size_t i = 2; i < lead.length; ++i)
+      if (byte(i) < 0x80 || byte(i) > 0xbf) return 0;
+    return lead.length;
+  }
+  return 0;
 }
 
 /// A file name as the list and the log show it: UTF-8 as it is, every byte
@@ -83,7 +86,9 @@ std::string displayName(std::string_view bytes) {
   return out;
 }
 
-std::string displayPath(const fs::path& p) { return displayName(p.native()); }
+std::string displayPath(const fs::path& p) {
+  return displayName(p.native());
+}
 
 std::string idFor(const fs::path& p) {
   std::string name = p.filename().string();

@@ -1,6 +1,12 @@
 #include "server/app/work_pool.hpp"
 
 #include <signal.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 
 #include "core/base/parallel.hpp"
 
@@ -22,7 +28,9 @@ WorkPool::WorkPool(std::size_t workers, std::size_t queueLimit) : queueLimit_(qu
   pthread_sigmask(SIG_SETMASK, &previous, nullptr);
 }
 
-WorkPool::~WorkPool() { shutdown(); }
+WorkPool::~WorkPool() {
+  shutdown();
+}
 
 bool WorkPool::trySubmit(std::function<void()> task) {
   {
@@ -57,6 +65,12 @@ WorkPool::Stats WorkPool::stats() const {
 }
 
 void WorkPool::work() {
+  // Linux keeps a nice value per thread (and threads a task starts inherit
+  // it): this one's, not the process's. Best effort.
+  const auto self = static_cast<id_t>(::syscall(SYS_gettid));
+  errno = 0;
+  const int nice = ::getpriority(PRIO_PROCESS, self);
+  if (errno == 0) ::setpriority(PRIO_PROCESS, self, std::min(nice + kWorkerNice, 19));
   std::unique_lock lock(mutex_);
   for (;;) {
     ++idle_;

@@ -7,7 +7,10 @@
 //
 // Threads: every member may be called from any thread. The workers are
 // started with every signal blocked, so a process that waits for its signals
-// with sigwait (tinsmith serve) still gets them all on its own thread.
+// with sigwait (tinsmith serve) still gets them all on its own thread. They
+// run kWorkerNice steps nicer than the process (and so do the threads a
+// build starts): on a busy machine the scheduler gives the I/O threads the
+// cores first, and a cached tile is not kept waiting behind a fit.
 #pragma once
 
 #include <condition_variable>
@@ -23,13 +26,15 @@ namespace tinsmith::server {
 
 class WorkPool {
  public:
+  static constexpr int kWorkerNice = 10;
+
   struct Stats {
     std::size_t workers = 0;
     std::size_t queueLimit = 0;
-    std::size_t waiting = 0;    ///< queued, not started
-    std::size_t running = 0;    ///< on a worker now
-    std::uint64_t queued = 0;   ///< tasks taken, ever
-    std::uint64_t rejected = 0; ///< tasks refused: the queue was full, or the pool shut down
+    std::size_t waiting = 0;     ///< queued, not started
+    std::size_t running = 0;     ///< on a worker now
+    std::uint64_t queued = 0;    ///< tasks taken, ever
+    std::uint64_t rejected = 0;  ///< tasks refused: the queue was full, or the pool shut down
   };
 
   /// `workers` 0: one per core. `queueLimit`: tasks that may wait for a

@@ -92,7 +92,8 @@ TEST(ArchiveReplacement, ConcurrentAnswersAreAllOldUntilTheReloadThenAllNew) {
     }
   };
   together(ask);
-  EXPECT_EQ(oldAnswers.load(), kClients * kRequests) << newAnswers << " answers were the new store's";
+  EXPECT_EQ(oldAnswers.load(), kClients * kRequests)
+      << newAnswers << " answers were the new store's";
 
   const auto lines = server.server().reload();
   ASSERT_EQ(lines.size(), 1u);
@@ -100,7 +101,8 @@ TEST(ArchiveReplacement, ConcurrentAnswersAreAllOldUntilTheReloadThenAllNew) {
   oldAnswers = 0;
   newAnswers = 0;
   together(ask);
-  EXPECT_EQ(newAnswers.load(), kClients * kRequests) << oldAnswers << " answers were the old store's";
+  EXPECT_EQ(newAnswers.load(), kClients * kRequests)
+      << oldAnswers << " answers were the old store's";
   EXPECT_NE(newEtag, before.header("etag"));
 }
 
@@ -153,11 +155,13 @@ TEST(ArchiveReplacement, SighupReloadsTheCliAndItGoesOnServing) {
            "  exec 3<&-\n"
            "}\n"
         << "cp " << coarseStore().string() << " " << (dir / "second.tmp").string() << "\n"
-        << "mv " << (dir / "second.tmp").string() << " " << (dir / "stores" / "second.3dtiles").string()
+        << "mv " << (dir / "second.tmp").string() << " "
+        << (dir / "stores" / "second.3dtiles").string()
         << "\n"
            "list | grep -c '\"id\": \"second\"' | sed 's/^/before=/'\n"
            "kill -HUP $pid\n"
-           "for i in $(seq 100); do list | grep -q '\"id\": \"second\"' && break; sleep 0.05; done\n"
+           "for i in $(seq 100); do list | grep -q '\"id\": \"second\"' && break; sleep 0.05; "
+           "done\n"
            "list | grep -c '\"id\": \"second\"' | sed 's/^/after=/'\n"
            "kill -0 $pid && echo alive\n"
            "kill -TERM $pid\n"
@@ -172,6 +176,10 @@ TEST(ArchiveReplacement, SighupReloadsTheCliAndItGoesOnServing) {
   EXPECT_NE(r.out.find("exit=0"), std::string::npos) << r.out << r.err;
   EXPECT_NE(r.out.find("SIGHUP"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("added"), std::string::npos) << r.out;
+  const auto help = runTinsmith("serve --help");
+  EXPECT_NE(help.out.find("SIGHUP"), std::string::npos) << help.out;
+  EXPECT_NE(help.out.find("--workers"), std::string::npos) << help.out;
+  EXPECT_NE(help.out.find("--queue"), std::string::npos) << help.out;
 }
 
 }  // namespace

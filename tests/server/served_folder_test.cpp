@@ -92,12 +92,15 @@ TEST(Preconditions, AMatchingIfNoneMatchIs412ForPostAnd304ForGet) {
   ASSERT_EQ(first.status, 200) << first.body;
   const std::string etag = first.header("etag");
   ASSERT_FALSE(etag.empty());
-  const auto again = c.request("/tilesets/hill/elevation", "If-None-Match: " + etag + "\r\n", "POST", body);
+  const auto again =
+      c.request("/tilesets/hill/elevation", "If-None-Match: " + etag + "\r\n", "POST", body);
   EXPECT_EQ(again.status, 412) << again.body;
   EXPECT_EQ(again.header("content-type"), "application/json");
-  EXPECT_EQ(c.request("/tilesets/hill/elevation", "If-None-Match: *\r\n", "POST", body).status, 412);
-  EXPECT_EQ(c.request("/tilesets/hill/elevation", "If-None-Match: \"other\"\r\n", "POST", body).status,
-            200);
+  EXPECT_EQ(c.request("/tilesets/hill/elevation", "If-None-Match: *\r\n", "POST", body).status,
+            412);
+  EXPECT_EQ(
+      c.request("/tilesets/hill/elevation", "If-None-Match: \"other\"\r\n", "POST", body).status,
+      200);
   // GET and HEAD still revalidate.
   const auto tileset = c.request("/tilesets/hill/tileset.json");
   const std::string match = "If-None-Match: " + tileset.header("etag") + "\r\n";

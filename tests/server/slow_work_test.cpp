@@ -112,9 +112,10 @@ TEST(SlowWork, HealthAndCachedTilesAnswerWhileABuildAndABatchAreHeldOnTheWorkers
   ArchiveLock lock(s.archive);
   HttpConnection build(s.port(), 20000), elevations(s.port(), 20000);
   ASSERT_TRUE(build.send("GET /tilesets/slow/" + s.deep(0) + " HTTP/1.1\r\nHost: x\r\n\r\n"));
-  ASSERT_TRUE(elevations.send("POST /tilesets/slow/elevation HTTP/1.1\r\nHost: x\r\n"
-                              "Content-Length: " + std::to_string(batch.size()) + "\r\n\r\n" +
-                              batch));
+  ASSERT_TRUE(
+      elevations.send("POST /tilesets/slow/elevation HTTP/1.1\r\nHost: x\r\n"
+                      "Content-Length: " +
+                      std::to_string(batch.size()) + "\r\n\r\n" + batch));
   // Both on a worker, both waiting for the store behind the lock.
   ASSERT_TRUE(metricReaches(s.port(), "tinsmith_work_running", 2))
       << "/metrics did not answer while the slow requests were held";
