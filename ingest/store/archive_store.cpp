@@ -17,10 +17,12 @@
 // the header).
 #include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <condition_variable>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "core/base/error.hpp"
@@ -172,12 +174,45 @@ std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
   return connection;
 }
 
+// The file a path names now (device and inode); nullopt when nothing is there.
+struct FileIdentity {
+  dev_t device = 0;
+  ino_t inode = 0;
+  friend bool operator==(const FileIdentity&, const FileIdentity&) = default;
+};
+std::optional<FileIdentity> identityOf(const fs::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
+  return FileIdentity{st.st_dev, st.st_ino};
+}
+
 // Connections handed to one thread at a time; grows on demand up to `capacity`.
+//
+// Every connection is on the file the first one opened: an archive renamed
+// over the path meanwhile (a new version of the store) is not read by a
+// store opened on the old one, so no reader mixes the two versions. A new
+// connection is kept only when the path still names the first one's file
+// after it opened (SQLite opens its file in sqlite3_open_v2; the old file
+// cannot come back under the name, since its entry was replaced); otherwise
+// it is closed and the pool stops growing: later calls take turns on the
+// connections it has.
 class ConnectionPool {
  public:
   ConnectionPool(fs::path path, Access access, std::size_t capacity)
       : path_(std::move(path)), access_(access), capacity_(capacity) {
-    idle_.push_back(connect(path_, access_));
+    // The identity is taken before and after the first connection: equal,
+    // the connection is on that file. A file replaced in between is taken
+    // as it is now (its first reader defines the store's version).
+    for (int attempt = 0;; ++attempt) {
+      const auto before = identityOf(path_);
+      auto first = connect(path_, access_);
+      const auto after = identityOf(path_);
+      if ((before && after && *before == *after) || attempt == 3) {
+        identity_ = after;
+        idle_.push_back(std::move(first));
+        break;
+      }
+    }
     opened_ = 1;
   }
 
@@ -197,6 +232,11 @@ class ConnectionPool {
 
   Lease acquire() const {
     std::unique_lock lock(mutex_);
+    return acquireLocked(lock);
+  }
+
+ private:
+  Lease acquireLocked(std::unique_lock<std::mutex>& lock) const {
     freed_.wait(lock, [&] { return !idle_.empty() || opened_ < capacity_; });
     if (!idle_.empty()) {
       std::unique_ptr<Connection> connection = std::move(idle_.back());
@@ -205,17 +245,32 @@ class ConnectionPool {
     }
     ++opened_;
     lock.unlock();
+    std::unique_ptr<Connection> connection;
     try {
-      return {*this, connect(path_, access_)};
+      connection = connect(path_, access_);
     } catch (...) {
+      // What is under the name now may not be an archive at all (half
+      // copied): this store's own file is still readable.
+      const bool replaced = identityOf(path_) != identity_;
       lock.lock();
       --opened_;
-      freed_.notify_one();
-      throw;
+      if (!replaced) {
+        freed_.notify_one();
+        throw;
+      }
+      capacity_ = opened_;
+      return acquireLocked(lock);
     }
+    if (identity_ && identityOf(path_) == identity_) return {*this, std::move(connection)};
+    // Another file under the name (or none): not this store's. Closed, and
+    // the pool keeps the connections it has.
+    connection.reset();
+    lock.lock();
+    --opened_;
+    capacity_ = opened_;
+    return acquireLocked(lock);
   }
 
- private:
   void giveBack(std::unique_ptr<Connection> connection) const {
     {
       std::lock_guard lock(mutex_);
@@ -226,7 +281,8 @@ class ConnectionPool {
 
   fs::path path_;
   Access access_;
-  std::size_t capacity_;
+  mutable std::size_t capacity_;  // lowered to what is open when the path names another file
+  std::optional<FileIdentity> identity_;
   mutable std::mutex mutex_;
   mutable std::condition_variable freed_;
   mutable std::vector<std::unique_ptr<Connection>> idle_;

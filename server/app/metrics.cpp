@@ -100,6 +100,22 @@ std::string Metrics::prometheusText() const {
   appendSingle(out, "tinsmith_on_demand_build_seconds_total", "counter",
                "Time spent building tiles on demand.",
                std::to_string(static_cast<double>(buildNanos_.load(kRelaxed)) * 1e-9));  // %f
+  if (const WorkPool* pool = pool_.load(kRelaxed)) {
+    const WorkPool::Stats work = pool->stats();
+    appendSingle(out, "tinsmith_work_workers", "gauge",
+                 "Worker threads for slow requests (on-demand builds, large batches).",
+                 std::to_string(work.workers));
+    appendSingle(out, "tinsmith_work_running", "gauge", "Slow requests on a worker now.",
+                 std::to_string(work.running));
+    appendSingle(out, "tinsmith_work_waiting", "gauge",
+                 "Slow requests queued for a worker now (at most --queue beyond the idle ones).",
+                 std::to_string(work.waiting));
+    appendSingle(out, "tinsmith_work_queued_total", "counter",
+                 "Slow requests handed to the workers.", std::to_string(work.queued));
+    appendSingle(out, "tinsmith_work_rejected_total", "counter",
+                 "Slow requests refused with 503 because the queue was full.",
+                 std::to_string(work.rejected));
+  }
   return out;
 }
 

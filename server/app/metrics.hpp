@@ -1,6 +1,7 @@
 // The server's counters, exposed as Prometheus text (/metrics): requests by
 // route and status, a latency histogram, response bytes, tile cache hits and
-// misses, open connections, tiles built on demand. Lock-free (relaxed atomics): a scrape sees each
+// misses, open connections, tiles built on demand, the worker pool's queue
+// (server/app/work_pool.hpp). Lock-free (relaxed atomics): a scrape sees each
 // counter whole, not all of them at one instant.
 #pragma once
 
@@ -10,6 +11,7 @@
 #include <cstdint>
 #include <string>
 
+#include "server/app/work_pool.hpp"
 #include "server/http/route.hpp"
 
 namespace tinsmith::server {
@@ -17,7 +19,7 @@ namespace tinsmith::server {
 class Metrics {
  public:
   /// The statuses counted by name; any other lands in "other".
-  static constexpr std::array<int, 16> kStatuses{200, 204, 206, 304, 400, 404, 405, 408,
+  static constexpr std::array<int, 17> kStatuses{200, 204, 206, 304, 400, 404, 405, 408, 412,
                                                  413, 414, 416, 431, 500, 501, 503, 505};
   /// Upper bounds of the latency buckets, seconds (then +Inf).
   static constexpr std::array<double, 14> kBuckets{0.0001, 0.00025, 0.0005, 0.001, 0.0025,
@@ -37,6 +39,9 @@ class Metrics {
   /// A request that waited for a build another request started.
   void countBuildWait() { buildWaits_.fetch_add(1, kRelaxed); }
   [[nodiscard]] std::uint64_t tilesBuilt() const { return tilesBuilt_.load(kRelaxed); }
+  /// The pool whose queue the text reports (null: none); it must outlive
+  /// this, or be unset first.
+  void watchPool(const WorkPool* pool) { pool_.store(pool, kRelaxed); }
 
   /// Requests counted for (route, status) so far (for tests).
   [[nodiscard]] std::uint64_t requests(RouteKind route, int status) const;
@@ -57,6 +62,7 @@ class Metrics {
   std::atomic<std::uint64_t> cacheHits_{0}, cacheMisses_{0};
   std::atomic<std::int64_t> openConnections_{0};
   std::atomic<std::uint64_t> tilesBuilt_{0}, buildWaits_{0}, buildNanos_{0};
+  std::atomic<const WorkPool*> pool_{nullptr};
 };
 
 }  // namespace tinsmith::server

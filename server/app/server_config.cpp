@@ -119,6 +119,14 @@ const std::map<std::string, Apply>& serverKeys() {
        [](const Reader& r, const std::string& k, const toml::node& n) {
          r.settings.threads = static_cast<int>(r.integer(k, n, 0, 256));
        }},
+      {"workers",
+       [](const Reader& r, const std::string& k, const toml::node& n) {
+         r.settings.workers = static_cast<int>(r.integer(k, n, 0, 256));
+       }},
+      {"queue",
+       [](const Reader& r, const std::string& k, const toml::node& n) {
+         r.settings.queue = static_cast<int>(r.integer(k, n, 0, 100000));
+       }},
       {"max_connections",
        [](const Reader& r, const std::string& k, const toml::node& n) {
          r.settings.maxConnections = static_cast<int>(r.integer(k, n, 1, 1000000));

@@ -5,6 +5,7 @@
 //   stores = ["../out/red-butte.3dtiles"]   # relative to the config's folder
 //   host = "127.0.0.1"        port = 8080          cors = "*"   # or "off"
 //   cache_mb = 256            threads = 0          max_connections = 10000
+//   workers = 0               queue = 64
 //   read_timeout = 10.0       idle_timeout = 30.0  reload = 2.0
 //   quiet = false             log_format = "text"  # or "json"
 //   on_demand = false
@@ -39,6 +40,8 @@ struct ServerSettings {
   std::string cors = "*";  ///< "off": no CORS headers
   std::size_t cacheMb = 256;
   int threads = 0;
+  int workers = 0;  ///< threads for slow requests (on-demand builds, large batches); 0: cores
+  int queue = 64;   ///< slow requests that may wait for a worker; more get 503
   int maxConnections = 10000;
   double readTimeout = 10, idleTimeout = 30, reloadSeconds = 2;
   bool quiet = false;

@@ -70,14 +70,19 @@ std::string accessLogJson(const Exchange& e) {
 TileServer::TileServer(TileServerOptions options)
     : options_(std::move(options)),
       catalog_(options_.stores),
-      service_(catalog_, metrics_, withNotices(options_.service, options_.notices)) {
+      pool_(options_.workers, options_.queue),
+      service_(catalog_, metrics_, withNotices(options_.service, options_.notices), &pool_) {
+  metrics_.watchPool(&pool_);
   http_ = std::make_unique<HttpServer>(
       options_.http, [this](const Request& r) { return service_.handle(r); },
       [this](const Exchange& e) { logExchange(e); },
       [this](int delta) { metrics_.countConnection(delta); });
 }
 
-TileServer::~TileServer() { http_.reset(); }
+TileServer::~TileServer() {
+  pool_.shutdown();
+  http_.reset();
+}
 
 void TileServer::run() {
   std::thread watcher;
@@ -86,13 +91,15 @@ void TileServer::run() {
       std::unique_lock lock(watchMutex_);
       while (!watchChanged_.wait_for(lock, options_.reloadInterval, [this] { return stopping_; })) {
         lock.unlock();
-        for (const auto& line : catalog_.refresh())
-          if (options_.notices) std::fprintf(options_.notices, "tinsmith serve: %s\n", line.c_str());
+        reload();
         lock.lock();
       }
     });
   }
   http_->run();
+  // Requests still on a worker after the grace are not answered: their
+  // builds finish, queued ones are dropped.
+  pool_.shutdown();
   stop();  // run() can also end by itself: the watcher stops either way
   if (watcher.joinable()) watcher.join();
 }
@@ -104,6 +111,15 @@ void TileServer::stop() {
   }
   watchChanged_.notify_all();
   http_->stop();
+}
+
+std::vector<std::string> TileServer::reload() {
+  std::lock_guard lock(reloadMutex_);
+  auto lines = catalog_.refresh();
+  if (options_.notices)
+    for (const auto& line : lines)
+      std::fprintf(options_.notices, "tinsmith serve: %s\n", line.c_str());
+  return lines;
 }
 
 void TileServer::logExchange(const Exchange& e) {

@@ -24,6 +24,11 @@ struct TileServerOptions {
   std::vector<std::filesystem::path> stores;
   ServerOptions http;
   ServiceOptions service;
+  /// Worker threads for slow requests (0: one per core), and how many such
+  /// requests may wait for one before the next is answered 503 (see
+  /// server/app/work_pool.hpp, TileService).
+  std::size_t workers = 0;
+  std::size_t queue = 64;
   /// One line per request (access log) to `log`; null: none (--quiet).
   std::FILE* log = stderr;
   LogFormat logFormat = LogFormat::Text;
@@ -50,6 +55,11 @@ class TileServer {
   void run();
   /// Graceful shutdown; thread-safe.
   void stop();
+  /// Checks the stores for replacements and new ones now, as every
+  /// reloadInterval does (TilesetCatalog::refresh), and reports on
+  /// `notices`; returns the lines reported. Thread-safe (one check at a
+  /// time).
+  std::vector<std::string> reload();
 
  private:
   void logExchange(const Exchange& exchange);
@@ -57,9 +67,11 @@ class TileServer {
   TileServerOptions options_;
   TilesetCatalog catalog_;
   Metrics metrics_;
+  WorkPool pool_;  // shut down before the HTTP server goes: its tasks hold connections
   TileService service_;
   std::mutex logMutex_;
   std::unique_ptr<HttpServer> http_;
+  std::mutex reloadMutex_;  // one catalog refresh at a time
   std::mutex watchMutex_;  // with watchChanged_, guards stopping_
   std::condition_variable watchChanged_;
   bool stopping_ = false;

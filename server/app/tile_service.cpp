@@ -30,6 +30,30 @@ Response internalFailure(ErrorKind kind, const std::string& what) {
   return r;
 }
 
+/// f()'s response, or the response for what it threw.
+template <class F>
+Response guarded(F&& f) {
+  try {
+    return f();
+  } catch (const ParameterError& e) {
+    return errorResponse(400, ErrorKind::Input, e.what(), e.parameter);
+  } catch (const Error& e) {
+    const int status = httpStatusFor(e.kind());
+    return status >= 500 ? internalFailure(e.kind(), e.what())
+                         : errorResponse(status, e.kind(), e.what());
+  } catch (const std::exception& e) {
+    return internalFailure(ErrorKind::Internal, e.what());
+  }
+}
+
+Response busy() {
+  Response r = errorResponse(503, ErrorKind::Internal,
+                             "the server is busy with other slow requests (tile builds, large "
+                             "batches); try again in a moment");
+  r.addHeader("Retry-After", std::to_string(kBusyRetrySeconds));
+  return r;
+}
+
 Response redirect(const std::string& location) {
   Response r = errorResponse(301, ErrorKind::Input, "moved to " + location);
   r.addHeader("Location", location);
@@ -83,10 +107,12 @@ std::string normalizeBasePath(std::string_view text) {
   return out;
 }
 
-TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options)
+TileService::TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options,
+                         WorkPool* pool)
     : catalog_(catalog),
       metrics_(metrics),
       options_(std::move(options)),
+      pool_(pool),
       cache_(options_.cacheBytes),
       onDemand_(cache_, metrics_, options_.notices) {}
 
@@ -115,44 +141,54 @@ std::shared_ptr<const TileService::Listing> TileService::listing() {
 }
 
 Response TileService::handle(const Request& request) {
-  Response response;
   RouteKind kind = RouteKind::Unknown;
-  try {
+  Response response = guarded([&] {
     const auto rest = underBase(request.target, options_.basePath);
     const auto target = rest && !rest->empty() ? parseRequestTarget(*rest) : std::nullopt;
-    if (!rest) {
-      response = notFound("this server answers under " + options_.basePath + "/ only");
-    } else if (rest->empty() && !options_.basePath.empty()) {
+    if (!rest) return notFound("this server answers under " + options_.basePath + "/ only");
+    if (rest->empty() && !options_.basePath.empty()) {
       kind = RouteKind::Index;
-      response = redirect(options_.basePath + "/" + request.target.substr(options_.basePath.size()));
-    } else if (!target) {
-      response = errorResponse(400, ErrorKind::Input,
-                               "malformed request target (bad escape, '..', '\\', NUL or "
-                               "control byte, empty segment)",
-                               "target");
-    } else {
-      auto matched = matchRoute(*target);
-      if (auto* error = std::get_if<RouteError>(&matched)) {
-        response = errorResponse(400, ErrorKind::Input, error->message, error->parameter);
-      } else {
-        const Route& route = std::get<Route>(matched);
-        kind = route.kind;
-        response = dispatch(request, *target, route);
-      }
+      return redirect(options_.basePath + "/" + request.target.substr(options_.basePath.size()));
     }
-  } catch (const ParameterError& e) {
-    response = errorResponse(400, ErrorKind::Input, e.what(), e.parameter);
-  } catch (const Error& e) {
-    const int status = httpStatusFor(e.kind());
-    response = status >= 500 ? internalFailure(e.kind(), e.what())
-                             : errorResponse(status, e.kind(), e.what());
-  } catch (const std::exception& e) {
-    response = internalFailure(ErrorKind::Internal, e.what());
-  }
-  response.route = kind;
-  response.head = request.method == "HEAD";
-  addCors(response);
+    if (!target)
+      return errorResponse(400, ErrorKind::Input,
+                           "malformed request target (bad escape, '..', '\\', NUL or "
+                           "control byte, empty segment)",
+                           "target");
+    auto matched = matchRoute(*target);
+    if (auto* error = std::get_if<RouteError>(&matched))
+      return errorResponse(400, ErrorKind::Input, error->message, error->parameter);
+    const Route& route = std::get<Route>(matched);
+    kind = route.kind;
+    return dispatch(request, *target, route);
+  });
+  finish(response, kind, request.method == "HEAD");
   return response;
+}
+
+void TileService::finish(Response& response, RouteKind route, bool head) const {
+  response.route = route;
+  response.head = head;
+  addCors(response);
+}
+
+Response TileService::onPool(const Request& request, RouteKind route,
+                             std::function<Response()> work) {
+  if (!pool_) return work();
+  const bool head = request.method == "HEAD";
+  Response later;
+  later.deferred = [this, route, head, work = std::move(work)](Responder done) {
+    const bool taken = pool_->trySubmit([this, route, head, work, done] {
+      Response answer = guarded(work);
+      finish(answer, route, head);
+      done(std::move(answer));
+    });
+    if (taken) return;
+    Response refused = busy();
+    finish(refused, route, head);
+    done(std::move(refused));
+  };
+  return later;
 }
 
 void TileService::addCors(Response& response) const {
@@ -219,7 +255,7 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
   if (!tileset) return notFound("no tileset '" + route.tileset + "' (see /tilesets)");
   switch (route.kind) {
     case RouteKind::TilesetJson:
-      return serveStored(request, *tileset, "tileset.json", nullptr);
+      return serveStored(request, tileset, "tileset.json", nullptr);
     case RouteKind::ExternalTileset:
     case RouteKind::Tile: {
       const bool tile = route.kind == RouteKind::Tile;
@@ -229,7 +265,7 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
       const std::string key =
           tile ? tiles::tileContentKey(route.tile)
                : "tilesets/" + route.tile.name() + ".json";
-      return serveStored(request, *tileset, key, tile ? &route.tile : nullptr);
+      return serveStored(request, tileset, key, tile ? &route.tile : nullptr);
     }
     case RouteKind::Elevation:
     case RouteKind::Profile:
@@ -239,50 +275,78 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
     case RouteKind::Lines:
       if (!tileset->hasTin())
         return notFound("tileset '" + tileset->id() + "' carries no TIN, so it has no break lines");
-      return serveLines(request, *tileset);
+      return serveLines(request, tileset);
     default: break;
   }
   switch (route.kind) {
     case RouteKind::Elevation: {
-      if (post) return serveJson(request, elevationBatch(*tileset, request.body).dump(), "no-store");
+      if (post)
+        return batch(request, route.kind, [this, tileset](const Request& r) {
+          return serveJson(r, elevationBatch(*tileset, r.body).dump(), "no-store");
+        });
       auto answer = elevationAt(*tileset, target);
       if (answer["z"].is_null())
         return notFound("the point is outside the TIN of '" + tileset->id() + "'");
       return serveJson(request, answer.dump(), kTilesetCacheControl);
     }
     case RouteKind::Profile: {
-      const auto answer = post ? profileBatch(*tileset, request.body) : profileAlong(*tileset, target);
-      return serveJson(request, answer.dump(), post ? "no-store" : kTilesetCacheControl);
+      if (post)
+        return batch(request, route.kind, [this, tileset](const Request& r) {
+          return serveJson(r, profileBatch(*tileset, r.body).dump(), "no-store");
+        });
+      return serveJson(request, profileAlong(*tileset, target).dump(), kTilesetCacheControl);
     }
     default: break;
   }
   return notFound("no route for this path");
 }
 
-Response TileService::serveStored(const Request& request, const Tileset& tileset,
+Response TileService::batch(const Request& request, RouteKind route,
+                            std::function<Response(const Request&)> answer) {
+  if (request.body.size() < kDeferBatchBytes) return answer(request);
+  auto held = std::make_shared<const Request>(request);
+  return onPool(request, route, [held, answer = std::move(answer)] { return answer(*held); });
+}
+
+Response TileService::serveStored(const Request& request,
+                                  const std::shared_ptr<const Tileset>& tileset,
                                   const std::string& key, const tiles::TileId* tileId) {
   const bool tile = tileId != nullptr;
-  const std::string cacheKey = std::to_string(tileset.generation()) + '/' + key;
-  auto content = cache_.find(cacheKey);
-  metrics_.countCache(content != nullptr);
-  const bool hit = content != nullptr;
-  if (!content) {
-    auto bytes = tileset.store().get(key);
-    if (!bytes && tile && options_.onDemand) {
-      content = onDemand_.fetch(tileset, *tileId, cacheKey);
-    } else if (bytes) {
-      content = makeContent(std::move(*bytes), !tile);
-      cache_.insert(cacheKey, content);
-    }
-    if (!content) {
-      return notFound("tileset '" + tileset.id() + "' has no " + key +
-                      (tile ? " (the pyramid is not refined there)" : ""));
-    }
+  const std::string cacheKey = std::to_string(tileset->generation()) + '/' + key;
+  if (const auto content = cache_.find(cacheKey)) {
+    metrics_.countCache(true);
+    Response r = serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
+                              tile ? kTileCacheControl : kTilesetCacheControl, tile);
+    r.cacheHit = true;
+    return r;
   }
-  Response r = serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
-                            tile ? kTileCacheControl : kTilesetCacheControl, tile);
-  r.cacheHit = hit;
-  return r;
+  metrics_.countCache(false);
+  if (tile && options_.onDemand) {  // the store may lack it: a build of seconds
+    auto held = std::make_shared<const Request>(request);
+    return onPool(request, RouteKind::Tile, [this, held, tileset, key, id = *tileId, cacheKey] {
+      return serveUncached(*held, *tileset, key, &id, cacheKey);
+    });
+  }
+  return serveUncached(request, *tileset, key, tileId, cacheKey);
+}
+
+Response TileService::serveUncached(const Request& request, const Tileset& tileset,
+                                    const std::string& key, const tiles::TileId* tileId,
+                                    const std::string& cacheKey) {
+  const bool tile = tileId != nullptr;
+  std::shared_ptr<const Content> content;
+  auto bytes = tileset.store().get(key);
+  if (!bytes && tile && options_.onDemand) {
+    content = onDemand_.fetch(tileset, *tileId, cacheKey);
+  } else if (bytes) {
+    content = makeContent(std::move(*bytes), !tile);
+    cache_.insert(cacheKey, content);
+  }
+  if (!content)
+    return notFound("tileset '" + tileset.id() + "' has no " + key +
+                    (tile ? " (the pyramid is not refined there)" : ""));
+  return serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
+                      tile ? kTileCacheControl : kTilesetCacheControl, tile);
 }
 
 Response TileService::serveViewer(const Request& request, const std::string& asset, bool page) {
@@ -296,14 +360,20 @@ Response TileService::serveViewer(const Request& request, const std::string& ass
                       page || !found->library ? kPageCacheControl : kLibraryCacheControl, false);
 }
 
-Response TileService::serveLines(const Request& request, const Tileset& tileset) {
-  const std::string cacheKey = std::to_string(tileset.generation()) + "/lines.geojson";
-  auto content = cache_.find(cacheKey);
-  if (!content) {
-    content = makeContent(breakLinesGeoJson(tileset).dump() + "\n", true);
+Response TileService::serveLines(const Request& request,
+                                 const std::shared_ptr<const Tileset>& tileset) {
+  const std::string cacheKey = std::to_string(tileset->generation()) + "/lines.geojson";
+  const auto serve = [this](const Request& r, const Content& content) {
+    return serveContent(r, content, "application/geo+json", kTilesetCacheControl, false);
+  };
+  if (const auto content = cache_.find(cacheKey)) return serve(request, *content);
+  // The first time: the whole TIN's break lines, on a worker.
+  auto held = std::make_shared<const Request>(request);
+  return onPool(request, RouteKind::Lines, [this, held, tileset, cacheKey, serve] {
+    auto content = makeContent(breakLinesGeoJson(*tileset).dump() + "\n", true);
     cache_.insert(cacheKey, content);
-  }
-  return serveContent(request, *content, "application/geo+json", kTilesetCacheControl, false);
+    return serve(*held, *content);
+  });
 }
 
 Response TileService::serveJson(const Request& request, const std::string& json,
@@ -328,8 +398,13 @@ Response TileService::serveContent(const Request& request, const Content& conten
   if (content.gzip || content.brotli) r.addHeader("Vary", "Accept-Encoding");
   if (ranges) r.addHeader("Accept-Ranges", "bytes");
   if (!request.ifNoneMatch.empty() && ifNoneMatchMatches(request.ifNoneMatch, etag)) {
-    r.status = 304;
-    return r;
+    // RFC 9110 13.1.2: 304 answers only GET and HEAD; any other method fails.
+    if (request.method == "GET" || request.method == "HEAD") {
+      r.status = 304;
+      return r;
+    }
+    return errorResponse(412, ErrorKind::Input, "If-None-Match matches the current representation",
+                         "If-None-Match");
   }
   if (brotli) r.addHeader("Content-Encoding", "br");
   if (gzip) r.addHeader("Content-Encoding", "gzip");

@@ -4,10 +4,19 @@
 // Cache-Control, CORS, brotli or gzip for JSON, HEAD, byte ranges for tiles, 405 with
 // Allow, JSON error bodies. handle() never throws: a failure is a response
 // (500 for anything unexpected).
+//
+// Slow work leaves the I/O thread (given a WorkPool): with --on-demand, a
+// tile the memory cache lacks (its store read, and its build when the store
+// lacks it too); a POST batch of elevations or profiles over
+// kDeferBatchBytes; the first break-line GeoJSON of a store. Such a request's
+// response is deferred (message.hpp) and answered from a worker, or at once
+// 503 with Retry-After when the pool's queue is full. Cached tiles, tileset
+// files, /health and /metrics are answered inline.
 #pragma once
 
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -17,6 +26,7 @@
 #include "server/app/on_demand.hpp"
 #include "server/app/tileset_catalog.hpp"
 #include "server/app/viewer_assets.hpp"
+#include "server/app/work_pool.hpp"
 #include "server/http/message.hpp"
 
 namespace tinsmith::server {
@@ -42,6 +52,11 @@ struct ServiceOptions {
 /// 1-64 of [A-Za-z0-9._~-] and not "." or "..".
 std::string normalizeBasePath(std::string_view text);
 
+/// POST bodies from this size on are answered on the worker pool.
+inline constexpr std::size_t kDeferBatchBytes = 4096;
+/// Retry-After of a 503 for a full queue, seconds.
+inline constexpr int kBusyRetrySeconds = 1;
+
 /// Cache-Control values: tiles change only when their store is rebuilt;
 /// tileset files and the list may change with it, so they are short.
 inline constexpr const char* kTileCacheControl = "public, max-age=86400";
@@ -49,7 +64,10 @@ inline constexpr const char* kTilesetCacheControl = "public, max-age=60, must-re
 
 class TileService {
  public:
-  TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options);
+  /// `pool` (null: slow work runs inline) must outlive the responses this
+  /// defers to it.
+  TileService(const TilesetCatalog& catalog, Metrics& metrics, ServiceOptions options,
+              WorkPool* pool = nullptr);
   [[nodiscard]] Response handle(const Request& request);
 
  private:
@@ -62,19 +80,31 @@ class TileService {
   std::shared_ptr<const Listing> listing();
 
   Response dispatch(const Request& request, const RequestTarget& target, const Route& route);
+  /// What handle() does to every answer: its route, HEAD, CORS.
+  void finish(Response& response, RouteKind route, bool head) const;
+  /// `work`'s answer, deferred to the pool (inline without one); `work` runs
+  /// on a worker, so it holds what it reads (the Tileset, the request).
+  Response onPool(const Request& request, RouteKind route, std::function<Response()> work);
+  /// A POST batch: answered inline when its body is small, else on the pool.
+  Response batch(const Request& request, RouteKind route,
+                 std::function<Response(const Request&)> answer);
   /// `tile`: the tile whose content `key` is; null for a tileset file.
-  Response serveStored(const Request& request, const Tileset& tileset, const std::string& key,
-                       const tiles::TileId* tile);
+  Response serveStored(const Request& request, const std::shared_ptr<const Tileset>& tileset,
+                       const std::string& key, const tiles::TileId* tile);
+  /// serveStored past a cache miss: the store, then (--on-demand) a build.
+  Response serveUncached(const Request& request, const Tileset& tileset, const std::string& key,
+                         const tiles::TileId* tile, const std::string& cacheKey);
   Response serveContent(const Request& request, const Content& content, const char* contentType,
                         const char* cacheControl, bool ranges) const;
   Response serveViewer(const Request& request, const std::string& asset, bool page);
-  Response serveLines(const Request& request, const Tileset& tileset);
+  Response serveLines(const Request& request, const std::shared_ptr<const Tileset>& tileset);
   Response serveJson(const Request& request, const std::string& json, const char* cacheControl) const;
   void addCors(Response& response) const;
 
   const TilesetCatalog& catalog_;
   Metrics& metrics_;
   ServiceOptions options_;
+  WorkPool* pool_;
   ContentCache cache_;
   OnDemandTiles onDemand_;
   std::mutex listingMutex_;

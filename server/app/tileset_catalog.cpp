@@ -40,6 +40,56 @@ bool isArchive(const fs::path& p) {
   return store::storeKindFor(p) == store::StoreKind::Archive && fs::is_regular_file(p, ec);
 }
 
+/// The length of the well-formed UTF-8 sequence at the start of `text`
+/// (RFC 3629: no overlong forms, no surrogates, nothing past U+10FFFF), 0
+/// when there is none.
+std::size_t utf8SequenceAt(std::string_view text) {
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+  if (byte(0) < 0x80) return 1;
+  // Lead bytes, the sequence's length and the range of its second byte.
+  struct Lead {
+    unsigned char first, last;
+    std::size_t length;
+    unsigned char low, high;
+  };
+  static constexpr Lead kLeads[] = {{0xc2, 0xdf, 2, 0x80, 0xbf}, {0xe0, 0xe0, 3, 0xa0, 0xbf},
+                                    {0xe1, 0xec, 3, 0x80, 0xbf}, {0xed, 0xed, 3, 0x80, 0x9f},
+                                    {0xee, 0xef, 3, 0x80, 0xbf}, {0xf0, 0xf0, 4, 0x90, 0xbf},
+                                    {0xf1, 0xf3, 4, 0x80, 0xbf}, {0xf4, 0xf4, 4, 0x80, 0x8f}};
+  for (const Lead& lead : kLeads) {
+    if (byte(0) < lead.first || byte(0) > lead.last) continue;
+    if (text.size() < lead.length || byte(1) < lead.low || byte(1) > lead.high) return 0;
+    for (std::size_t i = 2; i < lead.length; ++i)
+      if (byte(i) < 0x80 || byte(i) > 0xbf) return 0;
+    return lead.length;
+  }
+  return 0;
+}
+
+/// A file name as the list and the log show it: UTF-8 as it is, every byte
+/// that is not part of well-formed UTF-8 (a name from a Latin-1 system, say)
+/// written \xNN, so JSON can carry it and a reader can tell which file.
+std::string displayName(std::string_view bytes) {
+  std::string out;
+  while (!bytes.empty()) {
+    const std::size_t n = utf8SequenceAt(bytes);
+    if (n > 0) {
+      out.append(bytes.substr(0, n));
+      bytes.remove_prefix(n);
+      continue;
+    }
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned char>(bytes.front()));
+    out += hex;
+    bytes.remove_prefix(1);
+  }
+  return out;
+}
+
+std::string displayPath(const fs::path& p) {
+  return displayName(p.native());
+}
+
 std::string idFor(const fs::path& p) {
   std::string name = p.filename().string();
   if (name.empty()) name = p.parent_path().filename().string();
@@ -73,12 +123,41 @@ FileStamp stampOf(const fs::path& store) {
 
 std::atomic<std::uint64_t> nextGeneration{1};
 
-/// The stores directly in `folder`, sorted (staging archives left out).
+}  // namespace
+
+std::pair<std::uint64_t, std::uint64_t> fileIdentity(const fs::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return {0, 0};
+  return {static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino)};
+}
+
+namespace {
+
+/// Whether a name in a served folder is where a tile job (or a store's
+/// write) stages a store before it takes its own name (ingest/tiles/
+/// tile_job.cpp stagingPath, ingest/store's tempSibling): "X.partial.3dtiles",
+/// a folder "X.partial", or "X.tmp-<pid>-<n>" (an archive being written
+/// out, a folder being moved in, an old store moved aside). None is served:
+/// it is not finished, or no longer current.
+bool isStagingName(std::string_view name) {
+  if (name.ends_with(".partial.3dtiles") || name.ends_with(".partial")) return true;
+  const std::size_t marker = name.rfind(".tmp-");
+  if (marker == std::string_view::npos || marker == 0) return false;
+  const std::string_view numbers = name.substr(marker + 5);
+  const std::size_t dash = numbers.find('-');
+  const auto digits = [](std::string_view t) {
+    return !t.empty() && t.find_first_not_of("0123456789") == std::string_view::npos;
+  };
+  return dash != std::string_view::npos && digits(numbers.substr(0, dash)) &&
+         digits(numbers.substr(dash + 1));
+}
+
+/// The stores directly in `folder`, sorted (staging names left out).
 std::vector<fs::path> storesIn(const fs::path& folder) {
   std::vector<fs::path> found;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(folder, ec))
-    if (!entry.path().filename().string().ends_with(".partial.3dtiles") &&  // a run's staging
+    if (!isStagingName(entry.path().filename().native()) &&
         (isArchive(entry.path()) || isStoreDirectory(entry.path())))
       found.push_back(entry.path());
   std::sort(found.begin(), found.end());
@@ -96,6 +175,7 @@ struct TilesetCatalog::Entry {
 
 Tileset::Tileset(std::string id, const fs::path& path)
     : id_(std::move(id)), generation_(nextGeneration++), store_(store::openStoreForReading(path)) {
+  opened_ = fileIdentity(path);
   const auto tileset = parseStoredJson(*store_, "tileset.json");
   if (!tileset.is_object())
     throw inputError("has no readable tileset.json", fileLocation(path),
@@ -127,7 +207,7 @@ Tileset::Tileset(std::string id, const fs::path& path)
                                          static_cast<double>(kMaxZoom)));
 
   summary_["id"] = id_;
-  summary_["name"] = path.filename().string();
+  summary_["name"] = displayName(path.filename().native());
   summary_["crs"] = crs_;
   nlohmann::ordered_json bounds;
   const double deg = 180.0 / std::numbers::pi;
@@ -245,7 +325,15 @@ bool Tileset::keep(const std::string& key, std::string_view bytes, std::string& 
       // goes to WAL mode): a refresh in between must not take it for a
       // replacement.
       writesInPlace_ = true;
-      writer_ = store::openStoreForWriting(store_->path(), true);
+      // A store replaced under its name is not this one: a tile built from
+      // this one's TIN must not land in the next version.
+      const auto replaced = [&] { return fileIdentity(store_->path()) != opened_; };
+      if (!replaced()) writer_ = store::openStoreForWriting(store_->path(), true);
+      if (replaced()) {
+        writer_.reset();
+        why = "the store was replaced on disk since it was opened";
+        return false;
+      }
     }
     writer_->put(key, bytes);
     return true;
@@ -346,7 +434,7 @@ std::vector<std::string> TilesetCatalog::refresh() {
       e->current = std::make_shared<const Tileset>(e->id, e->path);
       e->stamp = now;
       ++version_;
-      log.push_back("reloaded " + e->path.string() + " as '" + e->id + "'");
+      log.push_back("reloaded " + displayPath(e->path) + " as '" + e->id + "'");
     } catch (const std::exception& ex) {
       e->stamp = now;  // not retried until it changes again
       log.push_back("kept the old '" + e->id + "': " + ex.what());
@@ -364,13 +452,14 @@ std::vector<std::string> TilesetCatalog::refresh() {
         auto entry = makeEntry(path, *grown);
         if (!entry) {
           refused_.insert(path.string());
-          log.push_back("not serving " + path.string() + ": its id '" + idFor(path) + "' is taken");
+          log.push_back("not serving " + displayPath(path) + ": its id '" + idFor(path) +
+                        "' is taken");
           continue;
         }
-        log.push_back("added " + path.string() + " as '" + entry->id + "'");
+        log.push_back("added " + displayPath(path) + " as '" + entry->id + "'");
         grown->push_back(std::move(entry));
       } catch (const std::exception& ex) {  // half-copied, say: tried again next time
-        log.push_back("cannot serve " + path.string() + " yet: " + ex.what());
+        log.push_back("cannot serve " + displayPath(path) + " yet: " + ex.what());
       }
     }
   }

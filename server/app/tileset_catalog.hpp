@@ -19,6 +19,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -102,6 +103,7 @@ class Tileset {
   mutable std::mutex writerMutex_;
   mutable std::unique_ptr<store::TileStore> writer_;
   mutable std::atomic<bool> writesInPlace_{false};
+  std::pair<std::uint64_t, std::uint64_t> opened_;  // the store's file (device, inode) when opened
   mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
   mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;
   std::string geoid_;
@@ -109,12 +111,19 @@ class Tileset {
   mutable std::unique_ptr<ingest::ProjGeoReference> geodetic_;
 };
 
+/// The (device, inode) of the file or folder `path` names now; (0, 0) when
+/// none.
+std::pair<std::uint64_t, std::uint64_t> fileIdentity(const std::filesystem::path& path);
+
 class TilesetCatalog {
  public:
   /// Each path is a store (a .3dtiles file, or a directory with a
   /// tileset.json) or a folder of stores (every *.3dtiles file and store
-  /// directory directly in it). The id is the file name without
-  /// ".3dtiles" (characters other than [A-Za-z0-9_.-] become '-'). Throws
+  /// directory directly in it, but for a tile job's staging names:
+  /// "*.partial.3dtiles", "*.partial", "*.tmp-N-N"). The id is the file name
+  /// without ".3dtiles", every byte other than [A-Za-z0-9_.-] a '-' (so a
+  /// name that is not UTF-8 is served too; the list's "name" shows such
+  /// bytes as \xNN). Throws
   /// usageError for a path that is neither or two stores with one id, and
   /// what Tileset throws for a store that cannot be served.
   explicit TilesetCatalog(const std::vector<std::filesystem::path>& paths);

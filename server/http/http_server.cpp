@@ -214,7 +214,28 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
       response = transportError(500, "the server failed to answer; its log has the details");
       response.failure = "an exception that is not a std::exception";
     }
+    if (response.deferred) return defer(std::move(response.deferred), keepAlive);
     respond(std::move(response), keepAlive);
+  }
+
+  /// The handler's answer comes later (Response::deferred): the connection
+  /// reads nothing meanwhile and counts as busy (stop() lets it finish); the
+  /// responder posts the answer back onto this connection's thread.
+  void defer(std::function<void(Responder)> start, bool keepAlive) {
+    state_ = State::Writing;
+    auto self = shared_from_this();
+    Responder responder = [self, keepAlive](Response answer) {
+      asio::post(self->executor(), [self, keepAlive, answer = std::move(answer)]() mutable {
+        self->respond(std::move(answer), keepAlive);
+      });
+    };
+    try {
+      start(std::move(responder));
+    } catch (const std::exception& e) {
+      Response failed = transportError(500, "the server failed to answer; its log has the details");
+      failed.failure = e.what();
+      respond(std::move(failed), false);
+    }
   }
 
   void respond(Response response, bool keepAlive) {

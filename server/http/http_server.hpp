@@ -16,7 +16,9 @@
 //    `Connection: close` and is closed.
 //  * The handler runs on the connection's thread and must be thread-safe.
 //    An exception from it becomes a 500 with a JSON body (and is reported to
-//    the observer like any response); the server never dies of one.
+//    the observer like any response); the server never dies of one. A
+//    response with `deferred` set is answered later, from elsewhere
+//    (message.hpp): slow work leaves the I/O threads that way.
 //  * stop() (thread-safe, callable from a signal handler's Asio callback):
 //    no new connections; connections waiting for a request are closed;
 //    requests being read, handled or written finish, answered with

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -22,6 +23,11 @@ struct Request {
   std::string body;
 };
 
+struct Response;
+/// Delivers a deferred response (see Response::deferred): call it once, from
+/// any thread.
+using Responder = std::function<void(Response)>;
+
 /// A response. `body` is shared so cached content is sent without a copy;
 /// [offset, offset + length) of it goes out (a 206's range), all of it when
 /// length is npos. `head` sends the headers with the body's Content-Length
@@ -37,6 +43,14 @@ struct Response {
   /// For a 5xx: what went wrong, for the server's log (the client gets a
   /// generic message, without paths or internals).
   std::string failure;
+  /// Set: the answer comes later, and the rest of this response is ignored.
+  /// The server calls it once, on the connection's thread right after the
+  /// handler returned, with a Responder that writes the answer it is given
+  /// on the connection's thread; meanwhile the connection reads nothing
+  /// more. It is how a handler moves slow work off the I/O threads (a
+  /// worker pool: server/app/work_pool.hpp). A responder that is destroyed
+  /// uncalled closes the connection unanswered.
+  std::function<void(Responder)> deferred;
 
   [[nodiscard]] std::size_t bodyLength() const {
     if (!body) return 0;

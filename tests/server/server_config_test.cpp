@@ -44,6 +44,8 @@ port = 9090
 cors = "https://maps.example.org"
 cache_mb = 64
 threads = 3
+workers = 5
+queue = 7
 max_connections = 500
 read_timeout = 2.5
 idle_timeout = 7
@@ -55,7 +57,7 @@ viewer = "viewer"
 base_path = "/maps/terrain"
 )",
                                                      "/etc/tinsmith/site.toml", s);
-  EXPECT_EQ(present.size(), 15u);
+  EXPECT_EQ(present.size(), 17u);
   ASSERT_EQ(s.stores.size(), 2u);
   EXPECT_EQ(s.stores[0], "/etc/tinsmith/stores/a.3dtiles");  // relative to the file
   EXPECT_EQ(s.stores[1], "/srv/b.3dtiles");
@@ -64,6 +66,8 @@ base_path = "/maps/terrain"
   EXPECT_EQ(s.cors, "https://maps.example.org");
   EXPECT_EQ(s.cacheMb, 64u);
   EXPECT_EQ(s.threads, 3);
+  EXPECT_EQ(s.workers, 5);
+  EXPECT_EQ(s.queue, 7);
   EXPECT_EQ(s.maxConnections, 500);
   EXPECT_DOUBLE_EQ(s.readTimeout, 2.5);
   EXPECT_DOUBLE_EQ(s.idleTimeout, 7.0);

@@ -224,6 +224,11 @@ class HttpConnection {
     buffer_.erase(0, out.size());
     return out;
   }
+  /// Whether any byte of an answer has arrived, without waiting.
+  bool anyArrived() {
+    char c;
+    return !buffer_.empty() || ::recv(fd_, &c, 1, MSG_PEEK | MSG_DONTWAIT) > 0;
+  }
   /// Closes with a TCP reset (SO_LINGER 0), as a crashed client would.
   void resetAndClose() {
     linger hard{1, 0};

@@ -1,7 +1,8 @@
 // `tinsmith serve`: serve tile stores over HTTP: tilesets, tiles, elevation,
 // break lines, the viewer pages, health and metrics (DESIGN.md "Server").
 //   tinsmith serve STORE|FOLDER [MORE…] [--config FILE] [--host H] [--port P]
-//                  [--cors ORIGIN|off] [--cache-mb N] [--threads N] [--viewer DIR]
+//                  [--cors ORIGIN|off] [--cache-mb N] [--threads N] [--workers N]
+//                  [--queue N] [--viewer DIR]
 //                  [--base-path /P] [--quiet] [--log-format text|json] [--on-demand] …
 // Every flag is also a key of a config file's [server] table
 // (server/app/server_config.hpp); flags given win over the file.
@@ -9,7 +10,8 @@
 // executable (../share/tinsmith/viewer), in /usr/share/tinsmith/viewer and in
 // the source tree it was built from (server/viewer, after tools/setup.sh).
 // SIGTERM and SIGINT shut it down gracefully (requests in flight finish) and
-// it exits 0.
+// it exits 0; SIGHUP checks the stores for replacements and new ones at once
+// (as --reload does periodically) and logs what it found.
 #include <pthread.h>
 #include <signal.h>
 
@@ -69,19 +71,32 @@ std::chrono::milliseconds seconds(double s) {
   return std::chrono::milliseconds(static_cast<long long>(s * 1000));
 }
 
-/// Runs `server` until SIGTERM or SIGINT: the signals are blocked in every
-/// thread (the server's threads inherit the mask) and one thread waits for
-/// them with sigwait, so no code runs in a signal handler.
-void serveUntilSignalled(server::TileServer& server) {
+/// Blocks the signals serveUntilSignalled waits for, in this thread and so
+/// in every thread started after (the server's inherit the mask; its
+/// workers block every signal). Called before the server is made, so a
+/// signal that comes as soon as it listens is waited for, not fatal.
+sigset_t blockServeSignals() {
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGHUP);
   sigaddset(&signals, SIGUSR1);  // wakes the waiter when the server stops by itself
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  return signals;
+}
+
+/// Runs `server` until SIGTERM or SIGINT, reloading the stores on SIGHUP:
+/// one thread waits for `signals` (blockServeSignals) with sigwait, so no
+/// code runs in a signal handler.
+void serveUntilSignalled(server::TileServer& server, const sigset_t& signals) {
   std::thread waiter([&] {
     int received = 0;
-    sigwait(&signals, &received);
+    while (sigwait(&signals, &received) == 0 && received == SIGHUP) {
+      // Logged with --quiet too, as reloads are (it is not access log).
+      std::cerr << "tinsmith serve: SIGHUP: checking the stores" << std::endl;
+      if (server.reload().empty()) std::cerr << "tinsmith serve: no store changed" << std::endl;
+    }
     server.stop();
   });
   server.run();
@@ -128,6 +143,18 @@ void addServeCommand(CLI::App& app) {
           ->capture_default_str(),
       &ServerSettings::cacheMb);
   add(addThreadsOption(*cmd, flags->threads, "I/O threads", {}, 256), &ServerSettings::threads);
+  add(cmd->add_option("--workers", flags->workers,
+                      "Threads for slow requests: tile builds (--on-demand), large elevation "
+                      "and profile batches, so the I/O threads keep answering (0: one per core)")
+          ->check(CLI::Range(0, 256))
+          ->capture_default_str(),
+      &ServerSettings::workers);
+  add(cmd->add_option("--queue", flags->queue,
+                      "Slow requests that may wait for a worker; more are answered 503 with "
+                      "Retry-After")
+          ->check(CLI::Range(0, 100000))
+          ->capture_default_str(),
+      &ServerSettings::queue);
   add(cmd->add_option("--max-connections", flags->maxConnections,
                       "Open connections at most; more get 503 and are closed")
           ->check(CLI::Range(1, 1000000))
@@ -184,7 +211,9 @@ void addServeCommand(CLI::App& app) {
       "  cors = \"off\"\n"
       "  cache_mb = 512\n"
       "  log_format = \"json\"\n"
-      "SIGTERM/SIGINT: requests in flight finish, then exit 0.\n\n" +
+      "SIGTERM/SIGINT: requests in flight finish, then exit 0.\n"
+      "SIGHUP: check the stores for replacements and new ones now (as --reload does\n"
+      "every few seconds), log what changed, and go on serving.\n\n" +
       cmd->get_footer());
   cmd->callback([flags, configFile, given] {
     ServerSettings opt;
@@ -200,6 +229,8 @@ void addServeCommand(CLI::App& app) {
     o.http.host = opt.host;
     o.http.port = static_cast<unsigned short>(opt.port);
     o.http.threads = opt.threads;
+    o.workers = static_cast<std::size_t>(opt.workers);
+    o.queue = static_cast<std::size_t>(opt.queue);
     o.http.limits.maxConnections = static_cast<std::size_t>(opt.maxConnections);
     o.http.limits.readTimeout = seconds(opt.readTimeout);
     o.http.limits.idleTimeout = seconds(opt.idleTimeout);
@@ -213,6 +244,7 @@ void addServeCommand(CLI::App& app) {
     o.service.viewer = viewerAssets(opt.viewer);
     const auto viewer = o.service.viewer;
     const std::string base = o.service.basePath;
+    const sigset_t signals = blockServeSignals();
     server::TileServer server(std::move(o));
     std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
               << " tileset(s) on http://" << opt.host << ":" << server.port() << base << "/"
@@ -225,7 +257,7 @@ void addServeCommand(CLI::App& app) {
     else
       std::cerr << "tinsmith serve: viewer from " << viewer->root().string() << " ("
                 << viewer->size() << " files)" << std::endl;
-    serveUntilSignalled(server);
+    serveUntilSignalled(server, signals);
     if (!opt.quiet) std::cerr << "tinsmith serve: stopped" << std::endl;
   });
 }
