@@ -48,8 +48,8 @@ MeshBuffers meshBuffersAround(std::span<const Point3> points, std::span<const Po
     const Point3& n = normals[i];
     const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
     if (len > 0) {
-      buffers.normals.push_back(
-          {static_cast<float>(n.x / len), static_cast<float>(n.y / len), static_cast<float>(n.z / len)});
+      buffers.normals.push_back({static_cast<float>(n.x / len), static_cast<float>(n.y / len),
+                                 static_cast<float>(n.z / len)});
     } else {
       buffers.normals.push_back({0.0f, 0.0f, 1.0f});
     }

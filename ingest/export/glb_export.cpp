@@ -18,6 +18,10 @@
 namespace tinsmith::ingest {
 namespace {
 
+// Without --max-position-error, Draco's quantization gets at least this much
+// of the bound (m) on a TIN whose float32 rounding alone nears the default.
+constexpr double kMinimumQuantizationShare = 0.001;
+
 std::string metres(double m) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g m", m);
@@ -31,7 +35,8 @@ struct FramedVertices {
   Point3 origin;
 };
 
-FramedVertices ecefVertices(const TinData& tin, const std::string& geoid, std::string_view tinName) {
+FramedVertices ecefVertices(const TinData& tin, const std::string& geoid,
+                            std::string_view tinName) {
   const std::string name(tinName);
   if (tin.crs.empty()) {
     throw inputError("the TIN has no CRS, so --frame ecef cannot place it on the globe",
@@ -110,18 +115,21 @@ GlbExport exportGlb(const TinData& tin, const GlbExportOptions& options, std::st
   const encode::MeshBuffers buffers =
       encode::meshBuffersAround(framed.points, normals, tin.triangles, framed.origin);
 
-  // Float32 positions round once when written; Draco's dequantization rounds
-  // them again (as the JS checkers allow, twice float32's relative rounding).
-  const double written = encode::floatRoundingBound(framed.points, framed.origin);
+  // Float32 positions round once when written (plain: all there is); Draco's
+  // float arithmetic adds its own rounding, then its quantization takes the
+  // rest of the bound.
   const bool draco = options.compression == encode::Compression::Draco;
-  const double floatShare = draco ? 2 * written : written;
+  const double written = encode::floatRoundingBound(framed.points, framed.origin);
+  const double floatShare = written + (draco ? encode::dracoArithmeticBound(buffers) : 0.0);
   const double bound = options.maxPositionError.value_or(
-      std::max(kDefaultGlbPositionError, 2 * floatShare));
+      std::max(kDefaultGlbPositionError, floatShare + kMinimumQuantizationShare));
   if (draco && !(bound > floatShare)) {
     throw usageError("--max-position-error " + metres(bound) +
-                         " is tighter than float32 positions can hold on this TIN (" +
-                         metres(floatShare) + " from its centre to its farthest vertex)",
-                     "give at least --max-position-error " + metres(2 * floatShare) +
+                         " is tighter than Draco's float32 positions can hold on this TIN "
+                         "(their rounding alone may reach " +
+                         metres(floatShare) + ")",
+                     "give at least --max-position-error " +
+                         metres(floatShare + kMinimumQuantizationShare) +
                          ", or --compression none");
   }
 
@@ -132,9 +140,10 @@ GlbExport exportGlb(const TinData& tin, const GlbExportOptions& options, std::st
   encode::GlbOptions glb;
   glb.compression = options.compression;
   glb.maxPositionError = bound - floatShare;
-  // The declared bound is the requested one (what the user relies on); the
-  // quantization never takes more than its share of it (checked below).
-  out.positionErrorBound = draco ? bound : floatShare;
+  // The declared bound is the requested one (what the user relies on, as a
+  // tile's record does); the quantization never takes more than its share of
+  // it (checked below).
+  out.positionErrorBound = draco ? bound : written;
   glb.assetExtras = assetExtras(tin, options, out);
   encode::GlbResult result;
   try {
@@ -149,7 +158,8 @@ GlbExport exportGlb(const TinData& tin, const GlbExportOptions& options, std::st
     throw usageError("--max-position-error " + metres(bound) +
                          " needs finer than Draco's 30-bit quantization on this TIN",
                      "give at least --max-position-error " +
-                         metres(floatShare + result.positionErrorBound) + ", or --compression none");
+                         metres(floatShare + result.positionErrorBound) +
+                         ", or --compression none");
   }
   out.positionBits = result.positionBits;
   out.bytes = std::move(result.bytes);

@@ -20,8 +20,9 @@
 // asset.extras.tinsmith: {"frame", "crs", "geoid" (ecef), "offset" (local),
 // "vertices", "triangles", "positionErrorBound"}. positionErrorBound (m) is
 // the farthest any decoded position lies from its TIN vertex in the frame:
-// float32 rounding of positions relative to the origin, plus Draco's
-// quantization when compressed.
+// plain, float32's rounding of positions relative to the origin; Draco, the
+// requested bound, which holds that rounding, Draco's float arithmetic
+// (encode::dracoArithmeticBound) and its quantization.
 // Written atomically (ingest/base/atomic_file.hpp): a failed export leaves no
 // file and whatever was at the path before. Output is deterministic.
 #pragma once
@@ -44,16 +45,17 @@ enum class GlbFrame { Ecef, Local };
 std::optional<GlbFrame> parseGlbFrame(std::string_view name);
 
 /// The default bound on how far a decoded position may lie from its vertex
-/// (m): as tight as the finest tiles' Draco bound allows on a TIN of a few
-/// kilometres.
-inline constexpr double kDefaultGlbPositionError = 0.001;
+/// (m): the tiles' loosest (their finest zoom's on Red Butte), which a TIN of
+/// up to about 15 km holds with Draco's float32 arithmetic included.
+inline constexpr double kDefaultGlbPositionError = 0.01;
 
 struct GlbExportOptions {
   encode::Compression compression = encode::Compression::Draco;
   GlbFrame frame = GlbFrame::Ecef;
   /// Draco: the farthest a decoded position may lie from its vertex (m,
-  /// Euclidean, float rounding included). nullopt: kDefaultGlbPositionError,
-  /// or twice float32's own rounding on a TIN too wide for that.
+  /// Euclidean, float32 rounding and Draco's float arithmetic included).
+  /// nullopt: kDefaultGlbPositionError, or float32's share + 1 mm on a TIN too
+  /// wide for that (beyond about 15 km).
   std::optional<double> maxPositionError;
   std::string geoid;  ///< ecef: "" (z ellipsoidal) or "egm96" (z EGM96 heights)
 };
@@ -64,7 +66,7 @@ struct GlbExport {
   std::size_t triangles = 0;
   int positionBits = 0;             ///< Draco's quantization bits (0 when plain)
   double positionErrorBound = 0.0;  ///< as in asset.extras (see the file comment)
-  Point3 origin;  ///< ecef: the ECEF centre; local: the offset taken off x, y, z
+  Point3 origin;                    ///< ecef: the ECEF centre; local: the offset taken off x, y, z
 };
 
 /// Checks the options alone (before any file is read or written): throws

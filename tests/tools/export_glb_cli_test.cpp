@@ -31,7 +31,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::readFile;
-using test::runCommand;
 using test::runTinsmith;
 
 const std::string kTinsmith = TINSMITH_BINARY;
@@ -39,8 +38,8 @@ const std::string kTinsmith = TINSMITH_BINARY;
 // GeographicLib's UTM is an independent check of it to nanometres.
 constexpr int kUtmZone = 12;
 
-// A hill of `side` × `side` points jittered off a 2 m grid at UTM 12N
-// coordinates, as a .tin with (or without) a CRS.
+// A hill (slopes up to about 7°) of `side` × `side` points jittered off a
+// 2 m grid at UTM 12N coordinates, as a .tin with (or without) a CRS.
 fs::path hillTin(const fs::path& dir, int side, bool withCrs = true) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> jitter(-0.4, 0.4);
@@ -48,9 +47,15 @@ fs::path hillTin(const fs::path& dir, int side, bool withCrs = true) {
   char buf[128];
   for (int i = 0; i < side; ++i) {
     for (int j = 0; j < side; ++j) {
-      const double x = 2.0 * i + jitter(rng), y = 2.0 * j + jitter(rng);
-      const double z = 1600.0 + 40.0 * std::exp(-((x - side) * (x - side) + (y - side) * (y - side)) /
-                                                 (0.5 * side * side));
+      // The outer ring stays on the grid: jittered, its near-collinear points
+      // would make hull slivers, steep across their width, whose area
+      // outweighs the hill's triangles in the normals at their corners.
+      const bool ring = i == 0 || j == 0 || i == side - 1 || j == side - 1;
+      const double dx = jitter(rng), dy = jitter(rng);
+      const double x = 2.0 * i + (ring ? 0.0 : dx), y = 2.0 * j + (ring ? 0.0 : dy);
+      const double z = 1600.0 + 0.1 * side *
+                                    std::exp(-((x - side) * (x - side) + (y - side) * (y - side)) /
+                                             (0.5 * side * side));
       std::snprintf(buf, sizeof buf, "%.4f %.4f %.4f\n", 433000 + x, 4515000 + y, z);
       text += buf;
     }
@@ -116,7 +121,8 @@ std::vector<std::uint32_t> matchVertices(const TinData& tin, const std::vector<P
                                          double bound, double& worst) {
   std::unordered_map<std::int64_t, std::vector<std::uint32_t>> grid;  // 1 m cells of TIN vertices
   const auto key = [](double x, double y) {
-    return (static_cast<std::int64_t>(std::floor(x)) << 32) ^ static_cast<std::int64_t>(std::floor(y));
+    return (static_cast<std::int64_t>(std::floor(x)) << 32) ^
+           static_cast<std::int64_t>(std::floor(y));
   };
   for (std::uint32_t v = 0; v < tin.vertices.size(); ++v)
     grid[key(tin.vertices[v].x, tin.vertices[v].y)].push_back(v);
@@ -165,8 +171,8 @@ void expectSameTriangles(const TinData& tin, const std::vector<std::uint32_t>& i
   EXPECT_TRUE(got == expected) << "the decoded triangles are not the TIN's, winding kept";
 }
 
-// Decodes an ecef-frame export and holds it to the TIN; returns the largest error.
-double checkEcefExport(const fs::path& glb, const TinData& tin, bool draco) {
+// Decodes an ecef-frame export and holds it to the TIN.
+void checkEcefExport(const fs::path& glb, const TinData& tin, bool draco) {
   const auto g = decodeFile(glb);
   EXPECT_EQ(g.draco, draco);
   const auto extras = extrasOf(g);
@@ -176,7 +182,11 @@ double checkEcefExport(const fs::path& glb, const TinData& tin, bool draco) {
   EXPECT_EQ(extras.at("triangles"), tin.triangles.size());
   const double bound = extras.at("positionErrorBound").get<double>();
   EXPECT_GT(bound, 0.0);
-  EXPECT_LE(bound, draco ? 0.001 : 1e-3);
+  if (draco) {
+    EXPECT_EQ(bound, 0.01);  // the default
+  } else {
+    EXPECT_LT(bound, 1e-4);  // float32 alone: micrometres a few hundred metres out
+  }
   EXPECT_EQ(g.mesh.positions.size(), tin.vertices.size());
   std::vector<Point3> utm;
   for (const auto& p : g.mesh.positions) utm.push_back(ecefToUtm(toEcef(g, p)));
@@ -195,7 +205,6 @@ double checkEcefExport(const fs::path& glb, const TinData& tin, bool draco) {
     const Point3 ne{q.x, -q.z, q.y};
     EXPECT_GT((ne.x * e.x + ne.y * e.y + ne.z * e.z) / std::hypot(e.x, e.y, e.z), 0.9) << i;
   }
-  return worst;
 }
 
 TEST(ExportGlb, DracoAndPlainHoldEveryVertexWithinTheDeclaredBoundOnTheGlobe) {
@@ -207,14 +216,14 @@ TEST(ExportGlb, DracoAndPlainHoldEveryVertexWithinTheDeclaredBoundOnTheGlobe) {
     const auto r = runTinsmith("export " + tin.string() + " --format glb -o " + glb.string() +
                                (draco ? "" : " --compression none"));
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_NE(r.err.find(std::to_string(fs::file_size(glb)) + " bytes"), std::string::npos) << r.err;
-    const double worst = checkEcefExport(glb, data, draco);
-    // Plain: float32 alone, well under a millimetre on an 80 m hill.
-    EXPECT_LT(worst, draco ? 0.001 : 1e-4) << (draco ? "draco" : "plain");
+    EXPECT_NE(r.err.find(std::to_string(fs::file_size(glb)) + " bytes"), std::string::npos)
+        << r.err;
+    checkEcefExport(glb, data, draco);
   }
   // Deterministic: the same TIN and options give the same bytes.
   const fs::path again = dir / "again.glb";
-  ASSERT_EQ(runTinsmith("export " + tin.string() + " --format glb -o " + again.string()).exitCode, 0);
+  ASSERT_EQ(runTinsmith("export " + tin.string() + " --format glb -o " + again.string()).exitCode,
+            0);
   EXPECT_EQ(readFile(again), readFile(dir / "draco.glb"));
 }
 
@@ -245,8 +254,8 @@ TEST(ExportGlb, MaxPositionErrorBoundsDracosRounding) {
   EXPECT_LT(fs::file_size(coarse), fs::file_size(fine));
   // Tighter than float32 positions 60 m from the centre can hold: refused.
   const fs::path tight = dir / "tight.glb";
-  const auto r = runTinsmith("export " + tin.string() + " --format glb --max-position-error 1e-7 -o " +
-                             tight.string());
+  const auto r = runTinsmith("export " + tin.string() +
+                             " --format glb --max-position-error 1e-7 -o " + tight.string());
   EXPECT_EQ(r.exitCode, 2) << r.err;
   EXPECT_NE(r.err.find("--max-position-error"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tight));
@@ -257,7 +266,8 @@ TEST(ExportGlb, Egm96HeightsAreRaisedByTheGeoidAsTheTilesAre) {
   const auto tin = hillTin(dir, 20);
   const TinData data = ingest::readTinFile(tin);
   const fs::path glb = dir / "geoid.glb";
-  const auto r = runTinsmith("export " + tin.string() + " --format glb --geoid egm96 -o " + glb.string());
+  const auto r =
+      runTinsmith("export " + tin.string() + " --format glb --geoid egm96 -o " + glb.string());
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const auto g = decodeFile(glb);
   EXPECT_EQ(extrasOf(g).at("geoid"), "egm96");
@@ -307,7 +317,8 @@ TEST(ExportGlb, LocalFrameIsTheTinMinusAWholeMetreOffsetWithYUp) {
       project.push_back({yUp.x + offset[0], -yUp.z + offset[1], yUp.y + offset[2]});
     }
     double worst = 0;
-    const auto match = matchVertices(data, project, extras.at("positionErrorBound").get<double>(), worst);
+    const auto match =
+        matchVertices(data, project, extras.at("positionErrorBound").get<double>(), worst);
     expectSameTriangles(data, g.mesh.indices, match);
     for (const auto& n : g.mesh.normals) EXPECT_GT(n[2], 0.5);  // up before the turn
   }
@@ -325,7 +336,8 @@ TEST(ExportGlb, ATinOver65535VerticesGets32BitIndices) {
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const std::string bytes = readFile(glb);
     const auto json = gltfJson(bytes);
-    const auto& indices = json["accessors"][json["meshes"][0]["primitives"][0]["indices"].get<int>()];
+    const auto& indices =
+        json["accessors"][json["meshes"][0]["primitives"][0]["indices"].get<int>()];
     EXPECT_EQ(indices["componentType"], 5125);  // UNSIGNED_INT
     checkEcefExport(glb, data, draco);
   }
@@ -357,26 +369,29 @@ TEST(ExportGlb, ErrorsNameTheFileAndLeaveTheOldOutputAsItWas) {
   unchanged();
 
   // A file-size limit: the write fails (EFBIG), the old file stays.
-  r = runCommand("ulimit -f 1; exec " + kTinsmith + " export " + tin.string() + to +
-                 " --compression none");
+  r = test::runCommand("ulimit -f 1; exec " + kTinsmith + " export " + tin.string() + to +
+                       " --compression none");
   EXPECT_EQ(r.exitCode, 5) << r.err;
   EXPECT_NE(r.err.find(out.string()), std::string::npos) << r.err;
   unchanged();
 
-  r = runTinsmith("export " + tin.string() + " --format glb -o " + (dir / "no/such/x.glb").string());
+  r = runTinsmith("export " + tin.string() + " --format glb -o " +
+                  (dir / "no/such/x.glb").string());
   EXPECT_EQ(r.exitCode, 5) << r.err;
   EXPECT_NE(r.err.find("no/such/x.glb"), std::string::npos) << r.err;
   r = runTinsmith("export " + tin.string() + " --format glb -o " + dir.string());
   EXPECT_EQ(r.exitCode, 5) << r.err;
   unchanged();
 
-  for (const char* bad : {"--frame enu", "--compression lzma", "--max-position-error 0",
-                          "--max-position-error -1", "--geoid egm2008", "--frame local --geoid egm96"}) {
+  for (const char* bad :
+       {"--frame enu", "--compression lzma", "--max-position-error 0", "--max-position-error -1",
+        "--geoid egm2008", "--frame local --geoid egm96"}) {
     r = runTinsmith("export " + tin.string() + to + " " + bad);
     EXPECT_EQ(r.exitCode, 2) << bad << ": " << r.err;
     unchanged();
   }
-  r = runTinsmith("export " + tin.string() + " --format obj --frame local -o " + (dir / "a.obj").string());
+  r = runTinsmith("export " + tin.string() + " --format obj --frame local -o " +
+                  (dir / "a.obj").string());
   EXPECT_EQ(r.exitCode, 2) << r.err;
   EXPECT_NE(r.err.find("--format glb"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "a.obj"));
@@ -391,7 +406,8 @@ TEST(ExportGlb, ErrorsNameTheFileAndLeaveTheOldOutputAsItWas) {
 TEST(ExportGlb, HelpDocumentsTheGlbOptions) {
   const auto r = runTinsmith("export --help");
   ASSERT_EQ(r.exitCode, 0) << r.err;
-  for (const char* o : {"--compression", "--frame", "--max-position-error", "--geoid", "0.001", "y up"})
+  for (const char* o :
+       {"--compression", "--frame", "--max-position-error", "--geoid", "0.01", "y up"})
     EXPECT_NE(r.out.find(o), std::string::npos) << o << "\n" << r.out;
 }
 

@@ -49,8 +49,10 @@ void reportGlb(const std::string& path, const ingest::GlbExport& g) {
   std::ostringstream s;
   s << "wrote " << path << ": " << g.vertices << " vertices, " << g.triangles << " triangles, "
     << g.bytes.size() << " bytes";
-  if (g.positionBits > 0) s << " (Draco, " << g.positionBits << "-bit positions";
-  else s << " (plain";
+  if (g.positionBits > 0)
+    s << " (Draco, " << g.positionBits << "-bit positions";
+  else
+    s << " (plain";
   s << ", every vertex within " << g.positionErrorBound << " m)\n";
   std::cerr << s.str();
 }
@@ -58,12 +60,14 @@ void reportGlb(const std::string& path, const ingest::GlbExport& g) {
 
 void addExportCommand(CLI::App& app) {
   auto opt = std::make_shared<ExportOptions>();
-  auto* cmd = app.add_subcommand("export", "Export a TIN: OBJ, PLY, EXR or GeoTIFF heightmap, single glb");
+  auto* cmd =
+      app.add_subcommand("export", "Export a TIN: OBJ, PLY, EXR or GeoTIFF heightmap, single glb");
   cmd->add_option("tin", opt->tin, "The .tin file")->required();
   cmd->add_option("--format", opt->format, "obj | ply | exr | tif | glb")->required();
   addOutputOption(*cmd, opt->output, "File to write")->required();
   cmd->add_option("--cell", opt->cell, "Raster cell size in metres (exr, tif)");
-  auto* glbGroup = cmd->add_option_group("glb", "--format glb: the whole TIN as one glTF 2.0 binary");
+  auto* glbGroup =
+      cmd->add_option_group("glb", "--format glb: the whole TIN as one glTF 2.0 binary");
   std::vector<CLI::Option*> glbOnly{
       glbGroup->add_option("--compression", opt->compression, "draco or none (default draco)"),
       glbGroup->add_option("--frame", opt->frame,
@@ -73,8 +77,8 @@ void addExportCommand(CLI::App& app) {
                            "(Blender, DCC tools) (default ecef)"),
       glbGroup->add_option("--max-position-error", opt->maxPositionError,
                            "Draco: farthest a decoded position may lie from its TIN vertex, in "
-                           "metres, float32 rounding included (default 0.001; wider on a TIN "
-                           "too wide for float32 to hold that)"),
+                           "metres, float32 rounding included (default 0.01, as the finest "
+                           "tiles; on a TIN over about 12 km, float32's rounding + 0.001)"),
       glbGroup->add_option("--geoid", opt->geoid,
                            "ecef: egm96 when the TIN's z are EGM96 heights, as `tile --geoid` "
                            "(default: z are ellipsoidal heights)")};
