@@ -36,9 +36,13 @@ echo
 echo "-- info"
 "$tinsmith" info out/red-butte.tin
 echo
-echo "-- export OBJ (full precision) and a 10 m GeoTIFF heightmap"
+echo "-- export OBJ (full precision), a 10 m GeoTIFF heightmap and a glb"
 "$tinsmith" export out/red-butte.tin --format obj -o out/red-butte.obj
 "$tinsmith" export out/red-butte.tin --format tif --cell 10 -o out/red-butte.tif
+echo "-- export the whole TIN as one Draco glTF on the globe (EGM96 heights, as the tiles)"
+"$tinsmith" export out/red-butte.tin --format glb --geoid egm96 -o out/red-butte.glb
+echo "   out/red-butte.glb: $(stat -c %s out/red-butte.glb) bytes, the whole TIN in one file (CesiumJS;"
+echo "   --frame local for Blender and other DCC tools)"
 echo "-- a shaded-relief picture of the TIN: out/red-butte-hillshade.png"
 gdaldem hillshade -q -multidirectional -compute_edges out/red-butte.tif out/red-butte-hillshade.tif
 gdal_translate -q -of PNG out/red-butte-hillshade.tif out/red-butte-hillshade.png

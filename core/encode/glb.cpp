@@ -259,6 +259,18 @@ std::string assembleGlb(const std::string& jsonText, const std::string& bin) {
 
 }  // namespace
 
+double dracoArithmeticBound(const MeshBuffers& mesh) {
+  // Per coordinate, with R ≤ 2c the quantization range and u = 2⁻²⁴: value −
+  // min (u·R), × 1/step with the reciprocal rounded (2u·R), + 0.5 before the
+  // floor (u·R); then step rounded and × q (2u·R), + min (u·c): 13u·c
+  // (draco/core/quantization_utils.h, attribute_quantization_transform.cc).
+  float c = 0.0f;
+  for (const auto& p : mesh.positions) {
+    for (float v : p) c = std::max(c, std::abs(v));
+  }
+  return std::sqrt(3.0) * 13.0 * std::ldexp(static_cast<double>(c), -24);
+}
+
 GlbResult encodeGlb(const MeshBuffers& mesh, const Matrix4& rootMatrix, const GlbOptions& options) {
   checkMesh(mesh);
   checkOptions(options);

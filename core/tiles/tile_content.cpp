@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/base/error.hpp"
+#include "core/encode/mesh_buffers.hpp"
 #include "core/tiles/lon_range.hpp"
 
 namespace tinsmith::tiles {
@@ -14,13 +15,6 @@ namespace tinsmith::tiles {
 namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
-
-Point3 sub(const Point3& a, const Point3& b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-Point3 cross(const Point3& a, const Point3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
 
 /// What a tile's rectangle is on the globe: the longitude of its centre, and
 /// which pole its sides go around (+1 north, −1 south, 0 none; their
@@ -175,46 +169,21 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
     for (std::size_t i = 0; i < project.size(); ++i) frame[i] = enu.fromGeodetic(geodetic[i]);
     record.local = true;
   }
-  Point3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  for (const auto& p : frame) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  const Point3 centre{0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)};
+  const encode::Box3 bounds = encode::boundingBox(frame);
+  const Point3 centre = bounds.centre();
   if (record.local) {
+    const Point3 &lo = bounds.lo, &hi = bounds.hi;
     record.box = {centre.x, centre.y, centre.z, 0.5 * (hi.x - lo.x), 0, 0, 0, 0.5 * (hi.y - lo.y),
                   0,        0,        0,        0.5 * (hi.z - lo.z)};
   }
 
   // Normals: area-weighted face normals of the surface in the output frame;
   // a skirt vertex takes the normal of the vertex above it.
-  std::vector<Point3> normals(project.size(), Point3{0, 0, 0});
-  for (const auto& t : tile.triangles) {
-    const Point3 nrm = cross(sub(frame[t[1]], frame[t[0]]), sub(frame[t[2]], frame[t[0]]));
-    for (auto v : t)
-      normals[v] = {normals[v].x + nrm.x, normals[v].y + nrm.y, normals[v].z + nrm.z};
-  }
+  std::vector<Point3> normals = encode::areaWeightedNormals(frame, tile.triangles);
   for (std::size_t v = 0; v < top; ++v) {
     if (below[v] != std::numeric_limits<std::uint32_t>::max()) normals[below[v]] = normals[v];
   }
-  encode::MeshBuffers buffers;
-  buffers.positions.reserve(frame.size());
-  buffers.normals.reserve(frame.size());
-  for (std::size_t i = 0; i < frame.size(); ++i) {
-    buffers.positions.push_back({static_cast<float>(frame[i].x - centre.x),
-                                 static_cast<float>(frame[i].y - centre.y),
-                                 static_cast<float>(frame[i].z - centre.z)});
-    const Point3& nrm = normals[i];
-    const double len = std::sqrt(nrm.x * nrm.x + nrm.y * nrm.y + nrm.z * nrm.z);
-    if (len > 0) {
-      buffers.normals.push_back({static_cast<float>(nrm.x / len), static_cast<float>(nrm.y / len),
-                                 static_cast<float>(nrm.z / len)});
-    } else {
-      buffers.normals.push_back({0.0f, 0.0f, 1.0f});
-    }
-  }
-  buffers.indices.reserve(triangles.size() * 3);
-  for (const auto& t : triangles) buffers.indices.insert(buffers.indices.end(), t.begin(), t.end());
+  const encode::MeshBuffers buffers = encode::meshBuffersAround(frame, normals, triangles, centre);
 
   encode::GlbOptions glb;
   glb.compression = options.compression;

@@ -9,16 +9,7 @@
 # OUT); then a plan view of each zoom's mesh (draw_zooms.mjs, OUT/zoom-Z.png,
 # about 5 s). Usage: check_demo_tiles.sh TINSMITH_BINARY OUT_DIR
 set -euo pipefail
-bin=$1
-out=$2
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-if [[ ! -d "$here/node_modules/gltf-validator" ]]; then
-  echo "tests/js/node_modules is missing: run tools/setup.sh" >&2
-  exit 1
-fi
-rm -rf "$out"
-mkdir -p "$out"
+source "$(dirname "$0")/script_prelude.sh"
 # Each store in its own folder under one name: the build record names the
 # TIN beside it (red-butte.tin), so the archive and the Draco directory hold
 # the same bytes.

@@ -55,19 +55,3 @@ TEST(Cli, MissingRequiredArgumentIsAUsageErrorThatNamesIt) {
 
 }  // namespace
 }  // namespace tinsmith
-
-namespace tinsmith {
-namespace {
-
-// Every stage of the pipeline is built; `export --format glb` (one Draco
-// glTF of a whole TIN) is what is left to say so.
-TEST(Cli, UnbuiltStageSaysSoAndExitsWithNotImplemented) {
-  const auto tin = test::scratchDir("cli-unbuilt") / "missing.tin";
-  const auto r = test::runTinsmith("export " + tin.string() + " --format glb -o x.glb");
-  EXPECT_EQ(r.exitCode, 6) << r.err;
-  EXPECT_NE(r.err.find("not implemented yet"), std::string::npos) << r.err;
-  EXPECT_EQ(r.err.rfind("ERROR: ", 0), 0u) << r.err;
-}
-
-}  // namespace
-}  // namespace tinsmith
