@@ -77,13 +77,24 @@ struct TileSurface {
   /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed;
   /// 5 a TIN point held where the fit missed the tolerance.
   std::vector<std::uint8_t> flags;
-  double error = 0.0;  ///< measured max |surface − TIN| (m)
+  /// Measured max |surface − TIN| (m), vertical, in the project CRS: before
+  /// encoding (tile_content.hpp adds what encoding moves).
+  double error = 0.0;
   Point2 errorAt;
+  /// Per triangle: its own measured max |surface − TIN| (m), as `error`.
+  std::vector<double> triangleErrors;
+  double tolerance = 0.0;             ///< the zoom's tolerance (m)
   std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
   std::size_t dataPoints = 0;         ///< data points the tile's fit used
   std::size_t heldPoints = 0;         ///< TIN points the refinement added or held
   [[nodiscard]] bool empty() const { return triangles.empty(); }
 };
+
+/// The share of a zoom's tolerance left to encoding (tile_content.hpp): the
+/// tiles are refined until each triangle's vertical error plus its chord sag
+/// is within (1 − kEncodingShare) of the tolerance, and positions are
+/// quantized within half the share (the other half is float rounding).
+inline constexpr double kEncodingShare = 0.02;
 
 inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8,
                               kHeld = 16, kPinned = 32;

@@ -334,7 +334,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
 
   // Everything that can refuse the run is checked before the output is touched.
   const TileId root = options.subtree.value_or(TileId{});
-  tiles::requireInPyramid(tiler, root);
+  tiles::requireInPyramid(tiler, content, root);
   const std::string tinBytes = encodeTin(tin);
   const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler, content);
   const std::string shard = shardRecord(options);
@@ -424,10 +424,10 @@ ShardCoverage coverageOf(const store::TileStore& in) {
   const auto record = in.get(kShardKey);
   if (!record) {
     if (in.contains("tileset.json")) return {};
-    throw inputError(
-        "the store is neither a shard (no " + std::string(kShardKey) + ") nor finished (no tileset.json)",
-        fileLocation(in.path().string()),
-        "build the shard again with tinsmith tile --subtree or --until-zoom");
+    throw inputError("the store is neither a shard (no " + std::string(kShardKey) +
+                         ") nor finished (no tileset.json)",
+                     fileLocation(in.path().string()),
+                     "build the shard again with tinsmith tile --subtree or --until-zoom");
   }
   const auto j = nlohmann::json::parse(*record, nullptr, false);
   ShardCoverage c;
