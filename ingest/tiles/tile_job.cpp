@@ -424,10 +424,10 @@ ShardCoverage coverageOf(const store::TileStore& in) {
   const auto record = in.get(kShardKey);
   if (!record) {
     if (in.contains("tileset.json")) return {};
-    throw inputError("the store is neither a shard (no " + std::string(kShardKey) +
-                         ") nor finished (no tileset.json)",
-                     fileLocation(in.path().string()),
-                     "build the shard again with tinsmith tile --subtree or --until-zoom");
+    throw inputError(
+        "the store is neither a shard (no " + std::string(kShardKey) + ") nor finished (no tileset.json)",
+        fileLocation(in.path().string()),
+        "build the shard again with tinsmith tile --subtree or --until-zoom");
   }
   const auto j = nlohmann::json::parse(*record, nullptr, false);
   ShardCoverage c;
