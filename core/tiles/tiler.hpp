@@ -11,11 +11,14 @@
 // then the constrained least squares (8.9, umbrella smoothing) over that mesh
 // with the side, line and ring vertices held. The tile's error is measured
 // exactly against the TIN (surface_difference.hpp), and where a triangle
-// misses the zoom's tolerance the mesh is refined greedily, worst first, with
-// the TIN's points (tile_refiner.hpp), within `maxTriangles`. The fit gives
-// the tile its shape where the terrain is smooth; the TIN points are what
-// meets the tolerance on contour-built terrain, whose creases no smooth fit
-// follows, and on a DEM's detail below the fit's finest level.
+// misses the zoom's tolerance — its vertical error plus its chord's sag below
+// the curved Earth (chord_sag.hpp), within (1 − kEncodingShare) of the
+// tolerance — the mesh is refined greedily, worst first, with the TIN's
+// points (tile_refiner.hpp), within `maxTriangles`. What a tile declares is
+// measured again on what is encoded (tile_content.hpp, docs/tile-error.md).
+// The fit gives the tile its shape where the terrain is smooth; the TIN
+// points are what meets the tolerance on contour-built terrain, whose creases
+// no smooth fit follows, and on a DEM's detail below the fit's finest level.
 //
 // Tolerances: the finest planned zoom Z meets `tolerance`; zoom z's is
 // tolerance · 2^(Z − z), and zooms below Z keep `tolerance`. Z is the first
