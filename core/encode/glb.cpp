@@ -7,8 +7,10 @@
 // text that reads back to the same double, so the bytes are deterministic.
 #include "core/encode/glb.hpp"
 
+#include <draco/attributes/attribute_quantization_transform.h>
 #include <draco/compression/config/compression_shared.h>
 #include <draco/compression/encode.h>
+#include <draco/core/quantization_utils.h>
 #include <draco/mesh/mesh.h>
 
 #include <algorithm>
@@ -134,8 +136,8 @@ PositionQuantization choosePositionBits(const Bounds& b, double maxError) {
   if (range == 0.0f) range = 1.0f;
   PositionQuantization q;
   for (q.bits = 1; q.bits <= 30; ++q.bits) {
-    q.errorBound =
-        std::sqrt(3.0) * static_cast<double>(range) / static_cast<double>((1u << q.bits) - 1u) / 2.0;
+    q.errorBound = std::sqrt(3.0) * static_cast<double>(range) /
+                   static_cast<double>((1u << q.bits) - 1u) / 2.0;
     if (q.errorBound <= maxError) return q;
   }
   q.bits = 30;
@@ -190,6 +192,39 @@ DracoPrimitive encodeDraco(const MeshBuffers& mesh, int positionBits, int normal
   out.bytes.assign(buffer.data(), buffer.size());
   out.points = encoder.num_encoded_points();
   out.faces = encoder.num_encoded_faces();
+  return out;
+}
+
+// What Draco's decoder returns for the POSITION attribute encodeDraco writes:
+// SequentialQuantizationAttributeEncoder computes the quantization on the
+// attribute (AttributeQuantizationTransform::ComputeParameters) and
+// quantizes value − min with a Quantizer; the decoder adds min back to the
+// Dequantizer's value, in float. The same calls, in the same order.
+std::vector<std::array<float, 3>> dracoDecodedPositions(const MeshBuffers& mesh, int bits) {
+  draco::PointAttribute attribute;
+  attribute.Init(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, false,
+                 mesh.positions.size());
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    attribute.SetAttributeValue(draco::AttributeValueIndex(static_cast<std::uint32_t>(i)),
+                                mesh.positions[i].data());
+  }
+  draco::AttributeQuantizationTransform transform;
+  if (!transform.ComputeParameters(attribute, bits))
+    throw internalError("Draco could not quantize the positions");
+  const auto maxQuantized = static_cast<std::int32_t>((1u << static_cast<unsigned>(bits)) - 1u);
+  draco::Quantizer quantizer;
+  quantizer.Init(transform.range(), maxQuantized);
+  draco::Dequantizer dequantizer;
+  if (!dequantizer.Init(transform.range(), maxQuantized))
+    throw internalError("Draco could not dequantize the positions");
+  std::vector<std::array<float, 3>> out(mesh.positions.size());
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const float min = transform.min_value(c);
+      const std::int32_t q = quantizer.QuantizeFloat(mesh.positions[i][c] - min);
+      out[i][c] = dequantizer.DequantizeFloat(q) + min;
+    }
+  }
   return out;
 }
 
@@ -362,6 +397,16 @@ GlbResult encodeGlb(const MeshBuffers& mesh, const Matrix4& rootMatrix, const Gl
 
   result.bytes = assembleGlb(doc.dump(), bin);
   return result;
+}
+
+std::vector<std::array<float, 3>> decodedPositions(const MeshBuffers& mesh,
+                                                   const GlbOptions& options) {
+  checkMesh(mesh);
+  checkOptions(options);
+  if (options.compression != Compression::Draco) return mesh.positions;
+  const PositionQuantization q =
+      choosePositionBits(positionBounds(mesh.positions), options.maxPositionError);
+  return dracoDecodedPositions(mesh, q.bits);
 }
 
 }  // namespace tinsmith::encode

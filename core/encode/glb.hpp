@@ -7,8 +7,8 @@
 //
 // Draco: positions are quantized on the bounding cube of the positions with
 // the fewest bits (≤ 30) whose rounding moves no position farther than
-// maxPositionError (the bound, √3 × the per-coordinate rounding, is reported); normals with normalBits (octahedral).
-// Draco keeps the triangle set but may reorder vertices and triangles, and
+// maxPositionError (the bound, √3 × the per-coordinate rounding, is reported); normals with
+// normalBits (octahedral). Draco keeps the triangle set but may reorder vertices and triangles, and
 // drops positions no triangle uses (the accessor counts say what it kept).
 // Output is deterministic: the same mesh and options give the same bytes.
 #pragma once
@@ -67,6 +67,15 @@ double dracoArithmeticBound(const MeshBuffers& mesh);
 /// usageError for a maxPositionError that is not positive or normalBits
 /// outside [2, 30] (Draco only).
 GlbResult encodeGlb(const MeshBuffers& mesh, const Matrix4& rootMatrix, const GlbOptions& options);
+
+/// The positions a client decodes from encodeGlb(mesh, …, options), one per
+/// position of `mesh`, in its order: the mesh's own when plain; with Draco,
+/// its quantization — on the bits encodeGlb chooses, with Draco's own
+/// quantizer and dequantizer, as its encoder and decoder compute them (the
+/// decoded values are a deterministic function of the positions and the
+/// bits). What tiles measure their error and bounds on. Throws as encodeGlb.
+std::vector<std::array<float, 3>> decodedPositions(const MeshBuffers& mesh,
+                                                   const GlbOptions& options);
 
 /// A .glb read back: its mesh (Draco decoded with Draco's C++ decoder), the root
 /// node's matrix (identity when absent) and asset.extras as JSON text (empty

@@ -15,13 +15,14 @@ double skirtDepth(const Tiler& tiler, const TileId& id, double error) {
   return std::max(2.0 * error, tiler.zoomTolerance(id.z));
 }
 
-void requireInPyramid(const Tiler& tiler, const TileId& root) {
+void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root) {
   if (!tiler.geometry().inside(root))
     throw usageError("tile " + root.name() + " is outside the pyramid");
   for (TileId a = root; a.z > 0;) {
     a = a.parent();
     const TileSurface s = tiler.buildTile(a);
-    if (s.empty() || !tiler.refines(a, s.error)) {
+    if (s.empty() ||
+        !tiler.refines(a, encodeTile(s, skirtDepth(tiler, a, s.error), content).record.error)) {
       throw usageError(
           "tile " + root.name() + " is not in the pyramid: its ancestor " + a.name() +
               (s.empty() ? " holds no terrain" : " meets the tolerance and has no children"),

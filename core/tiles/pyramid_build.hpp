@@ -33,9 +33,10 @@ struct PyramidSummary {
 double skirtDepth(const Tiler& tiler, const TileId& id, double error);
 
 /// Throws usageError unless `root` is a tile of the pyramid: inside its
-/// grid, and every ancestor refines (the ancestors are built, not emitted, to
-/// see). A caller checks this before it touches any output.
-void requireInPyramid(const Tiler& tiler, const TileId& root);
+/// grid, and every ancestor refines (the ancestors are built and encoded with
+/// `content`, not emitted, to see: a tile refines on its declared error). A
+/// caller checks this before it touches any output.
+void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root);
 
 /// Builds the pyramid under `root` (the whole pyramid for 0/0/0), which
 /// must be a tile of the pyramid (requireInPyramid; only its grid is checked

@@ -5,9 +5,11 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 
 #include "core/base/error.hpp"
 #include "core/encode/mesh_buffers.hpp"
+#include "core/tiles/chord_sag.hpp"
 #include "core/tiles/lon_range.hpp"
 
 namespace tinsmith::tiles {
@@ -49,6 +51,151 @@ BoundsOnGlobe boundsOnGlobe(const Rect& r, const GeoReference& geo) {
   }
   if (std::abs(winding) > std::numbers::pi) out.pole = lat > 0 ? 1 : -1;
   return out;
+}
+
+double distance(const Point3& a, const Point3& b) {
+  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
+                   (a.z - b.z) * (a.z - b.z));
+}
+Point3 middle(const Point3& a, const Point3& b) {
+  return {0.5 * (a.x + b.x), 0.5 * (a.y + b.y), 0.5 * (a.z + b.z)};
+}
+
+/// The edges of triangles, each once (ends a < b packed as a · 2³² + b),
+/// ascending; edgeOf finds one.
+std::vector<std::uint64_t> uniqueEdges(std::span<const std::array<std::uint32_t, 3>> triangles) {
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * triangles.size());
+  for (const auto& t : triangles) {
+    for (int i = 0; i < 3; ++i) {
+      const std::uint64_t a = t[i], b = t[(i + 1) % 3];
+      edges.push_back(a < b ? a << 32 | b : b << 32 | a);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+std::size_t edgeOf(const std::vector<std::uint64_t>& edges, std::uint64_t a, std::uint64_t b) {
+  const std::uint64_t key = a < b ? a << 32 | b : b << 32 | a;
+  return static_cast<std::size_t>(std::lower_bound(edges.begin(), edges.end(), key) -
+                                  edges.begin());
+}
+
+/// The error a tile declares (tile_content.hpp, encodeTile): per surface
+/// triangle, its measured vertical error, plus the farthest encoding moved
+/// one of its corners (`shipped` against `frame`, the exact positions), plus
+/// its chord's sag: the distance, at the middle of each edge, between the
+/// chord's middle and the ground there (the point of the project CRS halfway
+/// between the ends, through the georeference), taken over the triangle as
+/// the quadratic it is to second order (quadraticGapMax). The largest over
+/// the triangles.
+template <class ToFrame>
+double shippedError(const TileSurface& tile, std::span<const Point3> project,
+                    std::span<const Point3> frame, std::span<const Point3> shipped,
+                    const GeoReference& geo, const ToFrame& toFrame) {
+  const auto edges = uniqueEdges(tile.triangles);
+  std::vector<Point3> middles(edges.size());
+  for (std::size_t k = 0; k < edges.size(); ++k)
+    middles[k] = middle(project[edges[k] >> 32], project[edges[k] & 0xffffffffU]);
+  std::vector<encode::Geodetic> ground(middles.size());
+  geo.toGeodetic(middles, ground);
+  std::vector<double> sag(edges.size());
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    sag[k] =
+        distance(middle(frame[edges[k] >> 32], frame[edges[k] & 0xffffffffU]), toFrame(ground[k]));
+  }
+  const bool perTriangle = tile.triangleErrors.size() == tile.triangles.size();
+  double worst = 0.0;
+  for (std::size_t t = 0; t < tile.triangles.size(); ++t) {
+    const auto& tri = tile.triangles[t];
+    double moved = 0.0;
+    std::array<double, 3> middles{};
+    for (int i = 0; i < 3; ++i) {
+      moved = std::max(moved, distance(shipped[tri[i]], frame[tri[i]]));
+      middles[i] = sag[edgeOf(edges, tri[i], tri[(i + 1) % 3])];
+    }
+    const double vertical = perTriangle ? tile.triangleErrors[t] : tile.error;
+    worst = std::max(worst, vertical + moved + quadraticGapMax(middles[0], middles[1], middles[2]));
+  }
+  return worst;
+}
+
+/// A local-frame box around the shipped positions (a box is convex, so it
+/// holds every straight triangle between them).
+std::array<double, 12> localBox(std::span<const Point3> shipped) {
+  Point3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (const auto& p : shipped) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  return {0.5 * (lo.x + hi.x),
+          0.5 * (lo.y + hi.y),
+          0.5 * (lo.z + hi.z),
+          0.5 * (hi.x - lo.x),
+          0,
+          0,
+          0,
+          0.5 * (hi.y - lo.y),
+          0,
+          0,
+          0,
+          0.5 * (hi.z - lo.z)};
+}
+
+/// The region (west, south, east, north in radians, heights in metres) of
+/// what a client draws: the shipped ECEF positions and the straight
+/// triangles between them, surface and skirts. A triangle's chords leave
+/// the box of its corners — below their heights (a 20 km chord: 8 m) and, on
+/// a parallel, poleward — so the region takes the middle of every edge and
+/// the centre of every triangle, and its floor is each triangle's lowest
+/// corner less its sag below its corners' heights (quadraticGapMax of its
+/// edge middles').
+std::array<double, 6> shippedRegion(const TileSurface& tile, std::span<const Point3> shipped,
+                                    std::span<const std::array<std::uint32_t, 3>> triangles,
+                                    const GeoReference& geo) {
+  std::vector<encode::Geodetic> g(shipped.size());
+  for (std::size_t i = 0; i < shipped.size(); ++i) g[i] = encode::ecefToGeodetic(shipped[i]);
+  const auto edges = uniqueEdges(triangles);
+  std::vector<encode::Geodetic> mid(edges.size());
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    mid[k] =
+        encode::ecefToGeodetic(middle(shipped[edges[k] >> 32], shipped[edges[k] & 0xffffffffU]));
+  }
+  double s = HUGE_VAL, n = -HUGE_VAL, h0 = HUGE_VAL, h1 = -HUGE_VAL;
+  std::vector<double> lons;
+  lons.reserve(g.size() + mid.size() + triangles.size());
+  auto take = [&](const encode::Geodetic& p) {
+    lons.push_back(p.lon * kDegree);
+    s = std::min(s, p.lat * kDegree);
+    n = std::max(n, p.lat * kDegree);
+    h1 = std::max(h1, p.height);
+  };
+  for (const auto& p : g) take(p);
+  for (const auto& p : mid) take(p);
+  for (const auto& t : triangles) {
+    take(encode::ecefToGeodetic({(shipped[t[0]].x + shipped[t[1]].x + shipped[t[2]].x) / 3,
+                                 (shipped[t[0]].y + shipped[t[1]].y + shipped[t[2]].y) / 3,
+                                 (shipped[t[0]].z + shipped[t[1]].z + shipped[t[2]].z) / 3}));
+    std::array<double, 3> depths{};
+    double lowest = HUGE_VAL;
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t a = t[i], b = t[(i + 1) % 3];
+      depths[i] =
+          std::max(0.0, 0.5 * (g[a].height + g[b].height) - mid[edgeOf(edges, a, b)].height);
+      lowest = std::min(lowest, g[a].height);
+    }
+    h0 = std::min(h0, lowest - quadraticGapMax(depths[0], depths[1], depths[2]));
+  }
+  // Longitudes from the tile's centre, so a tile across ±180° has a range
+  // across it (east < west); a tile around a pole has every longitude and
+  // reaches the pole.
+  const BoundsOnGlobe globe = boundsOnGlobe(tile.bounds, geo);
+  LonRange lon = lonRangeAround(globe.centreLon, lons);
+  if (globe.pole > 0) n = std::numbers::pi / 2;
+  if (globe.pole < 0) s = -std::numbers::pi / 2;
+  if (globe.pole != 0) lon = LonRange{};
+  return {lon.west, s, lon.east, n, h0, h1};
 }
 
 }  // namespace
@@ -137,45 +284,19 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   options.geo->toGeodetic(project, geodetic);
   TileRecord record;
   record.id = tile.id;
-  record.error = tile.error;
   record.breakLineVertices = tile.breakLineVertices;
   record.vertices = project.size();
   record.triangles = triangles.size();
+  record.local = options.frame == ContentFrame::Local;
 
+  const std::optional<encode::EnuFrame> enu =
+      record.local ? std::optional<encode::EnuFrame>(options.localOrigin) : std::nullopt;
+  auto toFrame = [&](const encode::Geodetic& g) {
+    return enu ? enu->fromGeodetic(g) : encode::geodeticToEcef(g);
+  };
   std::vector<Point3> frame(project.size());
-  if (options.frame == ContentFrame::Ecef) {
-    for (std::size_t i = 0; i < project.size(); ++i) frame[i] = encode::geodeticToEcef(geodetic[i]);
-    double s = HUGE_VAL, n = -HUGE_VAL, h0 = HUGE_VAL, h1 = -HUGE_VAL;
-    std::vector<double> lons(geodetic.size());
-    for (std::size_t i = 0; i < geodetic.size(); ++i) {
-      const auto& g = geodetic[i];
-      lons[i] = g.lon * kDegree;
-      s = std::min(s, g.lat * kDegree);
-      n = std::max(n, g.lat * kDegree);
-      h0 = std::min(h0, g.height);
-      h1 = std::max(h1, g.height);
-    }
-    // Longitudes from the tile's centre, so a tile across ±180° has a range
-    // across it (east < west); a tile around a pole has every longitude and
-    // reaches the pole.
-    const BoundsOnGlobe globe = boundsOnGlobe(tile.bounds, *options.geo);
-    LonRange lon = lonRangeAround(globe.centreLon, lons);
-    if (globe.pole > 0) n = std::numbers::pi / 2;
-    if (globe.pole < 0) s = -std::numbers::pi / 2;
-    if (globe.pole != 0) lon = LonRange{};
-    record.region = {lon.west, s, lon.east, n, h0, h1};
-  } else {
-    const encode::EnuFrame enu(options.localOrigin);
-    for (std::size_t i = 0; i < project.size(); ++i) frame[i] = enu.fromGeodetic(geodetic[i]);
-    record.local = true;
-  }
-  const encode::Box3 bounds = encode::boundingBox(frame);
-  const Point3 centre = bounds.centre();
-  if (record.local) {
-    const Point3 &lo = bounds.lo, &hi = bounds.hi;
-    record.box = {centre.x, centre.y, centre.z, 0.5 * (hi.x - lo.x), 0, 0, 0, 0.5 * (hi.y - lo.y),
-                  0,        0,        0,        0.5 * (hi.z - lo.z)};
-  }
+  for (std::size_t i = 0; i < project.size(); ++i) frame[i] = toFrame(geodetic[i]);
+  const Point3 centre = encode::boundingBox(frame).centre();
 
   // Normals: area-weighted face normals of the surface in the output frame;
   // a skirt vertex takes the normal of the vertex above it.
@@ -187,11 +308,29 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
 
   encode::GlbOptions glb;
   glb.compression = options.compression;
-  glb.maxPositionError = std::clamp(0.1 * tile.error, 0.0005, 0.01);
+  // Quantization takes at most half of the tolerance's encoding share (the
+  // tiler left kEncodingShare of it), and a tenth of an error well within it.
+  const double quantization =
+      tile.tolerance > 0 ? std::min(0.1 * tile.error, 0.5 * kEncodingShare * tile.tolerance)
+                         : 0.1 * tile.error;
+  glb.maxPositionError = std::clamp(quantization, 0.0005, 0.01);
   // The record states the requested bound, which the encoder's actual one
   // never exceeds (the checkers compare decoded tiles against it).
   record.positionErrorBound =
       options.compression == encode::Compression::Draco ? glb.maxPositionError : 0.0;
+
+  // What a client draws: the decoded positions, straight triangles between them.
+  const auto decoded = encode::decodedPositions(buffers, glb);
+  std::vector<Point3> shipped(decoded.size());
+  for (std::size_t i = 0; i < decoded.size(); ++i) {
+    shipped[i] = {centre.x + decoded[i][0], centre.y + decoded[i][1], centre.z + decoded[i][2]};
+  }
+  record.error = shippedError(tile, project, frame, shipped, *options.geo, toFrame);
+  if (record.local) {
+    record.box = localBox(shipped);
+  } else {
+    record.region = shippedRegion(tile, shipped, triangles, *options.geo);
+  }
   glb.assetExtras = recordToJson(record);
   encode::GlbResult result = encode::encodeGlb(buffers, encode::zUpContentRootMatrix(centre), glb);
   record.positionBits = result.positionBits;

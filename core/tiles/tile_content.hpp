@@ -43,7 +43,10 @@ struct ContentOptions {
 /// What tileset.json says of a tile.
 struct TileRecord {
   TileId id;
-  double error = 0.0;              ///< measured max |tile − TIN| (m)
+  /// The tile's geometricError (m): a bound on the 3-D distance between what
+  /// a client draws — the decoded positions, straight triangles between them
+  /// — and the TIN, over the tile's part of it (encodeTile says how).
+  double error = 0.0;
   std::array<double, 6> region{};  ///< west, south, east, north (rad), min, max height (m)
   std::array<double, 12> box{};    ///< local frame: centre, then three half-axes (m)
   bool local = false;              ///< which of region / box is meaningful
@@ -68,6 +71,21 @@ struct TileContent {
 
 /// Encodes a non-empty tile surface. `skirtDepth` (m) is how far the skirts
 /// reach below the sides.
+///
+/// The record's error and bounds are those of what is shipped
+/// (docs/tile-error.md): positions as a client decodes them
+/// (encode::decodedPositions, Draco's rounding included) and triangles as it
+/// draws them, straight in ECEF (or the local frame) between points on the
+/// curved Earth. Per surface triangle, its vertical error measured before
+/// encoding (TileSurface::triangleErrors; a vertical distance bounds the 3-D
+/// one), plus the farthest encoding moved one of its corners, plus its
+/// chord's sag below the ground (measured at its edges' middles through the
+/// georeference, taken over the triangle as the quadratic it is): the
+/// largest is the error, a bound on the 3-D distance both ways. On a
+/// near-vertical wall, where a millimetre across moves the surface metres
+/// vertically, the vertical distance means nothing and is not what it bounds.
+/// The region holds the decoded positions, every edge's chord middle and
+/// every triangle's centre, and reaches down to each triangle's sag.
 TileContent encodeTile(const TileSurface& tile, double skirtDepth, const ContentOptions& options);
 
 }  // namespace tinsmith::tiles

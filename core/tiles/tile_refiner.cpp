@@ -96,7 +96,12 @@ class Refiner {
   static std::uint32_t next(std::uint32_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
   static std::uint32_t prev(std::uint32_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
 
-  void push(std::uint32_t t) { heap_.push({diff_[t].maxAbs, t, version_[t]}); }
+  [[nodiscard]] ChordSag sag(std::uint32_t t) const {
+    if (!(options_.earthRadius > 0)) return {};
+    return chordSag(xy(tri_[t][0]), xy(tri_[t][1]), xy(tri_[t][2]), options_.earthRadius);
+  }
+
+  void push(std::uint32_t t) { heap_.push({diff_[t].maxAbs + sag(t).depth, t, version_[t]}); }
 
   void link(std::uint32_t h, std::uint32_t g) {
     twin_[h] = g;
@@ -267,12 +272,16 @@ class Refiner {
         nearestCorner = i;
       }
     }
+    // Where the chord's sag is the larger part of the error, the triangle is
+    // split where it sags deepest (holding a corner would not change it).
+    const ChordSag curvature = sag(t);
+    const bool sagging = curvature.depth > d.maxAbs;
     const bool freeCorner = !(tile_.flags[v[nearestCorner]] & kHeld);
-    if (nearest < 0.1 * longest && freeCorner) return holdVertex(v[nearestCorner]);
+    if (!sagging && nearest < 0.1 * longest && freeCorner) return holdVertex(v[nearestCorner]);
 
     const Rect& rect = tile_.bounds;
     const double margin = options_.sideMargin;
-    Point2 p = d.vertexAbs > options_.tolerance ? d.vertex : d.at;
+    Point2 p = sagging ? curvature.at : d.vertexAbs > options_.tolerance ? d.vertex : d.at;
     // On a side the error is the side's own (its simplification), which the
     // neighbour shares: nothing in this tile changes it. Beside one, the
     // point comes in to the margin.
@@ -351,7 +360,9 @@ class Refiner {
     tile_.heldEdges.assign(tri_.size(), 0);
     tile_.riverEdges.assign(tri_.size(), 0);
     tile_.error = 0.0;
+    tile_.triangleErrors.assign(tri_.size(), 0.0);
     for (std::uint32_t t = 0; t < tri_.size(); ++t) {
+      tile_.triangleErrors[t] = diff_[t].maxAbs;
       for (int i = 0; i < 3; ++i) {
         const auto bit = static_cast<std::uint8_t>(1U << i);
         if (kind_[3 * t + i] != EdgeKind::Free) tile_.heldEdges[t] |= bit;

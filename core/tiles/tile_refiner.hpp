@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/tiles/chord_sag.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/tiler.hpp"
 
@@ -37,14 +38,20 @@ struct RefineOptions {
   double tolerance = 1.0;            ///< metres: refine while a triangle is above
   std::size_t maxTriangles = 32768;  ///< stop before the tile holds more
   double sideMargin = 0.0;           ///< metres a new vertex keeps from the tile's sides
+  /// When positive (m), a triangle's chord sag below a sphere of this radius
+  /// (chord_sag.hpp) counts in its error: where the sag is the larger part,
+  /// the point taken is where it is deepest (a long flat triangle is split
+  /// until it lies within the tolerance of the curved ground).
+  double earthRadius = 0.0;
 };
 
 /// Refines `tile` (a constrained Delaunay triangulation: CCW triangles,
 /// heldEdges, riverEdges, flags as TileSurface documents) in place. Each
 /// triangle's exact difference (triangleDifferences) is measured once and
 /// again only when the triangle changes; an edge's, once for its life.
-/// Sets tile.error and tile.errorAt from the final triangles and returns how
-/// many vertices it inserted or held.
+/// Sets tile.error, tile.errorAt and tile.triangleErrors (vertical, without
+/// the sag) from the final triangles and returns how many vertices it
+/// inserted or held.
 std::size_t refineTile(TileSurface& tile, const TinIndex& tin, const RefineOptions& options);
 
 }  // namespace tinsmith::tiles

@@ -7,9 +7,10 @@
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
 #include "core/fit/least_squares.hpp"
-#include "core/surface/surface.hpp"
-#include "core/tiles/tile_refiner.hpp"
 #include "core/geometry/predicates.hpp"
+#include "core/surface/surface.hpp"
+#include "core/tiles/chord_sag.hpp"
+#include "core/tiles/tile_refiner.hpp"
 
 namespace tinsmith::tiles {
 
@@ -37,6 +38,11 @@ namespace {
 /// side's or line's error plus the slope it cuts (measured on Red Butte at
 /// 1 m: 0.9 leaves tiles that never converge, 0.4 converges at zoom 4).
 constexpr double kEdgeShare = 0.4;
+
+/// The share of a zoom's tolerance a tile side's chords may sag below the
+/// curved ground (chord_sag.hpp): a side is cut into pieces no longer than
+/// that allows, as the refiner cannot split a side.
+constexpr double kSideSagShare = 0.1;
 
 /// The data the fits see: the TIN's vertices, plus points sampled from its
 /// triangles where its vertices are sparse (a triangle whose longest edge
@@ -301,11 +307,15 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   // Where the fit misses the zoom's tolerance, the TIN's points, worst first.
   // They stay 1e-4 of the tile's width off its sides (which hold the TIN's
   // section already and are shared with the neighbour).
+  // Each triangle's chord sag counts (the content is straight triangles on
+  // the curved Earth), and encoding keeps its share of the tolerance.
   RefineOptions refine;
-  refine.tolerance = zd.tolerance;
+  refine.tolerance = (1 - kEncodingShare) * zd.tolerance;
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = 1e-4 * rect.width();
+  refine.earthRadius = kEarthRadiusOfCurvature;
   tile.heldPoints = refineTile(tile, index_, refine);
+  tile.tolerance = zd.tolerance;
   return tile;
 }
 
@@ -403,6 +413,8 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
   std::vector<TinIndex::SectionPoint> section;
   std::vector<std::pair<double, double>> along, kept;
   std::array<std::vector<Point3>, 4> sideLines;
+  // L² / 8R within kSideSagShare of the tolerance.
+  const double maxSideChord = std::sqrt(8 * kEarthRadiusOfCurvature * kSideSagShare * zd.tolerance);
   for (int k = 0; k < 4; ++k) {
     auto& side = sides[k];
     const bool horizontal = k == 0 || k == 2;
@@ -455,9 +467,25 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       kept.clear();
       simplifySection(std::span<const std::pair<double, double>>(first, last),
                       {ua, must[m - 1].p.z}, {ub, must[m].p.z}, kEdgeShare * zd.tolerance, kept);
-      for (const auto& [u, z] : kept) {
-        const Point2 q = at(u);
-        out.push_back({q.x, q.y, z});
+      kept.push_back({ub, must[m].p.z});
+      // Chords too long for the Earth's curvature are cut evenly, each cut
+      // on the TIN (the chord's line off it): from the same doubles in both
+      // tiles sharing the side.
+      std::pair<double, double> from{ua, must[m - 1].p.z};
+      for (const auto& to : kept) {
+        const auto pieces = std::ceil((to.first - from.first) / maxSideChord);
+        for (double k = 1; k < pieces; ++k) {
+          const double u = from.first + (to.first - from.first) * (k / pieces);
+          const auto z = tinZ(u);
+          const Point2 q = at(u);
+          out.push_back(
+              {q.x, q.y, z ? *z : from.second + (to.second - from.second) * (k / pieces)});
+        }
+        if (to.first != ub) {
+          const Point2 q = at(to.first);
+          out.push_back({q.x, q.y, to.second});
+        }
+        from = to;
       }
       out.push_back(must[m].p);
       first = last;

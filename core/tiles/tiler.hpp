@@ -11,11 +11,14 @@
 // then the constrained least squares (8.9, umbrella smoothing) over that mesh
 // with the side, line and ring vertices held. The tile's error is measured
 // exactly against the TIN (surface_difference.hpp), and where a triangle
-// misses the zoom's tolerance the mesh is refined greedily, worst first, with
-// the TIN's points (tile_refiner.hpp), within `maxTriangles`. The fit gives
-// the tile its shape where the terrain is smooth; the TIN points are what
-// meets the tolerance on contour-built terrain, whose creases no smooth fit
-// follows, and on a DEM's detail below the fit's finest level.
+// misses the zoom's tolerance — its vertical error plus its chord's sag below
+// the curved Earth (chord_sag.hpp), within (1 − kEncodingShare) of the
+// tolerance — the mesh is refined greedily, worst first, with the TIN's
+// points (tile_refiner.hpp), within `maxTriangles`. What a tile declares is
+// measured again on what is encoded (tile_content.hpp, docs/tile-error.md).
+// The fit gives the tile its shape where the terrain is smooth; the TIN
+// points are what meets the tolerance on contour-built terrain, whose creases
+// no smooth fit follows, and on a DEM's detail below the fit's finest level.
 //
 // Tolerances: the finest planned zoom Z meets `tolerance`; zoom z's is
 // tolerance · 2^(Z − z), and zooms below Z keep `tolerance`. Z is the first
@@ -77,13 +80,24 @@ struct TileSurface {
   /// Per vertex: bit 0 west side, 1 east, 2 south, 3 north; 4 held fixed;
   /// 5 a TIN point held where the fit missed the tolerance.
   std::vector<std::uint8_t> flags;
-  double error = 0.0;  ///< measured max |surface − TIN| (m)
+  /// Measured max |surface − TIN| (m), vertical, in the project CRS: before
+  /// encoding (tile_content.hpp adds what encoding moves).
+  double error = 0.0;
   Point2 errorAt;
+  /// Per triangle: its own measured max |surface − TIN| (m), as `error`.
+  std::vector<double> triangleErrors;
+  double tolerance = 0.0;             ///< the zoom's tolerance (m)
   std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
   std::size_t dataPoints = 0;         ///< data points the tile's fit used
   std::size_t heldPoints = 0;         ///< TIN points the refinement added or held
   [[nodiscard]] bool empty() const { return triangles.empty(); }
 };
+
+/// The share of a zoom's tolerance left to encoding (tile_content.hpp): the
+/// tiles are refined until each triangle's vertical error plus its chord sag
+/// is within (1 − kEncodingShare) of the tolerance, and positions are
+/// quantized within half the share (the other half is float rounding).
+inline constexpr double kEncodingShare = 0.02;
 
 inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8,
                               kHeld = 16, kPinned = 32;

@@ -334,7 +334,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
 
   // Everything that can refuse the run is checked before the output is touched.
   const TileId root = options.subtree.value_or(TileId{});
-  tiles::requireInPyramid(tiler, root);
+  tiles::requireInPyramid(tiler, content, root);
   const std::string tinBytes = encodeTin(tin);
   const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler, content);
   const std::string shard = shardRecord(options);

@@ -243,6 +243,37 @@ TEST(EncodeGlb, DracoRoundTripKeepsTrianglesWithinTheReportedBound) {
   }
 }
 
+TEST(EncodeGlb, DecodedPositionsAreWhatDracoDecodes) {
+  // Each decoded position, bit for bit, is decodedPositions' for its vertex
+  // (Draco may reorder the vertices: matched by the triangles' corners).
+  MeshBuffers grid = terrainGrid(40, 30);
+  for (auto& p : grid.positions) p[2] += 0.37f * p[0] - 1e-3f * p[1];  // a tilt, odd values
+  for (const double maxError : {0.01, 0.0005, 0.2}) {
+    SCOPED_TRACE(maxError);
+    GlbOptions options;
+    options.maxPositionError = maxError;
+    const auto expected = decodedPositions(grid, options);
+    ASSERT_EQ(expected.size(), grid.positions.size());
+    const DecodedGlb d = decodeGlb(encodeGlb(grid, zUpContentRootMatrix({}), options).bytes, "g");
+    std::multiset<std::array<float, 3>> want(expected.begin(), expected.end());
+    std::size_t found = 0;
+    for (const auto& p : d.mesh.positions) found += want.count(p) > 0 ? 1 : 0;
+    EXPECT_EQ(found, d.mesh.positions.size());
+    double moved = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      moved =
+          std::max(moved, static_cast<double>(std::hypot(expected[i][0] - grid.positions[i][0],
+                                                         expected[i][1] - grid.positions[i][1],
+                                                         expected[i][2] - grid.positions[i][2])));
+    }
+    EXPECT_GT(moved, 0.0);
+    EXPECT_LE(moved, maxError + floatSlack(grid));
+  }
+  GlbOptions plain;
+  plain.compression = Compression::None;
+  EXPECT_EQ(decodedPositions(grid, plain), grid.positions);
+}
+
 TEST(EncodeGlb, PlainRoundTripIsExact) {
   const MeshBuffers grid = terrainGrid(50, 50);
   GlbOptions options;

@@ -13,6 +13,7 @@
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
 #include "core/surface/surface.hpp"
+#include "core/tiles/chord_sag.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/terrain_lines.hpp"
@@ -360,6 +361,30 @@ TEST(Tiles, FitSamplesStayWithinTheTinsVertexCount) {
   const Tiler tiler(tin, options);
   EXPECT_GT(tiler.dataPointCount(), tin.vertices.size());  // the plain is sampled
   EXPECT_LE(tiler.dataPointCount(), 2 * tin.vertices.size());
+}
+
+TEST(ChordSag, TheDeepestPointOfAFlatTriangleUnderASphere) {
+  const double R = 6.4e6;
+  // A plane through points of a sphere lies r²/2R below it at most (to second
+  // order), r the circumradius, when the circumcentre is inside.
+  const double L = 6000;
+  const ChordSag equilateral = chordSag({0, 0}, {L, 0}, {L / 2, L * std::sqrt(3.0) / 2}, R);
+  EXPECT_NEAR(equilateral.depth, L * L / 3 / (2 * R), 1e-12);
+  EXPECT_NEAR(equilateral.at.x, L / 2, 1e-9);
+  EXPECT_NEAR(equilateral.at.y, L / (2 * std::sqrt(3.0)), 1e-9);
+  // Right or obtuse: at the middle of the longest edge, L²/8R.
+  const ChordSag right = chordSag({0, 0}, {L, 0}, {0, L}, R);
+  EXPECT_NEAR(right.depth, 2 * L * L / (8 * R), 1e-12);
+  EXPECT_NEAR(right.at.x, L / 2, 1e-9);
+  EXPECT_NEAR(right.at.y, L / 2, 1e-9);
+  const ChordSag sliver = chordSag({0, 0}, {L, 0}, {L / 2, 1}, R);
+  EXPECT_NEAR(sliver.depth, L * L / (8 * R), 1e-12);
+  // The same from the edges' middles: their sags l²/8R, taken over the
+  // triangle as the quadratic they are.
+  auto mid = [&](double l2) { return l2 / (8 * R); };
+  EXPECT_NEAR(quadraticGapMax(mid(L * L), mid(L * L), mid(L * L)), equilateral.depth, 1e-12);
+  EXPECT_NEAR(quadraticGapMax(mid(L * L), mid(2 * L * L), mid(L * L)), right.depth, 1e-12);
+  EXPECT_NEAR(quadraticGapMax(mid(L * L), 0.0, 0.0), mid(L * L), 1e-15);
 }
 
 TEST(Tiles, BadOptionsAreUsageErrors) {
