@@ -73,6 +73,7 @@ TileServer::TileServer(TileServerOptions options)
       pool_(options_.workers, options_.queue),
       service_(catalog_, metrics_, withNotices(options_.service, options_.notices), &pool_) {
   metrics_.watchPool(&pool_);
+  options_.http.transportHeaders = corsHeaders(options_.service.cors);
   http_ = std::make_unique<HttpServer>(
       options_.http, [this](const Request& r) { return service_.handle(r); },
       [this](const Exchange& e) { logExchange(e); },

@@ -48,6 +48,8 @@ class TileServer {
   ~TileServer();
 
   [[nodiscard]] unsigned short port() const { return http_->port(); }
+  /// The connections served at once (HttpServer::effectiveMaxConnections).
+  [[nodiscard]] std::size_t maxConnections() const { return http_->effectiveMaxConnections(); }
   [[nodiscard]] const TilesetCatalog& catalog() const { return catalog_; }
   [[nodiscard]] const Metrics& metrics() const { return metrics_; }
   /// Serves until stop() (see HttpServer::run), checking the stores for

@@ -191,11 +191,17 @@ Response TileService::onPool(const Request& request, RouteKind route,
   return later;
 }
 
+std::vector<std::pair<std::string, std::string>> corsHeaders(const std::string& cors) {
+  if (cors.empty()) return {};
+  std::vector<std::pair<std::string, std::string>> out{
+      {"Access-Control-Allow-Origin", cors},
+      {"Access-Control-Expose-Headers", "ETag, Content-Length, Content-Range"}};
+  if (cors != "*") out.emplace_back("Vary", "Origin");
+  return out;
+}
+
 void TileService::addCors(Response& response) const {
-  if (options_.cors.empty()) return;
-  response.addHeader("Access-Control-Allow-Origin", options_.cors);
-  response.addHeader("Access-Control-Expose-Headers", "ETag, Content-Length, Content-Range");
-  if (options_.cors != "*") response.addHeader("Vary", "Origin");
+  for (auto& [name, value] : corsHeaders(options_.cors)) response.addHeader(name, value);
 }
 
 Response TileService::dispatch(const Request& request, const RequestTarget& target,

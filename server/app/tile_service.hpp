@@ -20,6 +20,8 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "server/app/content_cache.hpp"
 #include "server/app/metrics.hpp"
@@ -61,6 +63,10 @@ inline constexpr int kBusyRetrySeconds = 1;
 /// tileset files and the list may change with it, so they are short.
 inline constexpr const char* kTileCacheControl = "public, max-age=86400";
 inline constexpr const char* kTilesetCacheControl = "public, max-age=60, must-revalidate";
+
+/// The CORS headers every response carries for Access-Control-Allow-Origin
+/// `cors` (TileServiceOptions::cors); none when it is empty.
+std::vector<std::pair<std::string, std::string>> corsHeaders(const std::string& cors);
 
 class TileService {
  public:

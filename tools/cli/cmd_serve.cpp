@@ -249,6 +249,11 @@ void addServeCommand(CLI::App& app) {
     std::cerr << "tinsmith serve: " << server.catalog().tilesets().size()
               << " tileset(s) on http://" << opt.host << ":" << server.port() << base << "/"
               << std::endl;
+    if (server.maxConnections() < static_cast<std::size_t>(opt.maxConnections))
+      std::cerr << "tinsmith serve: the descriptor limit (ulimit -n) leaves room for "
+                << server.maxConnections() << " connections, not --max-connections "
+                << opt.maxConnections << "; more get 503 (raise the hard limit to serve more)"
+                << std::endl;
     if (!viewer || !viewer->hasCesium())
       std::cerr << "tinsmith serve: the viewer is not installed (run tools/setup.sh, or give "
                    "--viewer DIR); "
