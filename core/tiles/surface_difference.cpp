@@ -63,15 +63,52 @@ double sideOf(P2 a, P2 b, P2 p) { return geometry::orient2dInexact(a, b, p); }
 TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
   if (tin.vertices.empty() || tin.triangles.empty()) return;
   const Rect extent = boundsOf(tin.vertices);
-  // About four triangles a cell.
+  // About one triangle a cell for the triangles (a wall of contours 0.8 m
+  // apart packs hundreds into a cell sized for four on average, and every
+  // section along the wall went through them all), four for the vertices.
   const double cell = CellGrid::cellFor(extent.width(), extent.height(),
-                                        std::max<std::size_t>(1, tin.triangles.size() / 4), 1e-9);
+                                        std::max<std::size_t>(1, tin.triangles.size()), 1e-9);
+  const double vertexCell = CellGrid::cellFor(
+      extent.width(), extent.height(), std::max<std::size_t>(1, tin.triangles.size() / 4), 1e-9);
   grid_.emplace(extent.x0, extent.y0, extent.x1, extent.y1, cell);
+  // A triangle is listed in the cells of its box that it comes within a
+  // hundredth of a cell of, not in all of them: a contour TIN's slivers run
+  // for kilometres at a slant (a mesa's plain and plateau between rings of
+  // vertices 2 m apart), and listed by their boxes they filled every cell
+  // with hundreds that no query there meets (740 candidates a section, 1 in
+  // 44 crossed). The margin is far above the rounding of a query's cell walk
+  // and of the clipping in section(), so every triangle a query can meet,
+  // within rounding, is still listed in a cell the query visits.
+  const double margin = 0.01 * cell;
   grid_->build(tin.triangles.size(), [&](std::size_t t, auto&& emit) {
     const Rect b = triangleBox(static_cast<std::uint32_t>(t));
-    grid_->forEachCellOfBox(b.x0, b.y0, b.x1, b.y1, emit);
+    const auto& tri = tin.triangles[t];
+    // Relative to the first corner, for precision at UTM-sized coordinates.
+    const Point3& o = tin.vertices[tri[0]];
+    const std::array<P2, 3> c{P2{0.0, 0.0},
+                              P2{tin.vertices[tri[1]].x - o.x, tin.vertices[tri[1]].y - o.y},
+                              P2{tin.vertices[tri[2]].x - o.x, tin.vertices[tri[2]].y - o.y}};
+    const bool ccw = sideOf(c[0], c[1], c[2]) > 0;
+    // The cells of its box (as forEachCellOfBox), each kept unless it lies,
+    // grown by the margin, wholly right of one of the triangle's edges.
+    const auto cx0 = grid_->cellX(b.x0), cx1 = grid_->cellX(b.x1);
+    const auto cy0 = grid_->cellY(b.y0), cy1 = grid_->cellY(b.y1);
+    for (auto cy = cy0; cy <= cy1; ++cy) {
+      for (auto cx = cx0; cx <= cx1; ++cx) {
+        const double x0 = extent.x0 + static_cast<double>(cx) * cell - margin - o.x;
+        const double y0 = extent.y0 + static_cast<double>(cy) * cell - margin - o.y;
+        const double x1 = x0 + cell + 2 * margin, y1 = y0 + cell + 2 * margin;
+        const std::array<P2, 4> box{P2{x0, y0}, P2{x1, y0}, P2{x1, y1}, P2{x0, y1}};
+        bool separated = false;
+        for (int i = 0; i < 3 && ccw && !separated; ++i) {
+          separated = true;
+          for (const P2& q : box) separated = separated && sideOf(c[i], c[(i + 1) % 3], q) < 0;
+        }
+        if (!separated) emit(grid_->index(cx, cy));
+      }
+    }
   });
-  vertexGrid_.emplace(extent.x0, extent.y0, extent.x1, extent.y1, cell);
+  vertexGrid_.emplace(extent.x0, extent.y0, extent.x1, extent.y1, vertexCell);
   vertexGrid_->build(tin.vertices.size(), [&](std::size_t v, auto&& emit) {
     emit(vertexGrid_->index(vertexGrid_->cellX(tin.vertices[v].x),
                             vertexGrid_->cellY(tin.vertices[v].y)));

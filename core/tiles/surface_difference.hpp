@@ -31,7 +31,10 @@ class TinIndex {
  public:
   explicit TinIndex(const TinData& tin);
   [[nodiscard]] const TinData& tin() const { return tin_; }
-  /// The triangles whose bounding boxes meet `box`, each once, ascending.
+  /// The triangles whose bounding boxes meet `box`, each once, ascending —
+  /// all those that meet it, and of the rest only those within a hundredth
+  /// of an index cell of a cell the box overlaps (a long slanted sliver is
+  /// listed only in the cells it comes near).
   void overlapping(const Rect& box, std::vector<std::uint32_t>& out) const;
   /// The vertices inside `box` (closed).
   void verticesIn(const Rect& box, std::vector<std::uint32_t>& out) const;

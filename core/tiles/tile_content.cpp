@@ -313,7 +313,7 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   const double quantization =
       tile.tolerance > 0 ? std::min(0.1 * tile.error, 0.5 * kEncodingShare * tile.tolerance)
                          : 0.1 * tile.error;
-  glb.maxPositionError = std::clamp(quantization, 0.0005, 0.01);
+  glb.maxPositionError = std::clamp(quantization, 0.0005, kMaxQuantization);
   // The record states the requested bound, which the encoder's actual one
   // never exceeds (the checkers compare decoded tiles against it).
   record.positionErrorBound =

@@ -277,8 +277,23 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
   // ulp off a side made a sliver with it in one tile and a different crossing
   // in its neighbour. Both tiles see the snapped vertex on their side.
   const double near = 1e-9 * geometry_.size();
-  for (const auto& line : lines_) {
-    TerrainLine simplified = simplify(line, kEdgeShare * zd->tolerance, offTin);
+  auto simplifyLines = [&] {
+    std::vector<TerrainLine> out;
+    out.reserve(lines_.size());
+    for (const auto& line : lines_)
+      out.push_back(simplify(line, kEdgeShare * zd->tolerance, offTin));
+    return out;
+  };
+  std::vector<TerrainLine> own;
+  const std::vector<TerrainLine>* lines = &own;
+  if (z >= finestZoom_) {  // zoomTolerance(z) is the finest tolerance
+    std::call_once(finestLinesOnce_, [&] { finestLines_ = simplifyLines(); });
+    lines = &finestLines_;
+  } else {
+    own = simplifyLines();
+  }
+  for (const auto& line : *lines) {
+    TerrainLine simplified = line;
     auto& pts = simplified.points;
     for (auto& p : pts) {
       const Point2 q = geometry_.snapToLines(z, p.xy(), near);
@@ -305,14 +320,19 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   if (tile.empty()) return tile;
   fitTile(tile, *zd.fit);
   // Where the fit misses the zoom's tolerance, the TIN's points, worst first.
-  // They stay 1e-4 of the tile's width off its sides (which hold the TIN's
-  // section already and are shared with the neighbour).
+  // They stay off the sides (which hold the TIN's section already and are
+  // shared with the neighbour) by twice the farthest Draco may move a
+  // position (tile_content.cpp: at most 1 cm), so quantization cannot carry
+  // one across a side and fold a triangle there, or by 1e-7 of the tile's
+  // width on a tile too wide for that to be above rounding. A margin of
+  // 1e-4 of the width kept a wall's or a pit's vertex half a metre from a
+  // 5 km tile's side out of reach, and the tile over its tolerance.
   // Each triangle's chord sag counts (the content is straight triangles on
   // the curved Earth), and encoding keeps its share of the tolerance.
   RefineOptions refine;
   refine.tolerance = (1 - kEncodingShare) * zd.tolerance;
   refine.maxTriangles = options_.maxTriangles;
-  refine.sideMargin = 1e-4 * rect.width();
+  refine.sideMargin = std::max(2 * kMaxQuantization, 1e-7 * rect.width());
   refine.earthRadius = kEarthRadiusOfCurvature;
   tile.heldPoints = refineTile(tile, index_, refine);
   tile.tolerance = zd.tolerance;

@@ -98,6 +98,9 @@ struct TileSurface {
 /// is within (1 − kEncodingShare) of the tolerance, and positions are
 /// quantized within half the share (the other half is float rounding).
 inline constexpr double kEncodingShare = 0.02;
+/// The farthest Draco's quantization may move a tile's position (m): the
+/// encoder's bound is the smaller of this and half the encoding share.
+inline constexpr double kMaxQuantization = 0.01;
 
 inline constexpr std::uint8_t kSideWest = 1, kSideEast = 2, kSideSouth = 4, kSideNorth = 8,
                               kHeld = 16, kPinned = 32;
@@ -157,6 +160,12 @@ class Tiler {
   // fit (then zoom(finestZoom_) takes it instead of fitting again).
   mutable std::unique_ptr<fit::MultilevelFit> plannedFit_;
   mutable std::array<ZoomSlot, 31> zooms_;  // by zoom (PyramidGeometry::inside: z < 31)
+  // The lines simplified to the finest zoom's tolerance, which every zoom
+  // from finestZoom_ on has: simplified once (each zoom snaps them to its own
+  // sides). Simplifying keeps every chord on the TIN, a section per chord
+  // tried: a third of a job's time on a contoured mesa, once for each zoom.
+  mutable std::once_flag finestLinesOnce_;
+  mutable std::vector<TerrainLine> finestLines_;
 };
 
 }  // namespace tinsmith::tiles

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 #include <tuple>
@@ -17,6 +18,7 @@
 #include "core/tiles/pyramid.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/terrain_lines.hpp"
+#include "core/tiles/tile_refiner.hpp"
 #include "core/tiles/tiler.hpp"
 #include "core/tin/hull_trim.hpp"
 
@@ -185,6 +187,59 @@ TEST(SurfaceDifference, TheSectionIsTheTinAlongTheSegment) {
   EXPECT_LT(section.back().t, 0.96);
   EXPECT_EQ(index.z({x0 - 1, y0 + 500}), std::nullopt);
   EXPECT_NEAR(*index.z({x0 + 400, y0 + 600}), *surface.z({x0 + 400, y0 + 600}), 1e-9);
+}
+
+TEST(SurfaceDifference, SectionsThroughLongSlantedSliversMissNoTriangle) {
+  // A ring of vertices 4 m apart round a few far inside and a square far
+  // outside, as a mesa's contours over spot heights: slivers kilometres long
+  // at every slant, each listed only in the index cells it comes near. A
+  // triangle left out of a cell a segment crosses would show as a gap or as
+  // a stretch that is not the TIN.
+  Cdt cdt;
+  const FeatureId f = cdt.addFeature(FeatureKind::SpotHeight, "ring");
+  const double x0 = 500000, y0 = 4500000, cx = x0 + 1500, cy = y0 + 1500;
+  auto height = [&](double x, double y) {
+    return 100 + 0.01 * (x - x0) + 3e-5 * (y - y0) * (y - y0);
+  };
+  std::vector<Point3> points;
+  for (int k = 0; k < 1600; ++k) {
+    const double a = 2 * std::numbers::pi * k / 1600, r = 1000 + 30 * std::sin(7 * a);
+    points.push_back({cx + r * std::cos(a), cy + r * std::sin(a), 0});
+  }
+  for (int k = 0; k < 5; ++k) points.push_back({cx + 40.0 * k - 80, cy + 17.0 * (k % 3), 0});
+  for (const double x : {x0, x0 + 3000}) {
+    for (const double y : {y0, y0 + 3000}) points.push_back({x, y, 0});
+  }
+  for (auto& p : points) p.z = height(p.x, p.y);
+  cdt.insertPoints(points, f);
+  cdt.finalize();
+  const TinData tin = cdt.toTinData();
+  const TinIndex index(tin);
+  const Surface surface(tin);
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(0, 3000);
+  std::vector<TinIndex::SectionPoint> section;
+  for (int s = 0; s < 300; ++s) {
+    const Point2 a{x0 + u(rng), y0 + u(rng)}, b{x0 + u(rng), y0 + u(rng)};
+    index.section(a, b, section);
+    auto at = [&](double t) { return Point2{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; };
+    ASSERT_FALSE(section.empty());
+    EXPECT_EQ(section.front().t, 0.0);
+    EXPECT_EQ(section.back().t, 1.0);
+    for (std::size_t k = 0; k + 1 < section.size(); ++k) {
+      const auto [t0, z0] = section[k];
+      const auto [t1, z1] = section[k + 1];
+      ASSERT_FALSE(std::isnan(z0)) << "a gap inside the TIN, segment " << s;
+      if (t1 - t0 < 1e-9) continue;
+      for (double w : {0.25, 0.5, 0.75}) {
+        const auto z = surface.z(at(t0 + w * (t1 - t0)));
+        ASSERT_TRUE(z.has_value());
+        EXPECT_NEAR(z0 + w * (z1 - z0), *z, 1e-7) << "segment " << s << " at t " << t0;
+      }
+    }
+    const Point2 p = at(0.37);
+    EXPECT_NEAR(*index.z(p), *surface.z(p), 1e-7);
+  }
 }
 
 TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
@@ -400,6 +455,42 @@ TEST(Tiles, BadOptionsAreUsageErrors) {
   EXPECT_THROW(parseTileId("3/8/0", "--subtree"), tinsmith::Error);
   EXPECT_THROW(parseTileId("a/b/c", "--subtree"), tinsmith::Error);
   EXPECT_EQ(parseTileId("3/7/1", "--subtree"), (TileId{3, 7, 1}));
+}
+
+TEST(TileRefiner, AnErrorInsideTheSideMarginEndsItsTriangleNotTheBudget) {
+  // Regression (issue 21, the mesa at tolerance 2): a TIN vertex closer to a
+  // tile side than the margin, 9 m off the mesh, in a triangle whose top at
+  // that x lies below the margin line. The point brought in to the margin
+  // was outside the triangle, so its nearest edge was split at the foot, the
+  // error stayed where it was, and the next split came closer, every split
+  // flipping the growing fan of the side's corner: 8.4 M flips, a gigabyte of
+  // heap and edge cache and 60 s in one zoom-1 tile, stopped only by the
+  // triangle budget.
+  TinData tin;
+  tin.vertices = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}, {0, 100, 0}, {30, 1, 10}};
+  tin.triangles = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+  const TinIndex index(tin);
+  TileSurface tile;
+  tile.id = {0, 0, 0};
+  tile.bounds = {0, 0, 100, 100};
+  // The sides at the TIN (flat), and a held vertex on the margin line.
+  tile.vertices = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}, {0, 100, 0}, {60, 5, *index.z({60, 5})}};
+  tile.flags = {kSideSouth | kSideWest | kHeld, kSideSouth | kSideEast | kHeld,
+                kSideNorth | kSideEast | kHeld, kSideNorth | kSideWest | kHeld, kHeld | kPinned};
+  tile.triangles = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+  tile.heldEdges = {1, 1, 1, 1};
+  tile.riverEdges = {0, 0, 0, 0};
+  RefineOptions options;
+  options.tolerance = 1;
+  options.maxTriangles = 2000;
+  options.sideMargin = 5;
+  const std::size_t inserted = refineTile(tile, index, options);
+  EXPECT_LT(inserted, 50U);
+  EXPECT_LT(tile.triangles.size(), 100U);
+  // What is left over the tolerance is declared: the exact error of the mesh.
+  const SurfaceDifference exact = maxVerticalDifference(tile.vertices, tile.triangles, index);
+  EXPECT_GT(exact.maxAbs, options.tolerance);
+  EXPECT_DOUBLE_EQ(tile.error, exact.maxAbs);
 }
 
 }  // namespace
