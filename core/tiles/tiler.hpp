@@ -111,6 +111,8 @@ class Tiler {
   /// usageError for a tolerance ≤ 0 or maxTriangles < 64, inputError for a
   /// TIN with no triangles.
   Tiler(const TinData& tin, TilerOptions options);
+  /// The Tiler keeps a reference to the TIN: it must outlive it.
+  Tiler(TinData&& tin, TilerOptions options) = delete;
   ~Tiler();
 
   [[nodiscard]] const PyramidGeometry& geometry() const { return geometry_; }
