@@ -36,7 +36,7 @@ echo
 echo "-- info"
 "$tinsmith" info out/red-butte.tin
 echo
-echo "-- export OBJ (full precision), a 10 m GeoTIFF heightmap and a glb"
+echo "-- export OBJ (full precision) and a 10 m GeoTIFF heightmap"
 "$tinsmith" export out/red-butte.tin --format obj -o out/red-butte.obj
 "$tinsmith" export out/red-butte.tin --format tif --cell 10 -o out/red-butte.tif
 echo "-- export the whole TIN as one Draco glTF on the globe (EGM96 heights, as the tiles)"

@@ -1,10 +1,12 @@
 #include "core/tiles/surface_difference.hpp"
-#include "core/geometry/predicates.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
+
+#include "core/geometry/predicates.hpp"
 
 namespace tinsmith::tiles {
 
@@ -58,6 +60,18 @@ class SeenMarks {
 /// which is all a bound on a difference needs).
 double sideOf(P2 a, P2 b, P2 p) { return geometry::orient2dInexact(a, b, p); }
 
+/// Whether the box [x0, x1] × [y0, y1] lies wholly right of one edge of the
+/// counter-clockwise triangle c (then the two do not meet).
+bool rightOfAnEdge(const std::array<P2, 3>& c, double x0, double y0, double x1, double y1) {
+  const std::array<P2, 4> box{P2{x0, y0}, P2{x1, y0}, P2{x1, y1}, P2{x0, y1}};
+  for (int i = 0; i < 3; ++i) {
+    if (std::all_of(box.begin(), box.end(),
+                    [&](const P2& q) { return sideOf(c[i], c[(i + 1) % 3], q) < 0; }))
+      return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
@@ -88,6 +102,7 @@ TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
     const std::array<P2, 3> c{P2{0.0, 0.0},
                               P2{tin.vertices[tri[1]].x - o.x, tin.vertices[tri[1]].y - o.y},
                               P2{tin.vertices[tri[2]].x - o.x, tin.vertices[tri[2]].y - o.y}};
+    // A degenerate triangle (not counter-clockwise) is kept in every cell.
     const bool ccw = sideOf(c[0], c[1], c[2]) > 0;
     // The cells of its box (as forEachCellOfBox), each kept unless it lies,
     // grown by the margin, wholly right of one of the triangle's edges.
@@ -97,14 +112,8 @@ TinIndex::TinIndex(const TinData& tin) : tin_(tin) {
       for (auto cx = cx0; cx <= cx1; ++cx) {
         const double x0 = extent.x0 + static_cast<double>(cx) * cell - margin - o.x;
         const double y0 = extent.y0 + static_cast<double>(cy) * cell - margin - o.y;
-        const double x1 = x0 + cell + 2 * margin, y1 = y0 + cell + 2 * margin;
-        const std::array<P2, 4> box{P2{x0, y0}, P2{x1, y0}, P2{x1, y1}, P2{x0, y1}};
-        bool separated = false;
-        for (int i = 0; i < 3 && ccw && !separated; ++i) {
-          separated = true;
-          for (const P2& q : box) separated = separated && sideOf(c[i], c[(i + 1) % 3], q) < 0;
-        }
-        if (!separated) emit(grid_->index(cx, cy));
+        if (!ccw || !rightOfAnEdge(c, x0, y0, x0 + cell + 2 * margin, y0 + cell + 2 * margin))
+          emit(grid_->index(cx, cy));
       }
     }
   });

@@ -284,15 +284,12 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
       out.push_back(simplify(line, kEdgeShare * zd->tolerance, offTin));
     return out;
   };
-  std::vector<TerrainLine> own;
-  const std::vector<TerrainLine>* lines = &own;
-  if (z >= finestZoom_) {  // zoomTolerance(z) is the finest tolerance
+  std::vector<TerrainLine> coarser;  // this zoom's own, above the finest
+  if (z >= finestZoom_)              // zoomTolerance(z) is the finest tolerance
     std::call_once(finestLinesOnce_, [&] { finestLines_ = simplifyLines(); });
-    lines = &finestLines_;
-  } else {
-    own = simplifyLines();
-  }
-  for (const auto& line : *lines) {
+  else
+    coarser = simplifyLines();
+  for (const auto& line : z >= finestZoom_ ? finestLines_ : coarser) {
     TerrainLine simplified = line;
     auto& pts = simplified.points;
     for (auto& p : pts) {

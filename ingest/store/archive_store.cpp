@@ -17,7 +17,6 @@
 // the header).
 #include <fcntl.h>
 #include <sqlite3.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <condition_variable>
@@ -174,18 +173,6 @@ std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
   return connection;
 }
 
-// The file a path names now (device and inode); nullopt when nothing is there.
-struct FileIdentity {
-  dev_t device = 0;
-  ino_t inode = 0;
-  friend bool operator==(const FileIdentity&, const FileIdentity&) = default;
-};
-std::optional<FileIdentity> identityOf(const fs::path& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
-  return FileIdentity{st.st_dev, st.st_ino};
-}
-
 // Connections handed to one thread at a time; grows on demand up to `capacity`.
 //
 // Every connection is on the file the first one opened: an archive renamed
@@ -204,9 +191,9 @@ class ConnectionPool {
     // the connection is on that file. A file replaced in between is taken
     // as it is now (its first reader defines the store's version).
     for (int attempt = 0;; ++attempt) {
-      const auto before = identityOf(path_);
+      const auto before = fileIdentity(path_);
       auto first = connect(path_, access_);
-      const auto after = identityOf(path_);
+      const auto after = fileIdentity(path_);
       if ((before && after && *before == *after) || attempt == 3) {
         identity_ = after;
         idle_.push_back(std::move(first));
@@ -251,7 +238,7 @@ class ConnectionPool {
     } catch (...) {
       // What is under the name now may not be an archive at all (half
       // copied): this store's own file is still readable.
-      const bool replaced = identityOf(path_) != identity_;
+      const bool replaced = fileIdentity(path_) != identity_;
       lock.lock();
       --opened_;
       if (!replaced) {
@@ -261,7 +248,7 @@ class ConnectionPool {
       capacity_ = opened_;
       return acquireLocked(lock);
     }
-    if (identity_ && identityOf(path_) == identity_) return {*this, std::move(connection)};
+    if (identity_ && fileIdentity(path_) == identity_) return {*this, std::move(connection)};
     // Another file under the name (or none): not this store's. Closed, and
     // the pool keeps the connections it has.
     connection.reset();

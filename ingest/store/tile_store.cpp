@@ -5,6 +5,7 @@
 
 #include <signal.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -200,6 +201,12 @@ void requireReplaceable(const std::filesystem::path& path) {
   if (!marker && !keys.empty())
     refuseReplacing(clean, "is an archive that is not a tinsmith tile store (it has no " +
                                std::string(kStoreMarkerKey) + ")");
+}
+
+std::optional<FileIdentity> fileIdentity(const std::filesystem::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
+  return FileIdentity{static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino)};
 }
 
 std::unique_ptr<TileStore> openStoreForReading(const std::filesystem::path& path) {

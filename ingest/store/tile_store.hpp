@@ -19,6 +19,7 @@
 // but store keys. Anything else is refused, naming a file that would be lost.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -72,6 +73,17 @@ class TileStore {
   /// usageError on a store opened for reading.
   virtual void put(std::string_view key, std::string_view bytes) = 0;
 };
+
+/// Which file (or folder) a path names: its device and inode. A store
+/// renamed over the path is another file; the same file is the same store
+/// version.
+struct FileIdentity {
+  std::uint64_t device = 0;
+  std::uint64_t inode = 0;
+  friend bool operator==(const FileIdentity&, const FileIdentity&) = default;
+};
+/// The identity of what `path` names now; nullopt when nothing is there.
+std::optional<FileIdentity> fileIdentity(const std::filesystem::path& path);
 
 /// Opens an existing store read-only. Throws inputError naming the path when
 /// it is missing or not a store (a file that is not SQLite, an archive

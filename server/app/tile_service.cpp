@@ -173,13 +173,16 @@ void TileService::finish(Response& response, RouteKind route, bool head) const {
 }
 
 Response TileService::onPool(const Request& request, RouteKind route,
-                             std::function<Response()> work) {
-  if (!pool_) return work();
+                             std::function<Response(const Request&)> work) {
+  if (!pool_) return work(request);
   const bool head = request.method == "HEAD";
+  // The request outlives this call (the connection's copy is reused for its
+  // next request): the task keeps its own.
+  auto held = std::make_shared<const Request>(request);
   Response later;
-  later.deferred = [this, route, head, work = std::move(work)](Responder done) {
-    const bool taken = pool_->trySubmit([this, route, head, work, done] {
-      Response answer = guarded(work);
+  later.deferred = [this, route, head, held, work = std::move(work)](Responder done) {
+    const bool taken = pool_->trySubmit([this, route, head, held, work, done] {
+      Response answer = guarded([&] { return work(*held); });
       finish(answer, route, head);
       done(std::move(answer));
     });
@@ -310,8 +313,7 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
 Response TileService::batch(const Request& request, RouteKind route,
                             std::function<Response(const Request&)> answer) {
   if (request.body.size() < kDeferBatchBytes) return answer(request);
-  auto held = std::make_shared<const Request>(request);
-  return onPool(request, route, [held, answer = std::move(answer)] { return answer(*held); });
+  return onPool(request, route, std::move(answer));
 }
 
 Response TileService::serveStored(const Request& request,
@@ -321,17 +323,16 @@ Response TileService::serveStored(const Request& request,
   const std::string cacheKey = std::to_string(tileset->generation()) + '/' + key;
   if (const auto content = cache_.find(cacheKey)) {
     metrics_.countCache(true);
-    Response r = serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
-                              tile ? kTileCacheControl : kTilesetCacheControl, tile);
+    Response r = serveStoredContent(request, *content, tile);
     r.cacheHit = true;
     return r;
   }
   metrics_.countCache(false);
   if (tile && options_.onDemand) {  // the store may lack it: a build of seconds
-    auto held = std::make_shared<const Request>(request);
-    return onPool(request, RouteKind::Tile, [this, held, tileset, key, id = *tileId, cacheKey] {
-      return serveUncached(*held, *tileset, key, &id, cacheKey);
-    });
+    return onPool(request, RouteKind::Tile,
+                  [this, tileset, key, id = *tileId, cacheKey](const Request& r) {
+                    return serveUncached(r, *tileset, key, &id, cacheKey);
+                  });
   }
   return serveUncached(request, *tileset, key, tileId, cacheKey);
 }
@@ -351,7 +352,12 @@ Response TileService::serveUncached(const Request& request, const Tileset& tiles
   if (!content)
     return notFound("tileset '" + tileset.id() + "' has no " + key +
                     (tile ? " (the pyramid is not refined there)" : ""));
-  return serveContent(request, *content, tile ? "model/gltf-binary" : kJson,
+  return serveStoredContent(request, *content, tile);
+}
+
+Response TileService::serveStoredContent(const Request& request, const Content& content,
+                                         bool tile) const {
+  return serveContent(request, content, tile ? "model/gltf-binary" : kJson,
                       tile ? kTileCacheControl : kTilesetCacheControl, tile);
 }
 
@@ -374,11 +380,10 @@ Response TileService::serveLines(const Request& request,
   };
   if (const auto content = cache_.find(cacheKey)) return serve(request, *content);
   // The first time: the whole TIN's break lines, on a worker.
-  auto held = std::make_shared<const Request>(request);
-  return onPool(request, RouteKind::Lines, [this, held, tileset, cacheKey, serve] {
+  return onPool(request, RouteKind::Lines, [this, tileset, cacheKey, serve](const Request& r) {
     auto content = makeContent(breakLinesGeoJson(*tileset).dump() + "\n", true);
     cache_.insert(cacheKey, content);
-    return serve(*held, *content);
+    return serve(r, *content);
   });
 }
 

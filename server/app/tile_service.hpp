@@ -88,9 +88,11 @@ class TileService {
   Response dispatch(const Request& request, const RequestTarget& target, const Route& route);
   /// What handle() does to every answer: its route, HEAD, CORS.
   void finish(Response& response, RouteKind route, bool head) const;
-  /// `work`'s answer, deferred to the pool (inline without one); `work` runs
-  /// on a worker, so it holds what it reads (the Tileset, the request).
-  Response onPool(const Request& request, RouteKind route, std::function<Response()> work);
+  /// `work`'s answer to `request`, deferred to the pool (inline without
+  /// one); `work` runs on a worker with a copy of the request, so it holds
+  /// what else it reads (the Tileset).
+  Response onPool(const Request& request, RouteKind route,
+                  std::function<Response(const Request&)> work);
   /// A POST batch: answered inline when its body is small, else on the pool.
   Response batch(const Request& request, RouteKind route,
                  std::function<Response(const Request&)> answer);
@@ -100,6 +102,8 @@ class TileService {
   /// serveStored past a cache miss: the store, then (--on-demand) a build.
   Response serveUncached(const Request& request, const Tileset& tileset, const std::string& key,
                          const tiles::TileId* tile, const std::string& cacheKey);
+  /// A tile (`tile`) or tileset file: its content type and Cache-Control.
+  Response serveStoredContent(const Request& request, const Content& content, bool tile) const;
   Response serveContent(const Request& request, const Content& content, const char* contentType,
                         const char* cacheControl, bool ranges) const;
   Response serveViewer(const Request& request, const std::string& asset, bool page);

@@ -123,16 +123,6 @@ FileStamp stampOf(const fs::path& store) {
 
 std::atomic<std::uint64_t> nextGeneration{1};
 
-}  // namespace
-
-std::pair<std::uint64_t, std::uint64_t> fileIdentity(const fs::path& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return {0, 0};
-  return {static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino)};
-}
-
-namespace {
-
 /// Whether a name in a served folder is where a tile job (or a store's
 /// write) stages a store before it takes its own name (ingest/tiles/
 /// tile_job.cpp stagingPath, ingest/store's tempSibling): "X.partial.3dtiles",
@@ -175,7 +165,7 @@ struct TilesetCatalog::Entry {
 
 Tileset::Tileset(std::string id, const fs::path& path)
     : id_(std::move(id)), generation_(nextGeneration++), store_(store::openStoreForReading(path)) {
-  opened_ = fileIdentity(path);
+  opened_ = store::fileIdentity(path);
   const auto tileset = parseStoredJson(*store_, "tileset.json");
   if (!tileset.is_object())
     throw inputError("has no readable tileset.json", fileLocation(path),
@@ -327,7 +317,7 @@ bool Tileset::keep(const std::string& key, std::string_view bytes, std::string& 
       writesInPlace_ = true;
       // A store replaced under its name is not this one: a tile built from
       // this one's TIN must not land in the next version.
-      const auto replaced = [&] { return fileIdentity(store_->path()) != opened_; };
+      const auto replaced = [&] { return store::fileIdentity(store_->path()) != opened_; };
       if (!replaced()) writer_ = store::openStoreForWriting(store_->path(), true);
       if (replaced()) {
         writer_.reset();

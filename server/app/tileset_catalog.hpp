@@ -16,10 +16,10 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
-#include <utility>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -27,8 +27,8 @@
 #include "core/surface/surface.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "ingest/filters/reproject.hpp"
-#include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tiles/tile_rebuild.hpp"
 
 namespace tinsmith::server {
@@ -103,17 +103,13 @@ class Tileset {
   mutable std::mutex writerMutex_;
   mutable std::unique_ptr<store::TileStore> writer_;
   mutable std::atomic<bool> writesInPlace_{false};
-  std::pair<std::uint64_t, std::uint64_t> opened_;  // the store's file (device, inode) when opened
+  std::optional<store::FileIdentity> opened_;  // the store's file when opened
   mutable std::mutex transformMutex_;  // OGR transformations are not thread-safe
   mutable std::unique_ptr<ingest::CrsTransform> fromLonLat_;
   std::string geoid_;
   mutable std::mutex geodeticMutex_;  // guards the creation of geodetic_ only
   mutable std::unique_ptr<ingest::ProjGeoReference> geodetic_;
 };
-
-/// The (device, inode) of the file or folder `path` names now; (0, 0) when
-/// none.
-std::pair<std::uint64_t, std::uint64_t> fileIdentity(const std::filesystem::path& path);
 
 class TilesetCatalog {
  public:

@@ -1,11 +1,5 @@
 #include "server/http/http_server.hpp"
 
-#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange unincluded
-
-#include <boost/asio.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/http.hpp>
-
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
@@ -13,6 +7,9 @@
 
 #include <array>
 #include <atomic>
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
 #include <cerrno>
 #include <condition_variable>
 #include <ctime>
@@ -21,6 +18,7 @@
 #include <optional>
 #include <thread>
 #include <unordered_map>
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange unincluded
 #include <vector>
 
 #include "core/base/error.hpp"
@@ -71,6 +69,12 @@ const std::string& httpDate() {
   return text;
 }
 
+/// A descriptor held in reserve, given up to answer a 503 when the process
+/// has none left (HttpServer::Impl::shedOneConnection).
+int openSpareDescriptor() {
+  return ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+}
+
 /// The descriptors the process holds now.
 std::size_t openDescriptors() {
   std::error_code ec;
@@ -105,7 +109,8 @@ RequestHead headOf(const Message& message) {
   RequestHead head;
   head.version = static_cast<int>(message.version());
   const auto codings = message.equal_range(http::field::transfer_encoding);
-  for (auto it = codings.first; it != codings.second; ++it) head.transferEncodings.emplace_back(it->value().data(), it->value().size());
+  for (auto it = codings.first; it != codings.second; ++it)
+    head.transferEncodings.emplace_back(it->value().data(), it->value().size());
   head.contentLengths = message.count(http::field::content_length);
   head.hosts = message.count(http::field::host);
   return head;
@@ -164,9 +169,16 @@ struct HttpServer::Impl {
   /// A response the server makes itself (malformed or oversized request,
   /// timeout, overload), with the transport headers.
   [[nodiscard]] Response transportError(int status, const std::string& message) const {
-    Response r = errorResponse(status, status >= 500 ? ErrorKind::Internal : ErrorKind::Input, message);
+    Response r =
+        errorResponse(status, status >= 500 ? ErrorKind::Internal : ErrorKind::Input, message);
     if (status == 503) r.addHeader("Retry-After", "1");
     for (const auto& [name, value] : options.transportHeaders) r.addHeader(name, value);
+    return r;
+  }
+  /// The 500 for a handler that threw; `failure` goes to the log only.
+  [[nodiscard]] Response handlerFailure(std::string failure) const {
+    Response r = transportError(500, "the server failed to answer; its log has the details");
+    r.failure = std::move(failure);
     return r;
   }
   void accept();
@@ -195,8 +207,9 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
 
   void start() {
     if (reject_) {
-      respond(server_.transportError(503, "the server has too many open connections; try again later"),
-              false);
+      respond(
+          server_.transportError(503, "the server has too many open connections; try again later"),
+          false);
       return;
     }
     readRequest();
@@ -264,9 +277,7 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
         refusal = Refusal{505, "only HTTP/1.0 and HTTP/1.1 are served"};
       else
         refusal = checkFraming(headOf(head));
-      if (refusal) {
-        deadline_.cancel();
-        started_ = std::chrono::steady_clock::now();
+      if (refusal) {  // respond() cancels the deadline and starts the clock
         request_ = Request{};
         request_.method = std::string(head.method_string());
         request_.target = std::string(head.target());
@@ -300,10 +311,10 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
     const auto& limits = server_.options.limits;
     if (timedOut_) {
       if (buffer_.size() > 0 || parser_->got_some())
-        return respond(server_.transportError(408, "the request did not arrive in time (within " +
-                                                       std::to_string(limits.readTimeout.count()) +
-                                                       " ms)"),
-                       false);
+        return respond(
+            server_.transportError(408, "the request did not arrive in time (within " +
+                                            std::to_string(limits.readTimeout.count()) + " ms)"),
+            false);
       return close();
     }
     if (ec == http::error::header_limit) {
@@ -315,17 +326,19 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
       return respond(server_.transportError(431, "the request headers are too large"), false);
     }
     if (ec == http::error::body_limit)
-      return respond(server_.transportError(413, "the request body is too large (at most " +
-                                                     std::to_string(limits.maxBodyBytes) + " bytes)"),
-                     false);
+      return respond(
+          server_.transportError(413, "the request body is too large (at most " +
+                                          std::to_string(limits.maxBodyBytes) + " bytes)"),
+          false);
     if (ec == http::error::buffer_overflow)
-      return respond(server_.transportError(431, "a chunk-size line or the trailers of the request are "
-                                                 "too large (at most " +
-                                                     std::to_string(limits.maxHeaderBytes) + " bytes)"),
+      return respond(server_.transportError(431,
+                                            "a chunk-size line or the trailers of the request are "
+                                            "too large (at most " +
+                                                std::to_string(limits.maxHeaderBytes) + " bytes)"),
                      false);
-    if (ec == http::error::end_of_stream || ec == beast::error::timeout ||
-        ec == asio::error::operation_aborted || ec == asio::error::connection_reset ||
-        ec == asio::error::eof || ec == asio::error::bad_descriptor)
+    if (ec == http::error::end_of_stream || ec == asio::error::operation_aborted ||
+        ec == asio::error::connection_reset || ec == asio::error::eof ||
+        ec == asio::error::bad_descriptor)
       return close();
     if (ec)
       return respond(server_.transportError(400, "malformed HTTP request: " + ec.message()), false);
@@ -339,8 +352,9 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
       return respond(server_.transportError(414, "the request target is too long"), false);
     auto origin = originForm(request_.target);
     if (!origin)
-      return respond(server_.transportError(400, "the request target is neither a path nor an http(s) URL"),
-                     false);
+      return respond(
+          server_.transportError(400, "the request target is neither a path nor an http(s) URL"),
+          false);
     request_.target = std::move(*origin);
     const auto field = [&](http::field f) { return std::string(message[f]); };
     request_.ifNoneMatch = field(http::field::if_none_match);
@@ -355,11 +369,9 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
     try {
       response = server_.handler(request_);
     } catch (const std::exception& e) {
-      response = server_.transportError(500, "the server failed to answer; its log has the details");
-      response.failure = e.what();
+      response = server_.handlerFailure(e.what());
     } catch (...) {
-      response = server_.transportError(500, "the server failed to answer; its log has the details");
-      response.failure = "an exception that is not a std::exception";
+      response = server_.handlerFailure("an exception that is not a std::exception");
     }
     if (response.deferred) return defer(std::move(response.deferred), keepAlive);
     respond(std::move(response), keepAlive);
@@ -379,9 +391,7 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
     try {
       start(std::move(responder));
     } catch (const std::exception& e) {
-      Response failed = server_.transportError(500, "the server failed to answer; its log has the details");
-      failed.failure = e.what();
-      respond(std::move(failed), false);
+      respond(server_.handlerFailure(e.what()), false);
     }
   }
 
@@ -505,13 +515,15 @@ bool HttpServer::Impl::shedOneConnection() {
   ::close(spareDescriptor);
   const int client = ::accept4(acceptor->native_handle(), nullptr, nullptr, SOCK_CLOEXEC);
   if (client >= 0) {
-    const Response r = transportError(503, "the server is out of file descriptors; try again later");
+    const Response r =
+        transportError(503, "the server is out of file descriptors; try again later");
     const std::string answer = serializeHead(r, false) + *r.body;
-    [[maybe_unused]] const auto sent = ::send(client, answer.data(), answer.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    [[maybe_unused]] const auto sent =
+        ::send(client, answer.data(), answer.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
     ::shutdown(client, SHUT_WR);
     ::close(client);
   }
-  spareDescriptor = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  spareDescriptor = openSpareDescriptor();
   return client >= 0 && spareDescriptor >= 0;
 }
 
@@ -564,9 +576,9 @@ HttpServer::HttpServer(ServerOptions options, Handler handler, Observer observer
   }
   m.acceptor->non_blocking(true);  // shedOneConnection's accept4 must not wait
   m.acceptRetry.emplace(*m.contexts[0]);
-  m.spareDescriptor = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
-  m.maxConnections =
-      connectionsWithinDescriptorLimit(m.options.limits.maxConnections, m.options.limits.reservedDescriptors);
+  m.spareDescriptor = openSpareDescriptor();
+  m.maxConnections = connectionsWithinDescriptorLimit(m.options.limits.maxConnections,
+                                                      m.options.limits.reservedDescriptors);
   m.accept();
 }
 
@@ -584,7 +596,9 @@ HttpServer::~HttpServer() {
 
 unsigned short HttpServer::port() const { return impl_->acceptor->local_endpoint().port(); }
 
-std::size_t HttpServer::effectiveMaxConnections() const { return impl_->maxConnections; }
+std::size_t HttpServer::effectiveMaxConnections() const {
+  return impl_->maxConnections;
+}
 
 void HttpServer::run() {
   auto& m = *impl_;

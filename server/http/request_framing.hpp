@@ -25,10 +25,10 @@ namespace tinsmith::server {
 
 /// The facts of a request head that decide its framing.
 struct RequestHead {
-  int version = 11;                             ///< 10 or 11
+  int version = 11;                                 ///< 10 or 11
   std::vector<std::string_view> transferEncodings;  ///< each Transfer-Encoding line's value
-  std::size_t contentLengths = 0;               ///< Content-Length lines
-  std::size_t hosts = 0;                        ///< Host lines
+  std::size_t contentLengths = 0;                   ///< Content-Length lines
+  std::size_t hosts = 0;                            ///< Host lines
 };
 
 /// Why a request is refused: its status and the message for the client.

@@ -407,7 +407,8 @@ TEST(Tiles, FitSamplesStayWithinTheTinsVertexCount) {
     for (int i = 0; i <= 10; ++i) points.push_back({x0 + i * 1000.0, y0 + j * 1000.0, 100.0 + i});
   for (int j = 0; j < 60; ++j)  // the wall: 60 m × 60 m at 1 m, 50 m high
     for (int i = 0; i < 60; ++i)
-      points.push_back({x0 + 4200 + i * 1.0 + 0.3 * (j % 2), y0 + 4200 + j * 1.0, 100.0 + 50.0 * (i > 30)});
+      points.push_back(
+          {x0 + 4200 + i * 1.0 + 0.3 * (j % 2), y0 + 4200 + j * 1.0, 100.0 + 50.0 * (i > 30)});
   cdt.insertPoints(points, spots);
   cdt.finalize();
   const TinData tin = cdt.toTinData();

@@ -63,14 +63,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   (void)acceptsGzip(text);
   (void)acceptsBrotli(text);
 
-  if (const auto origin = originForm(text); origin && text.find("://") != std::string_view::npos &&
-                                            !text.empty() && text.front() != '/')
+  if (const auto origin = originForm(text);
+      origin && text.find("://") != std::string_view::npos && !text.empty() && text.front() != '/')
     require(!origin->empty() && origin->front() == '/');
   RequestHead head;
   head.version = size % 2 == 0 ? 11 : 10;
   head.hosts = size % 3;
   head.contentLengths = size % 5 == 0 ? 1 : 0;
-  for (std::size_t at = 0; at < text.size() && head.transferEncodings.size() < 4; at += 1 + text.size() / 4)
+  for (std::size_t at = 0; at < text.size() && head.transferEncodings.size() < 4;
+       at += 1 + text.size() / 4)
     head.transferEncodings.push_back(text.substr(at, 1 + text.size() / 4));
   if (const auto refusal = checkFraming(head)) {
     require(refusal->status == 400 || refusal->status == 501);

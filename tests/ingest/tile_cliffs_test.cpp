@@ -10,9 +10,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <random>
-
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "tests/support/run_command.hpp"
 
@@ -25,7 +24,9 @@ constexpr double kX0 = 500000, kY0 = 4500000, kSide = 2500;
 constexpr double kCx = kX0 + kSide / 2, kCy = kY0 + kSide / 2;
 constexpr double kFoot = 1000, kRim = 1100, kStep = 10, kWall = 2;
 
-double rimRadius(double theta) { return 500 + 40 * std::sin(5 * theta) + 15 * std::sin(13 * theta + 1); }
+double rimRadius(double theta) {
+  return 500 + 40 * std::sin(5 * theta) + 15 * std::sin(13 * theta + 1);
+}
 
 double mesaZ(double x, double y) {
   const double r = std::hypot(x - kCx, y - kCy);
@@ -60,7 +61,8 @@ TEST(TileCliffs, AMesasWallBesideATileSideIsReachedAndTheZoomMeetsItsTolerance) 
       const bool plain = k > levels;  // the 950 m contour on the plain
       const double z = plain ? 950 : kFoot + k * kStep;
       const double offset = plain ? kWall + 500 : kWall * (1 - static_cast<double>(k) / levels);
-      lines << (k ? "," : "") << R"({"type":"Feature","properties":{},"geometry":{"type":"LineString","coordinates":)"
+      lines << (k ? "," : "")
+            << R"({"type":"Feature","properties":{},"geometry":{"type":"LineString","coordinates":)"
             << ring(offset, z) << "}}";
     }
     lines << "]}";
@@ -78,8 +80,8 @@ TEST(TileCliffs, AMesasWallBesideATileSideIsReachedAndTheZoomMeetsItsTolerance) 
                              (dir / "contours.geojson").string() + " --crs EPSG:32612 -q -o " +
                              (dir / "mesa.tin").string());
   ASSERT_EQ(r.exitCode, 0) << r.err;
-  r = test::runTinsmith("tile " + (dir / "mesa.tin").string() + " -o " + (dir / "mesa.3dtiles").string() +
-                        " --tolerance 0.2 --json -q");
+  r = test::runTinsmith("tile " + (dir / "mesa.tin").string() + " -o " +
+                        (dir / "mesa.3dtiles").string() + " --tolerance 0.2 --json -q");
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const auto summary = nlohmann::json::parse(r.out);
   const auto& zooms = summary["zooms"];

@@ -6,7 +6,6 @@
 // status RFC 9112 asks for, and nothing a client sends after a refused head
 // is ever run as a request.
 #include <gtest/gtest.h>
-
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -14,9 +13,8 @@
 
 #include <ctime>
 #include <fstream>
-#include <regex>
-
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include "tests/server/server_test_support.hpp"
 
@@ -106,7 +104,8 @@ TEST(HostileHttp, AStreamOfTrailersDoesNotGrowTheServer) {
   std::string block;
   while (block.size() < (64 << 10)) block += line;
   std::size_t sent = 0;
-  while (sent < (200u << 20) && !c.anyArrived() && c.send(block)) sent += block.size();  // until answered
+  while (sent < (200u << 20) && !c.anyArrived() && c.send(block))
+    sent += block.size();  // until answered
   EXPECT_LT(sent, 200u << 20) << "the server read 200 MB of trailers";
   EXPECT_EQ(c.read().status, 431);
   EXPECT_LT(rss() - before, 20 * 1024) << "KiB grown while refusing the trailers";
@@ -124,7 +123,8 @@ TEST(HostileHttp, SmuggledRequestsAreNeverRun) {
            {"Transfer-Encoding: xchunked\r\n", 501},
            {"Transfer-Encoding: identity\r\n", 501},
            {"Transfer-Encoding: gzip\r\n", 501},
-           {"Transfer-Encoding: chunked\r\nTransfer-Encoding: gzip\r\n", 400},  // Beast: not chunked last
+           {"Transfer-Encoding: chunked\r\nTransfer-Encoding: gzip\r\n",
+            400},  // Beast: not chunked last
            {"Transfer-Encoding: chunked;x=1\r\n", 501},
            {"Transfer-Encoding: chunked\r\nContent-Length: 5\r\n", 400},
            {"Content-Length: 5\r\nTransfer-Encoding: chunked\r\n", 400},
@@ -135,8 +135,10 @@ TEST(HostileHttp, SmuggledRequestsAreNeverRun) {
     EXPECT_TRUE(a.closedAfter) << c.head << ": something was answered after the refusal";
   }
   // HTTP/1.0 cannot frame with Transfer-Encoding.
-  const auto a = exchange(server.port(), "POST /tilesets/hill/elevation HTTP/1.0\r\n"
-                                         "Transfer-Encoding: chunked\r\n\r\n0\r\n\r\n" + smuggled);
+  const auto a = exchange(server.port(),
+                          "POST /tilesets/hill/elevation HTTP/1.0\r\n"
+                          "Transfer-Encoding: chunked\r\n\r\n0\r\n\r\n" +
+                              smuggled);
   EXPECT_EQ(a.response.status, 400);
   EXPECT_TRUE(a.closedAfter);
 }
@@ -144,16 +146,21 @@ TEST(HostileHttp, SmuggledRequestsAreNeverRun) {
 TEST(HostileHttp, HostIsRequiredOnceAndAbsoluteTargetsAreServed) {
   RunningServer server;
   EXPECT_EQ(exchange(server.port(), "GET /health HTTP/1.1\r\n\r\n").response.status, 400);
-  EXPECT_EQ(exchange(server.port(), "GET /health HTTP/1.1\r\nHost: a\r\nHost: b\r\n\r\n").response.status, 400);
+  EXPECT_EQ(
+      exchange(server.port(), "GET /health HTTP/1.1\r\nHost: a\r\nHost: b\r\n\r\n").response.status,
+      400);
   EXPECT_EQ(exchange(server.port(), "GET /health HTTP/1.0\r\n\r\n").response.status, 200);
   const auto plain = httpGet(server.port(), "/tilesets/hill/tileset.json");
   ASSERT_EQ(plain.status, 200);
   HttpConnection c(server.port());
-  auto r = c.request("http://127.0.0.1:" + std::to_string(server.port()) + "/tilesets/hill/tileset.json");
+  auto r = c.request("http://127.0.0.1:" + std::to_string(server.port()) +
+                     "/tilesets/hill/tileset.json");
   EXPECT_EQ(r.status, 200);
   EXPECT_EQ(r.body, plain.body);
   EXPECT_EQ(c.request("HTTP://tiles.example.org/health").status, 200);  // keep-alive goes on
-  EXPECT_EQ(exchange(server.port(), "GET ftp://x/health HTTP/1.1\r\nHost: x\r\n\r\n").response.status, 400);
+  EXPECT_EQ(
+      exchange(server.port(), "GET ftp://x/health HTTP/1.1\r\nHost: x\r\n\r\n").response.status,
+      400);
 }
 
 TEST(HostileHttp, ARequestBegunButNotFinishedGets408) {
@@ -161,9 +168,9 @@ TEST(HostileHttp, ARequestBegunButNotFinishedGets408) {
   options.http.limits.readTimeout = std::chrono::milliseconds(500);
   options.http.limits.idleTimeout = std::chrono::milliseconds(500);
   RunningServer server(options);
-  for (const std::string& partial :
-       {std::string("GET /health HTTP/1.1\r\nHost: x\r\n"), kElevation + "Content-Length: 100\r\n\r\n{\"points\"",
-        kElevation + "Transfer-Encoding: chunked\r\n\r\n10\r\n"}) {
+  for (const std::string& partial : {std::string("GET /health HTTP/1.1\r\nHost: x\r\n"),
+                                     kElevation + "Content-Length: 100\r\n\r\n{\"points\"",
+                                     kElevation + "Transfer-Encoding: chunked\r\n\r\n10\r\n"}) {
     HttpConnection c(server.port(), 5000);
     c.send(partial);
     const auto r = c.read();
@@ -180,7 +187,10 @@ TEST(HostileHttp, EveryAnswerHasADateAndTransportErrorsHaveCors) {
   RunningServer server(options);
   const auto checkDate = [](const HttpResponse& r) {
     const std::string date = r.header("date");
-    ASSERT_TRUE(std::regex_match(date, std::regex(R"((Mon|Tue|Wed|Thu|Fri|Sat|Sun), \d\d (Jan|Feb|Mar|Apr|May|Jun|Jul|Aug|Sep|Oct|Nov|Dec) \d{4} \d\d:\d\d:\d\d GMT)")))
+    ASSERT_TRUE(std::regex_match(
+        date,
+        std::regex(
+            R"((Mon|Tue|Wed|Thu|Fri|Sat|Sun), \d\d (Jan|Feb|Mar|Apr|May|Jun|Jul|Aug|Sep|Oct|Nov|Dec) \d{4} \d\d:\d\d:\d\d GMT)")))
         << date;
     std::tm parts{};
     ::strptime(date.c_str(), "%a, %d %b %Y %H:%M:%S GMT", &parts);
@@ -188,9 +198,10 @@ TEST(HostileHttp, EveryAnswerHasADateAndTransportErrorsHaveCors) {
   };
   checkDate(httpGet(server.port(), "/health"));
   checkDate(httpGet(server.port(), "/tilesets/hill/tiles/0/0/0.glb"));
-  for (const std::string& bad : {"GET /health HTTP/1.1\r\nX-Big: " + std::string(20000, 'b') + "\r\n\r\n",
-                                 std::string("GET /health HTTP/1.1\r\n\r\n"),
-                                 kElevation + "Transfer-Encoding: gzip\r\n\r\n"}) {
+  for (const std::string& bad :
+       {"GET /health HTTP/1.1\r\nX-Big: " + std::string(20000, 'b') + "\r\n\r\n",
+        std::string("GET /health HTTP/1.1\r\n\r\n"),
+        kElevation + "Transfer-Encoding: gzip\r\n\r\n"}) {
     const auto r = exchange(server.port(), bad).response;
     EXPECT_GE(r.status, 400);
     checkDate(r);

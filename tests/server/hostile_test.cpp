@@ -153,7 +153,9 @@ TEST(Hostile, GarbageAndBadProtocolsAreRefused) {
   const int http2 = raw(server.port(), "GET / HTTP/2.0\r\nHost: x\r\n\r\n").status;
   EXPECT_TRUE(http2 == 400 || http2 == 505) << http2;
   EXPECT_EQ(raw(server.port(), "GET / HTTX/1.1\r\n\r\n").status, 400);
-  EXPECT_EQ(raw(server.port(), "GET /health HTTP/1.1\r\nHost: x\r\nContent-Length: -5\r\n\r\n").status, 400);
+  EXPECT_EQ(
+      raw(server.port(), "GET /health HTTP/1.1\r\nHost: x\r\nContent-Length: -5\r\n\r\n").status,
+      400);
   EXPECT_EQ(raw(server.port(),
                 "GET /health HTTP/1.1\r\nHost: x\r\nContent-Length: 1\r\nContent-Length: 2\r\n\r\n")
                 .status,

@@ -1,9 +1,9 @@
 // The framing rules of a request head, and absolute-form targets, as pure
 // functions (server/http/request_framing.hpp); the hostile HTTP suite
 // checks them over sockets.
-#include <gtest/gtest.h>
-
 #include "server/http/request_framing.hpp"
+
+#include <gtest/gtest.h>
 
 namespace tinsmith::server {
 namespace {
@@ -36,8 +36,8 @@ TEST(RequestFraming, HttpOneOneNeedsExactlyOneHost) {
 
 TEST(RequestFraming, AnyCodingButChunkedAloneIsRefused) {
   for (const std::string_view coding :
-       {"gzip", "identity", "xchunked", "chunkedx", "chunked;ext=1", "chunked, gzip", "gzip, chunked",
-        "chunked, chunked", ",", ""})
+       {"gzip", "identity", "xchunked", "chunkedx", "chunked;ext=1", "chunked, gzip",
+        "gzip, chunked", "chunked, chunked", ",", ""})
     EXPECT_EQ(statusOf(head(11, {coding})), 501) << coding;
   EXPECT_EQ(statusOf(head(11, {"chunked", "gzip"})), 501);  // over two header lines
   EXPECT_EQ(statusOf(head(11, {"gzip", "chunked"})), 501);
@@ -47,7 +47,7 @@ TEST(RequestFraming, AnyCodingButChunkedAloneIsRefused) {
 }
 
 TEST(RequestFraming, AmbiguousFramingIsABadRequest) {
-  EXPECT_EQ(statusOf(head(11, {"chunked"}, 1)), 400);  // with Content-Length
+  EXPECT_EQ(statusOf(head(11, {"chunked"}, 1)), 400);     // with Content-Length
   EXPECT_EQ(statusOf(head(10, {"chunked"}, 0, 0)), 400);  // in HTTP/1.0
 }
 
@@ -63,7 +63,8 @@ TEST(RequestFraming, AClientsBytesAreQuotedPrintably) {
 TEST(RequestFraming, AbsoluteFormBecomesOriginForm) {
   EXPECT_EQ(originForm("/tilesets?x=1"), "/tilesets?x=1");
   EXPECT_EQ(originForm("*"), "*");
-  EXPECT_EQ(originForm("http://127.0.0.1:8080/tilesets/rb/tileset.json"), "/tilesets/rb/tileset.json");
+  EXPECT_EQ(originForm("http://127.0.0.1:8080/tilesets/rb/tileset.json"),
+            "/tilesets/rb/tileset.json");
   EXPECT_EQ(originForm("HTTPS://example.org/a/b?q=1"), "/a/b?q=1");
   EXPECT_EQ(originForm("http://example.org"), "/");
   EXPECT_EQ(originForm("http://example.org?q=1"), "/?q=1");

@@ -91,11 +91,9 @@ void addExportCommand(CLI::App& app) {
                        "e.g. --cell 1.0");
     if (opt->cell && !(*opt->cell > 0))
       throw usageError("--cell must be a positive number of metres");
-    if (f != "glb") {
-      for (const auto* o : glbOnly) {
-        if (o->count() > 0)
-          throw usageError(o->get_name() + " is for --format glb", "leave it out for " + f);
-      }
+    for (const auto* o : glbOnly) {
+      if (f != "glb" && o->count() > 0)
+        throw usageError(o->get_name() + " is for --format glb", "leave it out for " + f);
     }
     if (f == "glb") {
       // Every option is checked before the TIN is read or the output touched.
