@@ -164,29 +164,83 @@ struct SidePoint {
   bool onLine;
 };
 
-/// Douglas–Peucker in the vertical: the points of `section` (sorted by
-/// `along`, NaN z skipped) farther than `tolerance` from the chord between
-/// `from` and `to`, appended to `kept` in order.
-void simplifySection(std::span<const std::pair<double, double>> section,
-                     std::pair<double, double> from, std::pair<double, double> to, double tolerance,
-                     std::vector<std::pair<double, double>>& kept) {
-  std::size_t worst = section.size();
-  double worstDistance = tolerance;
-  for (std::size_t k = 0; k < section.size(); ++k) {
-    const auto [u, z] = section[k];
-    if (std::isnan(z)) continue;
-    const double w = (u - from.first) / (to.first - from.first);
-    const double d = std::abs(z - (from.second + w * (to.second - from.second)));
-    if (d > worstDistance) {
-      worstDistance = d;
+/// How far a new vertex keeps from a tile's sides (RefineOptions::sideMargin):
+/// twice the farthest Draco may move a position (tile_content.cpp: at most
+/// 1 cm), so quantization cannot carry one across a side and fold a triangle
+/// there, or 1e-7 of the tile's width on a tile too wide for that to be above
+/// rounding. A margin of 1e-4 of the width kept a wall's or a pit's vertex
+/// half a metre from a 5 km tile's side out of reach, and the tile over its
+/// tolerance.
+double sideMargin(const Rect& rect) { return std::max(2 * kMaxQuantization, 1e-7 * rect.width()); }
+
+/// A point of a tile side's profile: its position along the side, the TIN's
+/// z on the side, and how much the TIN changes from the side to the lines
+/// the side margin away on either hand (NaN off the TIN).
+struct SideSample {
+  double along, z, leftStep, rightStep;
+};
+
+/// Douglas–Peucker over a side's profile between two points it keeps: the
+/// samples (sorted by `along`) where the chord from `from` to `to` misses by
+/// more than `tolerance` are appended to `kept`, in order. A chord misses
+/// where the TIN's z on the side is off it, or where the step to a margin
+/// line is off the step's own chord: no vertex the refiner may add comes
+/// closer to the side than the margin, so the strip between is the side's
+/// triangles alone, and they follow the TIN there only while its step across
+/// the strip is linear along the side. A pit's vertex half a metre inside a
+/// side, its slivers 300 m deep, steps 12 m down across a 2 cm strip along
+/// 100 m of side and nowhere else: the TIN vertex where that ends is kept,
+/// where the z alone dropped it and both tiles beside the side stayed 12 m
+/// off at every zoom.
+void simplifyProfile(std::span<const SideSample> samples, const SideSample& from,
+                     const SideSample& to, double tolerance, std::vector<SideSample>& kept) {
+  std::size_t worst = samples.size();
+  double worstMiss = tolerance;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const SideSample& p = samples[k];
+    const double w = (p.along - from.along) / (to.along - from.along);
+    auto miss = [&](double value, double a, double b) {
+      return std::isnan(value) || std::isnan(a) || std::isnan(b) ? 0.0
+                                                                 : std::abs(value - (a + w * (b - a)));
+    };
+    const double d = std::max({miss(p.z, from.z, to.z), miss(p.leftStep, from.leftStep, to.leftStep),
+                               miss(p.rightStep, from.rightStep, to.rightStep)});
+    if (d > worstMiss) {
+      worstMiss = d;
       worst = k;
     }
   }
-  if (worst == section.size()) return;
-  simplifySection(section.first(worst), from, section[worst], tolerance, kept);
-  kept.push_back(section[worst]);
-  simplifySection(section.subspan(worst + 1), section[worst], to, tolerance, kept);
+  if (worst == samples.size()) return;
+  simplifyProfile(samples.first(worst), from, samples[worst], tolerance, kept);
+  kept.push_back(samples[worst]);
+  simplifyProfile(samples.subspan(worst + 1), samples[worst], to, tolerance, kept);
 }
+
+/// The TIN's section along a line as (position along it, z), linear between.
+class SectionProfile {
+ public:
+  void take(const TinIndex& index, Point2 a, Point2 b, double u0, double u1) {
+    index.section(a, b, section_);
+    points_.clear();
+    for (const auto& sp : section_) points_.push_back({u0 + sp.t * (u1 - u0), sp.z});
+  }
+  [[nodiscard]] const std::vector<std::pair<double, double>>& points() const { return points_; }
+  /// The TIN's z at u along the line, or nullopt off the TIN.
+  [[nodiscard]] std::optional<double> at(double u) const {
+    const auto hi = std::lower_bound(points_.begin(), points_.end(), u,
+                                     [](const auto& a, double v) { return a.first < v; });
+    if (hi != points_.end() && hi->first == u && !std::isnan(hi->second)) return hi->second;
+    if (hi == points_.begin() || hi == points_.end()) return std::nullopt;
+    const auto lo = hi - 1;
+    if (std::isnan(lo->second) || std::isnan(hi->second)) return std::nullopt;
+    const double w = (u - lo->first) / (hi->first - lo->first);
+    return lo->second + w * (hi->second - lo->second);
+  }
+
+ private:
+  std::vector<TinIndex::SectionPoint> section_;
+  std::vector<std::pair<double, double>> points_;
+};
 
 }  // namespace
 
@@ -318,18 +372,13 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   fitTile(tile, *zd.fit);
   // Where the fit misses the zoom's tolerance, the TIN's points, worst first.
   // They stay off the sides (which hold the TIN's section already and are
-  // shared with the neighbour) by twice the farthest Draco may move a
-  // position (tile_content.cpp: at most 1 cm), so quantization cannot carry
-  // one across a side and fold a triangle there, or by 1e-7 of the tile's
-  // width on a tile too wide for that to be above rounding. A margin of
-  // 1e-4 of the width kept a wall's or a pit's vertex half a metre from a
-  // 5 km tile's side out of reach, and the tile over its tolerance.
+  // shared with the neighbour) by the side margin.
   // Each triangle's chord sag counts (the content is straight triangles on
   // the curved Earth), and encoding keeps its share of the tolerance.
   RefineOptions refine;
   refine.tolerance = (1 - kEncodingShare) * zd.tolerance;
   refine.maxTriangles = options_.maxTriangles;
-  refine.sideMargin = std::max(2 * kMaxQuantization, 1e-7 * rect.width());
+  refine.sideMargin = sideMargin(rect);
   refine.earthRadius = kEarthRadiusOfCurvature;
   tile.heldPoints = refineTile(tile, index_, refine);
   tile.tolerance = zd.tolerance;
@@ -423,34 +472,51 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
   }
 
   // Each side is the TIN's section along it, simplified (vertically, to
-  // kEdgeShare of the zoom's tolerance) between the points it must keep; those take the
-  // TIN's z (the fit's outside the TIN), a line's crossing the line's. Both
-  // tiles sharing a side compute it from the same inputs in the same
-  // direction (west to east, south to north), so they get the same vertices.
-  std::vector<TinIndex::SectionPoint> section;
-  std::vector<std::pair<double, double>> along, kept;
+  // kEdgeShare of the zoom's tolerance, and with the TIN's step to the lines
+  // the side margin away on either hand: simplifyProfile) between the points
+  // it must keep; those take the TIN's z (the fit's outside the TIN), a
+  // line's crossing the line's. Both tiles sharing a side compute it from the
+  // same inputs in the same direction (west to east, south to north), so they
+  // get the same vertices.
+  SectionProfile onSide, left, right;
+  std::vector<SideSample> samples, kept;
   std::array<std::vector<Point3>, 4> sideLines;
   // L² / 8R within kSideSagShare of the tolerance.
   const double maxSideChord = std::sqrt(8 * kEarthRadiusOfCurvature * kSideSagShare * zd.tolerance);
+  const double margin = sideMargin(rect);
   for (int k = 0; k < 4; ++k) {
     auto& side = sides[k];
     const bool horizontal = k == 0 || k == 2;
     const double fixed = k == 0 ? rect.y0 : k == 1 ? rect.x1 : k == 2 ? rect.y1 : rect.x0;
     const double u0 = horizontal ? rect.x0 : rect.y0, u1 = horizontal ? rect.x1 : rect.y1;
-    auto at = [&](double u) { return horizontal ? Point2{u, fixed} : Point2{fixed, u}; };
-    index_.section(at(u0), at(u1), section);
-    along.clear();
-    for (const auto& sp : section) along.push_back({u0 + sp.t * (u1 - u0), sp.z});
-    auto tinZ = [&](double u) -> std::optional<double> {
-      const auto hi = std::lower_bound(along.begin(), along.end(), u,
-                                       [](const auto& a, double v) { return a.first < v; });
-      if (hi != along.end() && hi->first == u && !std::isnan(hi->second)) return hi->second;
-      if (hi == along.begin() || hi == along.end()) return std::nullopt;
-      const auto lo = hi - 1;
-      if (std::isnan(lo->second) || std::isnan(hi->second)) return std::nullopt;
-      const double w = (u - lo->first) / (hi->first - lo->first);
-      return lo->second + w * (hi->second - lo->second);
+    auto at = [&](double u, double offset = 0.0) {
+      return horizontal ? Point2{u, fixed + offset} : Point2{fixed + offset, u};
     };
+    onSide.take(index_, at(u0), at(u1), u0, u1);
+    left.take(index_, at(u0, -margin), at(u1, -margin), u0, u1);
+    right.take(index_, at(u0, margin), at(u1, margin), u0, u1);
+    auto tinZ = [&](double u) { return onSide.at(u); };
+    // Inside the corners' squares of the margin no vertex can be added at
+    // all, so a step's kink there (where a TIN edge from the corner crosses
+    // a margin line) is not kept: the kept point would make a square whose
+    // diagonal is the Delaunay tie's, not the TIN's.
+    auto sample = [&](double u, double z, bool end = false) {
+      const auto zs = onSide.at(u), zl = left.at(u), zr = right.at(u);
+      const double nan = std::nan("");
+      if (!end && (u < u0 + 2 * margin || u > u1 - 2 * margin)) return SideSample{u, z, nan, nan};
+      return SideSample{u, z, zs && zl ? *zl - *zs : nan, zs && zr ? *zr - *zs : nan};
+    };
+    // The side's profile: every point of the three sections, by position.
+    samples.clear();
+    std::vector<double> positions;
+    for (const auto* profile : {&onSide, &left, &right})
+      for (const auto& [u, z] : profile->points()) positions.push_back(u);
+    std::sort(positions.begin(), positions.end());
+    positions.erase(std::unique(positions.begin(), positions.end()), positions.end());
+    for (const double u : positions) {
+      const auto z = tinZ(u);
+      if (z) samples.push_back(sample(u, *z));
+    }
     // Along the side; at equal positions a line point wins (its z is the line's).
     std::stable_sort(side.begin(), side.end(), [](const SidePoint& a, const SidePoint& b) {
       return a.along < b.along || (a.along == b.along && a.onLine > b.onLine);
@@ -474,35 +540,35 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
     }
     auto& out = sideLines[k];
     out.push_back(must.front().p);
-    auto first = along.begin();
+    auto first = samples.begin();
     for (std::size_t m = 1; m < must.size(); ++m) {
       const double ua = must[m - 1].along, ub = must[m].along;
       const double gap = (ub - ua) * 1e-9;
-      while (first != along.end() && first->first <= ua + gap) ++first;
+      while (first != samples.end() && first->along <= ua + gap) ++first;
       auto last = first;
-      while (last != along.end() && last->first < ub - gap) ++last;
+      while (last != samples.end() && last->along < ub - gap) ++last;
       kept.clear();
-      simplifySection(std::span<const std::pair<double, double>>(first, last),
-                      {ua, must[m - 1].p.z}, {ub, must[m].p.z}, kEdgeShare * zd.tolerance, kept);
-      kept.push_back({ub, must[m].p.z});
+      const SideSample end = sample(ub, must[m].p.z, true);
+      simplifyProfile(std::span<const SideSample>(first, last), sample(ua, must[m - 1].p.z, true), end,
+                      kEdgeShare * zd.tolerance, kept);
+      kept.push_back(end);
       // Chords too long for the Earth's curvature are cut evenly, each cut
       // on the TIN (the chord's line off it): from the same doubles in both
       // tiles sharing the side.
       std::pair<double, double> from{ua, must[m - 1].p.z};
       for (const auto& to : kept) {
-        const auto pieces = std::ceil((to.first - from.first) / maxSideChord);
+        const auto pieces = std::ceil((to.along - from.first) / maxSideChord);
         for (double k = 1; k < pieces; ++k) {
-          const double u = from.first + (to.first - from.first) * (k / pieces);
+          const double u = from.first + (to.along - from.first) * (k / pieces);
           const auto z = tinZ(u);
           const Point2 q = at(u);
-          out.push_back(
-              {q.x, q.y, z ? *z : from.second + (to.second - from.second) * (k / pieces)});
+          out.push_back({q.x, q.y, z ? *z : from.second + (to.z - from.second) * (k / pieces)});
         }
-        if (to.first != ub) {
-          const Point2 q = at(to.first);
-          out.push_back({q.x, q.y, to.second});
+        if (to.along != ub) {
+          const Point2 q = at(to.along);
+          out.push_back({q.x, q.y, to.z});
         }
-        from = to;
+        from = {to.along, to.z};
       }
       out.push_back(must[m].p);
       first = last;
