@@ -38,10 +38,17 @@ inline bool rowMajorLess(const TileId& a, const TileId& b) {
   return a.z < b.z || (a.z == b.z && (a.y < b.y || (a.y == b.y && a.x < b.x)));
 }
 
-/// Whether a tile with this measured error gets children: the pyramid's one
-/// refinement rule, also what `tinsmith merge` checks shards against.
-inline bool tileRefines(double error, int z, double tolerance, int maxZoom) {
-  return error > tolerance && z < maxZoom;
+/// Whether a tile gets children: the pyramid's one refinement rule, also what
+/// `tinsmith merge` checks shards against. Its measured error (`error`) is
+/// over `tolerance` and it is above `maxZoom`; from the planned finest zoom
+/// on, where the children's tolerance is the tile's, the error the children
+/// can reach (`reachableError`: without the triangles whose worst point lies
+/// within the side margin, which the children's sides share) must be over
+/// it. A pit a centimetre from the corner the four zoom-1 tiles share is out
+/// of reach at every zoom: it made 9 zooms, each tile around it 206 m off.
+inline bool tileRefines(double error, double reachableError, int z, double tolerance,
+                        int finestZoom, int maxZoom) {
+  return z < maxZoom && (z < finestZoom ? error : reachableError) > tolerance;
 }
 
 /// Parses "z/x/y"; throws usageError naming `what` for anything else or a tile

@@ -21,8 +21,11 @@ void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const T
   for (TileId a = root; a.z > 0;) {
     a = a.parent();
     const TileSurface s = tiler.buildTile(a);
-    if (s.empty() ||
-        !tiler.refines(a, encodeTile(s, skirtDepth(tiler, a, s.error), content).record.error)) {
+    const auto refined = [&] {
+      const TileRecord r = encodeTile(s, skirtDepth(tiler, a, s.error), content).record;
+      return tiler.refines(a, r.error, r.reachableError);
+    };
+    if (s.empty() || !refined()) {
       throw usageError(
           "tile " + root.name() + " is not in the pyramid: its ancestor " + a.name() +
               (s.empty() ? " holds no terrain" : " meets the tolerance and has no children"),
@@ -109,7 +112,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
       if (callbacks.progress) callbacks.progress(z, ++done, level.size());
       if (!records[i]) continue;  // an empty tile
       summary.records.push_back(*records[i]);
-      if (tiler.refines(level[i], records[i]->error)) {
+      if (tiler.refines(level[i], records[i]->error, records[i]->reachableError)) {
         for (int c = 0; c < 4; ++c) nextLevel.push_back(level[i].child(c));
       }
     }

@@ -89,9 +89,12 @@ std::size_t edgeOf(const std::vector<std::uint64_t>& edges, std::uint64_t a, std
 /// chord's middle and the ground there (the point of the project CRS halfway
 /// between the ends, through the georeference), taken over the triangle as
 /// the quadratic it is to second order (quadraticGapMax). The largest over
-/// the triangles.
+/// the triangles, and over those a refinement can reach (TileRecord).
+struct ShippedError {
+  double all = 0.0, reachable = 0.0;
+};
 template <class ToFrame>
-double shippedError(const TileSurface& tile, std::span<const Point3> project,
+ShippedError shippedError(const TileSurface& tile, std::span<const Point3> project,
                     std::span<const Point3> frame, std::span<const Point3> shipped,
                     const GeoReference& geo, const ToFrame& toFrame) {
   const auto edges = uniqueEdges(tile.triangles);
@@ -106,7 +109,8 @@ double shippedError(const TileSurface& tile, std::span<const Point3> project,
         distance(middle(frame[edges[k] >> 32], frame[edges[k] & 0xffffffffU]), toFrame(ground[k]));
   }
   const bool perTriangle = tile.triangleErrors.size() == tile.triangles.size();
-  double worst = 0.0;
+  const bool reach = tile.outOfReach.size() == tile.triangles.size();
+  ShippedError worst;
   for (std::size_t t = 0; t < tile.triangles.size(); ++t) {
     const auto& tri = tile.triangles[t];
     double moved = 0.0;
@@ -116,7 +120,9 @@ double shippedError(const TileSurface& tile, std::span<const Point3> project,
       middles[i] = sag[edgeOf(edges, tri[i], tri[(i + 1) % 3])];
     }
     const double vertical = perTriangle ? tile.triangleErrors[t] : tile.error;
-    worst = std::max(worst, vertical + moved + quadraticGapMax(middles[0], middles[1], middles[2]));
+    const double e = vertical + moved + quadraticGapMax(middles[0], middles[1], middles[2]);
+    worst.all = std::max(worst.all, e);
+    if (!reach || !tile.outOfReach[t]) worst.reachable = std::max(worst.reachable, e);
   }
   return worst;
 }
@@ -213,6 +219,8 @@ std::string recordToJson(const TileRecord& r) {
   j["triangles"] = r.triangles;
   j["breakLineVertices"] = r.breakLineVertices;
   j["positionErrorBound"] = r.positionErrorBound;
+  // Only where it differs: most tiles have nothing out of reach.
+  if (r.reachableError != r.error) j["reachableError"] = r.reachableError;
   nlohmann::ordered_json root;
   root["tinsmith"] = j;
   return root.dump();
@@ -238,6 +246,7 @@ std::optional<TileRecord> recordFromExtras(std::string_view extras) {
     r.triangles = j.value("triangles", std::size_t{0});
     r.breakLineVertices = j.value("breakLineVertices", std::size_t{0});
     r.positionErrorBound = j.value("positionErrorBound", 0.0);
+    r.reachableError = j.value("reachableError", r.error);
     return r;
   } catch (const nlohmann::json::exception&) {
     return std::nullopt;
@@ -325,7 +334,9 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   for (std::size_t i = 0; i < decoded.size(); ++i) {
     shipped[i] = {centre.x + decoded[i][0], centre.y + decoded[i][1], centre.z + decoded[i][2]};
   }
-  record.error = shippedError(tile, project, frame, shipped, *options.geo, toFrame);
+  const ShippedError error = shippedError(tile, project, frame, shipped, *options.geo, toFrame);
+  record.error = error.all;
+  record.reachableError = error.reachable;
   if (record.local) {
     record.box = localBox(shipped);
   } else {

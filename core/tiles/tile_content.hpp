@@ -47,6 +47,10 @@ struct TileRecord {
   /// a client draws — the decoded positions, straight triangles between them
   /// — and the TIN, over the tile's part of it (encodeTile says how).
   double error = 0.0;
+  /// The same bound over the triangles a refinement can reach (all but the
+  /// refiner's outOfReach ones): what decides children from the planned
+  /// finest zoom on (tileRefines). At most `error`.
+  double reachableError = 0.0;
   std::array<double, 6> region{};  ///< west, south, east, north (rad), min, max height (m)
   std::array<double, 12> box{};    ///< local frame: centre, then three half-axes (m)
   bool local = false;              ///< which of region / box is meaningful

@@ -38,6 +38,7 @@ class Refiner {
     twin_.assign(3 * nt, kNone);
     kind_.assign(3 * nt, EdgeKind::Free);
     version_.assign(nt, 0);
+    outOfReach_.assign(nt, 0);
     vout_.assign(tile_.vertices.size(), kNone);
     // The twins from the project's mesh (half-edge 3t + i runs from corner i
     // to corner i + 1 there too); from here on the refiner keeps them.
@@ -75,6 +76,7 @@ class Refiner {
         remeasure();
       } else {
         ++version_[top.t];  // nothing to do here: measured, not tried again
+        outOfReach_[top.t] = 1;
       }
     }
     writeBack();
@@ -118,8 +120,10 @@ class Refiner {
       kind_.insert(kind_.end(), 3, EdgeKind::Free);
       diff_.emplace_back();
       version_.push_back(0);
+      outOfReach_.push_back(0);
     }
     tri_[t] = corners;
+    outOfReach_[t] = 0;
     for (int i = 0; i < 3; ++i) {
       kind_[3 * t + i] = kinds[i];
       vout_[corners[i]] = 3 * t + static_cast<std::uint32_t>(i);
@@ -370,6 +374,7 @@ class Refiner {
     tile_.riverEdges.assign(tri_.size(), 0);
     tile_.error = 0.0;
     tile_.triangleErrors.assign(tri_.size(), 0.0);
+    tile_.outOfReach = outOfReach_;
     for (std::uint32_t t = 0; t < tri_.size(); ++t) {
       tile_.triangleErrors[t] = diff_[t].maxAbs;
       for (int i = 0; i < 3; ++i) {
@@ -393,6 +398,7 @@ class Refiner {
   std::vector<std::uint32_t> twin_;
   std::vector<EdgeKind> kind_;
   std::vector<std::uint32_t> version_;
+  std::vector<std::uint8_t> outOfReach_;  // per triangle: improve() could do nothing
   std::vector<std::uint32_t> vout_;
   std::priority_queue<Entry> heap_;
   std::vector<std::uint32_t> touched_;

@@ -50,8 +50,10 @@ struct RefineOptions {
 /// triangle's exact difference (triangleDifferences) is measured once and
 /// again only when the triangle changes; an edge's, once for its life.
 /// Sets tile.error, tile.errorAt and tile.triangleErrors (vertical, without
-/// the sag) from the final triangles and returns how many vertices it
-/// inserted or held.
+/// the sag) from the final triangles, and tile.outOfReach for the triangles
+/// left over the tolerance because nothing the tile may do reaches their
+/// worst point (on a side, or within the side margin outside them), and
+/// returns how many vertices it inserted or held.
 std::size_t refineTile(TileSurface& tile, const TinIndex& tin, const RefineOptions& options);
 
 }  // namespace tinsmith::tiles

@@ -86,6 +86,10 @@ struct TileSurface {
   Point2 errorAt;
   /// Per triangle: its own measured max |surface − TIN| (m), as `error`.
   std::vector<double> triangleErrors;
+  /// Per triangle: 1 when the refiner left it over the tolerance because its
+  /// worst point is out of any new vertex's reach (tile_refiner.hpp): on a
+  /// side or within the side margin, which the children share.
+  std::vector<std::uint8_t> outOfReach;
   double tolerance = 0.0;             ///< the zoom's tolerance (m)
   std::size_t breakLineVertices = 0;  ///< vertices of break lines kept in the tile
   std::size_t dataPoints = 0;         ///< data points the tile's fit used
@@ -123,9 +127,9 @@ class Tiler {
   [[nodiscard]] double zoomTolerance(int z) const;
   [[nodiscard]] const TinData& tin() const { return tin_; }
   [[nodiscard]] std::size_t dataPointCount() const { return data_.size(); }
-  /// Whether a tile with this error gets children (tileRefines).
-  [[nodiscard]] bool refines(const TileId& id, double error) const {
-    return tileRefines(error, id.z, options_.tolerance, maxZoom_);
+  /// Whether a tile with these errors gets children (tileRefines).
+  [[nodiscard]] bool refines(const TileId& id, double error, double reachableError) const {
+    return tileRefines(error, reachableError, id.z, options_.tolerance, finestZoom_, maxZoom_);
   }
 
   /// The tile's surface (empty when the tile holds none of the TIN). Thread-safe.

@@ -116,7 +116,7 @@ TileJobSummary summarize(const std::vector<TileRecord>& records, const std::stri
     z.maxError = std::max(z.maxError, r.error);
     if (r.error > z.tolerance) {
       ++z.overTolerance;
-      s.missed.push_back({r.id, r.error, z.tolerance});
+      s.missed.push_back({r.id, r.error, z.tolerance, r.reachableError});
     }
     s.bytes += r.bytes;
   }
@@ -502,10 +502,12 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     const auto b = nlohmann::json::parse(build);
     const double tolerance = b["options"]["tolerance"].get<double>();
     const int maxZoom = b["options"]["maxZoom"].get<int>();
+    const int finestZoom = b["pyramid"]["finestZoom"].get<int>();
     std::set<TileId> present;
     for (const auto& r : records) present.insert(r.id);
     for (const auto& r : records) {
-      if (!tiles::tileRefines(r.error, r.id.z, tolerance, maxZoom)) continue;
+      if (!tiles::tileRefines(r.error, r.reachableError, r.id.z, tolerance, finestZoom, maxZoom))
+        continue;
       for (int c = 0; c < 4; ++c) {
         const TileId child = r.id.child(c);
         if (present.contains(child)) continue;

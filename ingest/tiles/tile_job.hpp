@@ -81,6 +81,11 @@ struct ZoomSummary {
 struct MissedTile {
   tiles::TileId id;
   double error = 0, tolerance = 0;
+  /// Its error without the triangles no refinement reaches (TileRecord):
+  /// within the tolerance, the tile misses only where its sides keep every
+  /// descendant from reaching (a spot within 2 cm of a side).
+  double reachableError = 0;
+  [[nodiscard]] bool outOfReach() const { return reachableError <= tolerance; }
 };
 
 struct TileJobSummary {

@@ -51,7 +51,7 @@ TEST(DemoTiles, SharedSidesAreBitForBitAndEveryZoomMeetsItsTolerance) {
     todo.pop_back();
     TileSurface tile = tiler.buildTile(id);
     if (tile.empty()) continue;
-    if (tiler.refines(id, tile.error)) {
+    if (tiler.refines(id, tile.error, tile.error)) {
       for (int i = 0; i < 4; ++i) todo.push_back(id.child(i));
     }
     built.emplace(id, std::move(tile));

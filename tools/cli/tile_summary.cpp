@@ -52,6 +52,15 @@ std::string missedToleranceText(const ingest::TileJobSummary& s) {
                   worst[i].error, worst[i].tolerance);
   out += "\n  their geometricError is what they measure, so viewers refine them sooner; "
          "a larger --max-triangles or a looser --tolerance may meet it (--strict: exit code 1)\n";
+  const auto unreachable = static_cast<std::size_t>(
+      std::count_if(s.missed.begin(), s.missed.end(), [](const auto& m) { return m.outOfReach(); }));
+  if (unreachable > 0) {
+    out += format(
+        "  %zu of them miss only within the side margin (2 cm) of a tile side, where no tile "
+        "below can add a vertex either (a spike or pit at a side): from the planned finest zoom "
+        "on they get no children for it\n",
+        unreachable);
+  }
   return out;
 }
 
@@ -82,7 +91,10 @@ nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
   j["zooms"] = zooms;
   auto missed = nlohmann::ordered_json::array();
   for (const auto& m : s.missed)
-    missed.push_back({{"tile", m.id.name()}, {"error", m.error}, {"tolerance", m.tolerance}});
+    missed.push_back({{"tile", m.id.name()},
+                      {"error", m.error},
+                      {"tolerance", m.tolerance},
+                      {"outOfReach", m.outOfReach()}});
   j["withinTolerance"] = s.missed.empty();
   j["overTolerance"] = missed;
   return j;
