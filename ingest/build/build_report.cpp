@@ -55,7 +55,9 @@ std::string BuildReport::toJson() const {
                  {"checked", riversChecked},
                  {"reversed", riversReversed},
                  {"vertices_adjusted", riverVerticesAdjusted},
-                 {"max_adjustment_m", riverMaxAdjustment}};
+                 {"max_adjustment_m", riverMaxAdjustment},
+                 {"largest_changes", J::array()}};
+  for (const auto& e : riverLargestChanges) j["rivers"]["largest_changes"].push_back(eventJson(e));
   j["roads"] = {{"draped", roadsDraped},
                 {"spikes_removed", roadSpikesRemoved},
                 {"max_change_m", roadMaxChange}};
@@ -125,6 +127,16 @@ std::string BuildReport::summary() const {
     s << "  rivers (pieces outside lakes): " << riversDraped << " draped, " << riversChecked << " 3D checked, "
       << riversReversed << " digitised upstream, " << riverVerticesAdjusted
       << " vertices lowered/raised to descend (max " << fixed(riverMaxAdjustment, 2) << " m)\n";
+  for (std::size_t i = 0; i < riverLargestChanges.size() && i < 5; ++i) {
+    const Event& e = riverLargestChanges[i];
+    s << "    at " << fixed(e.at.x, 2) << ", " << fixed(e.at.y, 2) << ": " << e.what << " "
+      << (e.zKept < e.zOther ? "lowered" : "raised") << " from " << fixed(e.zOther, 2) << " to "
+      << fixed(e.zKept, 2) << " m";
+    if (e.zOther - e.zKept >= 3.0)
+      s << " — its banks keep their height, so the TIN has a pit there; a reservoir, weir or "
+           "culvert the layers do not hold? (add it as a lake or check the river's direction)";
+    s << "\n";
+  }
   if (roadsDraped)
     s << "  roads: " << roadsDraped << " draped and smoothed, " << roadSpikesRemoved
       << " spikes removed (max change " << fixed(roadMaxChange, 2) << " m)\n";

@@ -59,6 +59,12 @@ struct BuildReport : TinCounts {
   std::size_t riversDraped = 0, riversChecked = 0, riversReversed = 0;
   std::size_t riverVerticesAdjusted = 0;
   double riverMaxAdjustment = 0;
+  /// Per river changed by at least kRiverChangeToReport: its largest change
+  /// (zOther before, zKept after), largest first. A river lowered metres
+  /// below the surface it runs on leaves a pit in the TIN beside banks that
+  /// keep their height (a reservoir, weir or culvert the layers do not hold).
+  std::vector<Event> riverLargestChanges;
+  static constexpr double kRiverChangeToReport = 1.0;
   std::size_t roadsDraped = 0, roadSpikesRemoved = 0;
   double roadMaxChange = 0;
   std::vector<Lake> lakes;

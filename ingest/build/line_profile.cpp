@@ -160,7 +160,12 @@ DescentResult enforceDescent(std::vector<Point3>& line) {
       const double change = std::abs(p.z - b.mean);
       if (p.z != b.mean) {
         ++result.adjusted;
-        result.maxAdjustment = std::max(result.maxAdjustment, change);
+        if (change > result.maxAdjustment) {
+          result.maxAdjustment = change;
+          result.maxAt = p.xy();
+          result.maxFrom = p.z;
+          result.maxTo = b.mean;
+        }
       }
       p.z = b.mean;
     }

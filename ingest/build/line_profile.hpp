@@ -36,6 +36,9 @@ struct DescentResult {
   bool reversed = false;       ///< flow runs against the digitised order
   std::size_t adjusted = 0;    ///< vertices whose z changed
   double maxAdjustment = 0.0;  ///< largest |Δz|, metres
+  /// The vertex of the largest change: where, its z before and after.
+  Point2 maxAt;
+  double maxFrom = 0.0, maxTo = 0.0;
 };
 
 /// Makes z non-increasing downstream, in place, without changing x, y or the

@@ -285,6 +285,8 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
           report.riversReversed += d.reversed ? 1 : 0;
           report.riverVerticesAdjusted += d.adjusted;
           report.riverMaxAdjustment = std::max(report.riverMaxAdjustment, d.maxAdjustment);
+          if (d.maxAdjustment >= BuildReport::kRiverChangeToReport)
+            report.riverLargestChanges.push_back({d.maxAt, source, d.maxTo, d.maxFrom});
         }
         break;
       }
@@ -307,6 +309,10 @@ BuildReport build(std::vector<BuildLayer> layers, const BuildOptions& options,
   // Where rivers meet end to end, one vertex: every river keeps descending
   // through it.
   report.riverVerticesAdjusted += reconcileConfluences(rivers, riverReversed);
+  std::stable_sort(report.riverLargestChanges.begin(), report.riverLargestChanges.end(),
+                   [](const auto& a, const auto& b) {
+                     return std::abs(a.zOther - a.zKept) > std::abs(b.zOther - b.zKept);
+                   });
   surface.reset();  // free the copy before the big triangulation
   for (auto& line : later) {
     report.inputLineVertices += line.vertices.size();

@@ -39,6 +39,10 @@ TEST(RiverDescent, ADamIsLeveledByTheLeastTotalChange) {
   EXPECT_EQ(river[3].z, 80.0);
   EXPECT_EQ(r.adjusted, 2u);
   EXPECT_DOUBLE_EQ(r.maxAdjustment, 3.0);
+  // Where: the first downstream of the two changed by 3 m (90 raised to 93).
+  EXPECT_EQ(r.maxAt.x, 10.0);
+  EXPECT_DOUBLE_EQ(r.maxFrom, 90.0);
+  EXPECT_DOUBLE_EQ(r.maxTo, 93.0);
 }
 
 TEST(RiverDescent, RiverDigitisedUpstreamIsDetectedAndDescendsTowardsItsFirstVertex) {

@@ -86,6 +86,14 @@ TEST(TinBuilder, RiverDigitisedUpstreamIsDrapedMadeToDescendAndConstrained) {
   EXPECT_EQ(r.report.riversDraped, 1u);
   EXPECT_EQ(r.report.riversReversed, 1u);
   EXPECT_GT(r.report.riverVerticesAdjusted, 0u);
+  // The largest change is reported where it is, with its river and heights,
+  // and the summary names it.
+  ASSERT_EQ(r.report.riverLargestChanges.size(), 1u);
+  const auto& change = r.report.riverLargestChanges[0];
+  EXPECT_DOUBLE_EQ(std::abs(change.zOther - change.zKept), r.report.riverMaxAdjustment);
+  EXPECT_EQ(change.at.y, 51.0);
+  EXPECT_NE(change.what.find("river"), std::string::npos) << change.what;
+  EXPECT_NE(r.report.summary().find("lowered from"), std::string::npos) << r.report.summary();
   const auto edges = edgesOfKind(r.tin, FeatureKind::River);
   ASSERT_GE(edges.size(), 9u);  // densified to ≤ 10 m
   // Along every river edge, z falls (or stays) towards the west: downstream.
