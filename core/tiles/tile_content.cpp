@@ -95,8 +95,8 @@ struct ShippedError {
 };
 template <class ToFrame>
 ShippedError shippedError(const TileSurface& tile, std::span<const Point3> project,
-                    std::span<const Point3> frame, std::span<const Point3> shipped,
-                    const GeoReference& geo, const ToFrame& toFrame) {
+                          std::span<const Point3> frame, std::span<const Point3> shipped,
+                          const GeoReference& geo, const ToFrame& toFrame) {
   const auto edges = uniqueEdges(tile.triangles);
   std::vector<Point3> middles(edges.size());
   for (std::size_t k = 0; k < edges.size(); ++k)

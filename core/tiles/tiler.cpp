@@ -171,7 +171,9 @@ struct SidePoint {
 /// rounding. A margin of 1e-4 of the width kept a wall's or a pit's vertex
 /// half a metre from a 5 km tile's side out of reach, and the tile over its
 /// tolerance.
-double sideMargin(const Rect& rect) { return std::max(2 * kMaxQuantization, 1e-7 * rect.width()); }
+double sideMargin(const Rect& rect) {
+  return std::max(2 * kMaxQuantization, 1e-7 * rect.width());
+}
 
 /// A point of a tile side's profile: its position along the side, the TIN's
 /// z on the side, and how much the TIN changes from the side to the lines
@@ -200,11 +202,13 @@ void simplifyProfile(std::span<const SideSample> samples, const SideSample& from
     const SideSample& p = samples[k];
     const double w = (p.along - from.along) / (to.along - from.along);
     auto miss = [&](double value, double a, double b) {
-      return std::isnan(value) || std::isnan(a) || std::isnan(b) ? 0.0
-                                                                 : std::abs(value - (a + w * (b - a)));
+      return std::isnan(value) || std::isnan(a) || std::isnan(b)
+                 ? 0.0
+                 : std::abs(value - (a + w * (b - a)));
     };
-    const double d = std::max({miss(p.z, from.z, to.z), miss(p.leftStep, from.leftStep, to.leftStep),
-                               miss(p.rightStep, from.rightStep, to.rightStep)});
+    const double d =
+        std::max({miss(p.z, from.z, to.z), miss(p.leftStep, from.leftStep, to.leftStep),
+                  miss(p.rightStep, from.rightStep, to.rightStep)});
     if (d > worstMiss) {
       worstMiss = d;
       worst = k;
@@ -549,8 +553,8 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       while (last != samples.end() && last->along < ub - gap) ++last;
       kept.clear();
       const SideSample end = sample(ub, must[m].p.z, true);
-      simplifyProfile(std::span<const SideSample>(first, last), sample(ua, must[m - 1].p.z, true), end,
-                      kEdgeShare * zd.tolerance, kept);
+      simplifyProfile(std::span<const SideSample>(first, last), sample(ua, must[m - 1].p.z, true),
+                      end, kEdgeShare * zd.tolerance, kept);
       kept.push_back(end);
       // Chords too long for the Earth's curvature are cut evenly, each cut
       // on the TIN (the chord's line off it): from the same doubles in both

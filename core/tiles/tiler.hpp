@@ -4,7 +4,8 @@
 //   - the tile's sides: the TIN's exact section along each side, simplified in
 //     the vertical (Douglas–Peucker) to kEdgeShare of the zoom's tolerance
 //     between the points a side must keep (corners, the fit's vertices on it,
-//     the lines' crossings);
+//     the lines' crossings), with the TIN's step across the side margin kept
+//     linear along it too (no new vertex comes closer to a side);
 //   - the break lines and domain-boundary rings, simplified in 3-D to the same
 //     share with every chord also kept within it of the TIN beneath;
 //   - the zoom fit's binary vertices inside the tile;

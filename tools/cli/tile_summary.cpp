@@ -52,8 +52,8 @@ std::string missedToleranceText(const ingest::TileJobSummary& s) {
                   worst[i].error, worst[i].tolerance);
   out += "\n  their geometricError is what they measure, so viewers refine them sooner; "
          "a larger --max-triangles or a looser --tolerance may meet it (--strict: exit code 1)\n";
-  const auto unreachable = static_cast<std::size_t>(
-      std::count_if(s.missed.begin(), s.missed.end(), [](const auto& m) { return m.outOfReach(); }));
+  const auto unreachable = static_cast<std::size_t>(std::count_if(
+      s.missed.begin(), s.missed.end(), [](const auto& m) { return m.outOfReach(); }));
   if (unreachable > 0) {
     out += format(
         "  %zu of them miss only within the side margin (2 cm) of a tile side, where no tile "
