@@ -1,0 +1,235 @@
+#include "core/encode/quantized_mesh.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::encode {
+
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "quantized-mesh is little-endian; this writer copies native values");
+
+/// Little-endian appends.
+class Writer {
+ public:
+  template <class T>
+  void put(T value) {
+    char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    out_.append(bytes, sizeof(T));
+  }
+  void pad(std::size_t alignment) {
+    while (out_.size() % alignment != 0) out_.push_back('\0');
+  }
+  void append(std::string_view bytes) { out_.append(bytes); }
+  std::string take() { return std::move(out_); }
+
+ private:
+  std::string out_;
+};
+
+std::uint16_t zigZag(int value) {
+  return static_cast<std::uint16_t>((static_cast<unsigned>(value) << 1) ^
+                                    static_cast<unsigned>(value >> 31));
+}
+
+void putPoint(Writer& w, const Point3& p) {
+  w.put(p.x);
+  w.put(p.y);
+  w.put(p.z);
+}
+
+void check(bool ok, const std::string& what) {
+  if (!ok) throw internalError("encodeQuantizedMesh: " + what);
+}
+
+constexpr double kWgs84A = 6378137.0, kWgs84B = 6356752.3142451793;
+
+Point3 scaled(const Point3& p) {
+  return {p.x / kWgs84A, p.y / kWgs84A, p.z / kWgs84B};
+}
+double dot(const Point3& a, const Point3& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+double norm(const Point3& a) {
+  return std::sqrt(dot(a, a));
+}
+Point3 cross(const Point3& a, const Point3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+}  // namespace
+
+std::string encodeQuantizedMesh(const QuantizedMeshTile& tile) {
+  const std::size_t n = tile.u.size();
+  check(tile.v.size() == n && tile.height.size() == n, "u, v and height differ in length");
+  check(tile.octNormals.empty() || tile.octNormals.size() == n, "one normal a vertex");
+  check(n <= 0xffffffffU, "too many vertices");
+  for (std::size_t i = 0; i < n; ++i)
+    check(
+        tile.u[i] <= kQuantizedMax && tile.v[i] <= kQuantizedMax && tile.height[i] <= kQuantizedMax,
+        "a quantized value above 32767");
+  for (const auto& t : tile.triangles)
+    for (const std::uint32_t i : t) check(i < n, "a triangle index out of range");
+  for (const auto& edge : tile.edges)
+    for (const std::uint32_t i : edge) check(i < n, "an edge index out of range");
+  check(!tile.waterMask || tile.waterMask->size() == 1 || tile.waterMask->size() == 256 * 256,
+        "a water mask of neither 1 nor 65 536 bytes");
+
+  Writer w;
+  putPoint(w, tile.centre);
+  w.put(tile.minHeight);
+  w.put(tile.maxHeight);
+  putPoint(w, tile.sphereCentre);
+  w.put(tile.sphereRadius);
+  putPoint(w, tile.horizonOcclusion);
+
+  w.put(static_cast<std::uint32_t>(n));
+  for (const auto* values : {&tile.u, &tile.v, &tile.height}) {
+    int previous = 0;
+    for (const std::uint16_t value : *values) {
+      w.put(zigZag(static_cast<int>(value) - previous));
+      previous = value;
+    }
+  }
+
+  // CesiumJS reads 32-bit indices past 64 Ki vertices.
+  const bool wide = n > 65536;
+  auto putIndex = [&](std::uint32_t i) {
+    if (wide)
+      w.put(i);
+    else
+      w.put(static_cast<std::uint16_t>(i));
+  };
+  w.pad(wide ? 4 : 2);
+  w.put(static_cast<std::uint32_t>(tile.triangles.size()));
+  // High-water mark: each index as its distance below the highest index met
+  // so far plus one (0 introduces the next new vertex). An index above that
+  // is not encodable: the vertices must come in the order the triangles
+  // first use them.
+  std::uint32_t highest = 0;
+  for (const auto& t : tile.triangles) {
+    for (const std::uint32_t i : t) {
+      check(i <= highest, "vertices not in the order the triangles first use them");
+      putIndex(highest - i);
+      if (i == highest) ++highest;
+    }
+  }
+  for (const auto& edge : tile.edges) {
+    w.put(static_cast<std::uint32_t>(edge.size()));
+    for (const std::uint32_t i : edge) putIndex(i);
+  }
+
+  auto extension = [&](std::uint8_t id, std::string_view data) {
+    w.put(id);
+    w.put(static_cast<std::uint32_t>(data.size()));
+    w.append(data);
+  };
+  if (!tile.octNormals.empty()) {
+    std::string data;
+    for (const auto& o : tile.octNormals)
+      data.append({static_cast<char>(o[0]), static_cast<char>(o[1])});
+    extension(1, data);
+  }
+  if (tile.waterMask)
+    extension(2, std::string_view(reinterpret_cast<const char*>(tile.waterMask->data()),
+                                  tile.waterMask->size()));
+  if (tile.metadata) {
+    Writer m;
+    m.put(static_cast<std::uint32_t>(tile.metadata->size()));
+    m.append(*tile.metadata);
+    extension(4, m.take());
+  }
+  return w.take();
+}
+
+QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile) {
+  const std::size_t n = tile.u.size();
+  constexpr std::uint32_t kUnset = 0xffffffffU;
+  std::vector<std::uint32_t> renumber(n, kUnset), order;
+  order.reserve(n);
+  for (const auto& t : tile.triangles)
+    for (const std::uint32_t i : t)
+      if (i < n && renumber[i] == kUnset) {
+        renumber[i] = static_cast<std::uint32_t>(order.size());
+        order.push_back(i);
+      }
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (renumber[i] == kUnset) {
+      renumber[i] = static_cast<std::uint32_t>(order.size());
+      order.push_back(i);
+    }
+  QuantizedMeshTile out = tile;
+  for (std::size_t k = 0; k < n && k < tile.v.size() && k < tile.height.size(); ++k) {
+    out.u[k] = tile.u[order[k]];
+    out.v[k] = tile.v[order[k]];
+    out.height[k] = tile.height[order[k]];
+    if (tile.octNormals.size() == n) out.octNormals[k] = tile.octNormals[order[k]];
+  }
+  for (auto& t : out.triangles)
+    for (auto& i : t) i = i < n ? renumber[i] : i;
+  for (auto& edge : out.edges)
+    for (auto& i : edge) i = i < n ? renumber[i] : i;
+  return out;
+}
+
+std::array<std::uint8_t, 2> octEncode(const Point3& normal) {
+  const double l1 = std::abs(normal.x) + std::abs(normal.y) + std::abs(normal.z);
+  double x = l1 > 0 ? normal.x / l1 : 0.0, y = l1 > 0 ? normal.y / l1 : 0.0;
+  if (l1 > 0 && normal.z < 0) {
+    const double ox = x;
+    x = (1.0 - std::abs(y)) * (ox >= 0 ? 1.0 : -1.0);
+    y = (1.0 - std::abs(ox)) * (y >= 0 ? 1.0 : -1.0);
+  }
+  auto snorm = [](double value) {
+    return static_cast<std::uint8_t>(
+        std::lround((std::clamp(value, -1.0, 1.0) * 0.5 + 0.5) * 255.0));
+  };
+  return {snorm(x), snorm(y)};
+}
+
+Point3 octDecode(std::array<std::uint8_t, 2> oct) {
+  double x = oct[0] / 255.0 * 2.0 - 1.0, y = oct[1] / 255.0 * 2.0 - 1.0;
+  const double z = 1.0 - (std::abs(x) + std::abs(y));
+  if (z < 0) {
+    const double ox = x;
+    x = (1.0 - std::abs(y)) * (ox >= 0 ? 1.0 : -1.0);
+    y = (1.0 - std::abs(ox)) * (y >= 0 ? 1.0 : -1.0);
+  }
+  const double length = std::sqrt(x * x + y * y + z * z);
+  return {x / length, y / length, z / length};
+}
+
+Point3 horizonOcclusionPoint(std::span<const Point3> ecef, const Point3& direction) {
+  Point3 d = scaled(direction);
+  const double dn = norm(d);
+  if (!(dn > 0)) return {0, 0, 0};
+  d = {d.x / dn, d.y / dn, d.z / dn};
+  double farthest = 0.0;
+  for (const Point3& p : ecef) {
+    const Point3 s = scaled(p);
+    const double m2 = dot(s, s);
+    const double m = std::sqrt(m2);
+    if (!(m > 0)) continue;
+    const Point3 toPoint{s.x / m, s.y / m, s.z / m};
+    // Below the ellipsoid counts as on it.
+    const double magnitude = std::max(1.0, m);
+    const double cosAlpha = dot(toPoint, d);
+    const double sinAlpha = norm(cross(toPoint, d));
+    const double cosBeta = 1.0 / magnitude;
+    const double sinBeta = std::sqrt(std::max(1.0, m2) - 1.0) * cosBeta;
+    const double denominator = cosAlpha * cosBeta - sinAlpha * sinBeta;
+    // No point on the ray sees this one over the horizon (a tile of a
+    // hemisphere): far out, where nothing is culled.
+    if (!(denominator > 0)) return {d.x * 1e6, d.y * 1e6, d.z * 1e6};
+    farthest = std::max(farthest, 1.0 / denominator);
+  }
+  return {d.x * farthest, d.y * farthest, d.z * farthest};
+}
+
+}  // namespace tinsmith::encode

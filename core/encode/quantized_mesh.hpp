@@ -1,0 +1,80 @@
+// Cesium's quantized-mesh-1.0 terrain tiles (github.com/CesiumGS/quantized-mesh):
+// what CesiumJS's CesiumTerrainProvider, Cesium for Unreal/Unity and
+// 3d-tiles-renderer stream as the globe's surface. A tile is little-endian
+// binary, in this order:
+//   - the header (88 bytes): the tile's centre in ECEF, its minimum and
+//     maximum height (float), a bounding sphere, and the horizon occlusion
+//     point in the ellipsoid-scaled frame;
+//   - the vertices: a count and three arrays of u, v (0..32767 west→east,
+//     south→north across the tile's longitude and latitude range) and height
+//     (0..32767 from the minimum to the maximum height), each stored as the
+//     zig-zag encoding of its delta from the previous vertex's;
+//   - the triangles (counter-clockwise), 16-bit indices up to 65 536 vertices
+//     and 32-bit past (padded to their own alignment), high-water-mark encoded;
+//   - the indices of the vertices on the west, south, east and north edges,
+//     plain, of the same width;
+//   - extensions, each an id byte and a 32-bit length: oct-encoded vertex
+//     normals (1), a water mask (2: one byte, or 256 × 256 from the north-west
+//     corner row by row), metadata JSON (4).
+// Encoding is plain serialisation: the caller quantizes (encodeQuantizedMesh
+// checks the ranges), and the header's volumes come from the functions below.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/base/point.hpp"
+
+namespace tinsmith::encode {
+
+/// The largest quantized u, v or height.
+inline constexpr std::uint16_t kQuantizedMax = 32767;
+
+struct QuantizedMeshTile {
+  Point3 centre;  ///< ECEF (m)
+  float minHeight = 0, maxHeight = 0;
+  Point3 sphereCentre;  ///< ECEF (m)
+  double sphereRadius = 0;
+  Point3 horizonOcclusion;  ///< ellipsoid-scaled ECEF
+  std::vector<std::uint16_t> u, v, height;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise
+  /// Vertices on the west, south, east and north edges.
+  std::array<std::vector<std::uint32_t>, 4> edges;
+  /// Per vertex, when not empty: the oct-encoded normal (octEncode).
+  std::vector<std::array<std::uint8_t, 2>> octNormals;
+  /// One byte (0 land, 255 water) or 256 × 256, when set.
+  std::optional<std::vector<std::uint8_t>> waterMask;
+  /// A JSON object (e.g. {"available": …}), when set.
+  std::optional<std::string> metadata;
+};
+
+/// The tile as quantized-mesh-1.0 bytes (not gzipped). Throws internalError
+/// for arrays of different lengths, a value above kQuantizedMax, an index
+/// out of range, vertices not in first-use order (inFirstUseOrder), a water
+/// mask that is neither 1 nor 65 536 bytes.
+std::string encodeQuantizedMesh(const QuantizedMeshTile& tile);
+
+/// The tile with its vertices renumbered in the order its triangles first
+/// use them (what high-water-mark encoding needs), vertices no triangle uses
+/// after those; edges and normals follow their vertices.
+QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile);
+
+/// Oct encoding of a unit vector in two bytes (Cigolle et al. 2014, "A Survey
+/// of Efficient Representations of Independent Unit Vectors", as CesiumJS's
+/// AttributeCompression does it with 8 bits a component), and its decoding.
+std::array<std::uint8_t, 2> octEncode(const Point3& normal);
+Point3 octDecode(std::array<std::uint8_t, 2> oct);
+
+/// The horizon occlusion point of ECEF points (Cesium's
+/// EllipsoidalOccluder.computeHorizonCullingPointFromPoints on WGS84): on the
+/// ray from the Earth's centre through `direction` (the tile's centre), in
+/// the ellipsoid-scaled frame, the nearest point from which every one of the
+/// points is at or above the horizon; points below the ellipsoid count as on
+/// it. If the point is below a viewer's horizon, so is the whole tile.
+Point3 horizonOcclusionPoint(std::span<const Point3> ecef, const Point3& direction);
+
+}  // namespace tinsmith::encode
