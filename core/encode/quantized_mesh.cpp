@@ -148,6 +148,23 @@ std::string encodeQuantizedMesh(const QuantizedMeshTile& tile) {
   return w.take();
 }
 
+void setBoundingVolumes(QuantizedMeshTile& tile, std::span<const Point3> ecef) {
+  if (ecef.empty()) throw internalError("setBoundingVolumes: a tile with no positions");
+  Point3 lo = ecef[0], hi = ecef[0];
+  for (const Point3& p : ecef) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const Point3 centre{0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)};
+  double radius = 0;
+  for (const Point3& p : ecef)
+    radius = std::max(radius, norm({p.x - centre.x, p.y - centre.y, p.z - centre.z}));
+  tile.centre = centre;
+  tile.sphereCentre = centre;
+  tile.sphereRadius = radius;
+  tile.horizonOcclusion = horizonOcclusionPoint(ecef, centre);
+}
+
 QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile) {
   const std::size_t n = tile.u.size();
   constexpr std::uint32_t kUnset = 0xffffffffU;

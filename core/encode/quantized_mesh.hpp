@@ -58,6 +58,12 @@ struct QuantizedMeshTile {
 /// mask that is neither 1 nor 65 536 bytes.
 std::string encodeQuantizedMesh(const QuantizedMeshTile& tile);
 
+/// Sets the header's volumes from the ECEF positions the tile draws: the
+/// centre and the sphere's centre at the middle of their box, the radius to
+/// the farthest, and the horizon occlusion point towards the centre. Throws
+/// internalError for no positions.
+void setBoundingVolumes(QuantizedMeshTile& tile, std::span<const Point3> ecef);
+
 /// The tile with its vertices renumbered in the order its triangles first
 /// use them (what high-water-mark encoding needs), vertices no triangle uses
 /// after those; edges and normals follow their vertices.

@@ -224,5 +224,25 @@ TEST(QuantizedMesh, EveryPointIsOverTheHorizonOfTheOcclusionPointAndNoNearerOneW
   EXPECT_LT(closest, 1.0);
 }
 
+TEST(QuantizedMesh, TheHeadersSphereHoldsEveryPosition) {
+  std::vector<Point3> points;
+  for (int i = 0; i <= 8; ++i)
+    for (int j = 0; j <= 8; ++j)
+      points.push_back(
+          geodeticToEcef({-111.8 + 0.01 * i, 40.78 + 0.01 * j, 1500.0 + 37.0 * i * j}));
+  QuantizedMeshTile tile;
+  setBoundingVolumes(tile, points);
+  for (const Point3& p : points)
+    EXPECT_LE(
+        std::hypot(p.x - tile.sphereCentre.x, p.y - tile.sphereCentre.y, p.z - tile.sphereCentre.z),
+        tile.sphereRadius * (1 + 1e-12));
+  // 0.08° × 0.08° (6.7 km × 8.9 km, 2.4 km of relief): the sphere is of the
+  // tile's size (half its diagonal is 5.6 km), not the Earth's.
+  EXPECT_LT(tile.sphereRadius, 8000.0);
+  EXPECT_GT(tile.sphereRadius, 5500.0);
+  EXPECT_EQ(tile.centre, tile.sphereCentre);
+  EXPECT_THROW(setBoundingVolumes(tile, {}), Error);
+}
+
 }  // namespace
 }  // namespace tinsmith::encode
