@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "core/base/error.hpp"
+#include "core/encode/mesh_buffers.hpp"
 
 namespace tinsmith::encode {
 
@@ -165,7 +166,64 @@ void setBoundingVolumes(QuantizedMeshTile& tile, std::span<const Point3> ecef) {
   tile.horizonOcclusion = horizonOcclusionPoint(ecef, centre);
 }
 
-QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile) {
+QuantizedTerrain quantizeTerrain(const GeodeticMesh& mesh) {
+  const std::size_t n = mesh.vertices.size();
+  if (n == 0) throw internalError("quantizeTerrain: a tile with no vertices");
+  if (!(mesh.east > mesh.west && mesh.north > mesh.south))
+    throw internalError("quantizeTerrain: empty tile bounds");
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (const Geodetic& g : mesh.vertices) {
+    lo = std::min(lo, g.height);
+    hi = std::max(hi, g.height);
+  }
+  // The header's range is float: take the floats around the range, so that
+  // every height lies within it as a client reads it.
+  const auto minHeight = std::nextafter(static_cast<float>(lo), -HUGE_VALF);
+  const auto maxHeight = std::nextafter(static_cast<float>(hi), HUGE_VALF);
+  const double h0 = minHeight, h1 = maxHeight;
+  auto quantize = [](double value, double a, double b) {
+    return static_cast<std::uint16_t>(
+        std::lround(std::clamp((value - a) / (b - a), 0.0, 1.0) * kQuantizedMax));
+  };
+  auto expand = [](std::uint16_t q, double a, double b) { return a + (b - a) * q / kQuantizedMax; };
+  QuantizedMeshTile raw;
+  raw.minHeight = minHeight;
+  raw.maxHeight = maxHeight;
+  raw.triangles = mesh.triangles;
+  QuantizedTerrain out;
+  out.decoded.resize(n);
+  std::vector<Point3> exact(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Geodetic& g = mesh.vertices[i];
+    raw.u.push_back(quantize(g.lon, mesh.west, mesh.east));
+    raw.v.push_back(quantize(g.lat, mesh.south, mesh.north));
+    raw.height.push_back(quantize(g.height, h0, h1));
+    exact[i] = geodeticToEcef(g);
+    out.decoded[i] =
+        geodeticToEcef({expand(raw.u[i], mesh.west, mesh.east),
+                        expand(raw.v[i], mesh.south, mesh.north), expand(raw.height[i], h0, h1)});
+    out.maxMove =
+        std::max(out.maxMove, norm({out.decoded[i].x - exact[i].x, out.decoded[i].y - exact[i].y,
+                                    out.decoded[i].z - exact[i].z}));
+    const auto v = static_cast<std::uint32_t>(i);
+    if (raw.u[i] == 0) raw.edges[0].push_back(v);
+    if (raw.v[i] == 0) raw.edges[1].push_back(v);
+    if (raw.u[i] == kQuantizedMax) raw.edges[2].push_back(v);
+    if (raw.v[i] == kQuantizedMax) raw.edges[3].push_back(v);
+  }
+  const auto normals = areaWeightedNormals(exact, mesh.triangles);
+  for (std::size_t i = 0; i < n; ++i) {
+    // A vertex no triangle uses: the radial direction, about up.
+    const bool none = normals[i].x == 0 && normals[i].y == 0 && normals[i].z == 0;
+    raw.octNormals.push_back(octEncode(none ? exact[i] : normals[i]));
+  }
+  setBoundingVolumes(raw, out.decoded);
+  out.tile = inFirstUseOrder(raw, &out.index);
+  return out;
+}
+
+QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile,
+                                  std::vector<std::uint32_t>* renumbered) {
   const std::size_t n = tile.u.size();
   constexpr std::uint32_t kUnset = 0xffffffffU;
   std::vector<std::uint32_t> renumber(n, kUnset), order;
@@ -192,6 +250,7 @@ QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile) {
     for (auto& i : t) i = i < n ? renumber[i] : i;
   for (auto& edge : out.edges)
     for (auto& i : edge) i = i < n ? renumber[i] : i;
+  if (renumbered) *renumbered = std::move(renumber);
   return out;
 }
 

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "core/base/point.hpp"
+#include "core/encode/frames.hpp"
 
 namespace tinsmith::encode {
 
@@ -64,10 +65,41 @@ std::string encodeQuantizedMesh(const QuantizedMeshTile& tile);
 /// internalError for no positions.
 void setBoundingVolumes(QuantizedMeshTile& tile, std::span<const Point3> ecef);
 
+/// A terrain tile's mesh on the globe, to quantize: positions as longitude,
+/// latitude (degrees) and height above the ellipsoid (m), counter-clockwise
+/// triangles seen from above, and the tile's bounds.
+struct GeodeticMesh {
+  std::vector<Geodetic> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  double west = 0, south = 0, east = 0, north = 0;  ///< degrees
+};
+
+/// A quantized tile and what quantizing did to it.
+struct QuantizedTerrain {
+  QuantizedMeshTile tile;  ///< in first-use order, with normals and volumes
+  /// Per input vertex: its index in `tile`.
+  std::vector<std::uint32_t> index;
+  /// Per input vertex: its ECEF position as a client decodes it (u, v,
+  /// height back to degrees and metres, then to ECEF).
+  std::vector<Point3> decoded;
+  /// The farthest quantization moved a vertex (m, ECEF).
+  double maxMove = 0;
+};
+
+/// Quantizes a mesh to its tile: u, v across the bounds and heights across
+/// their range to 0..32767 (rounded), the vertices on each side (u or v 0 or
+/// 32767 after rounding) in the edge lists, area-weighted normals in ECEF
+/// oct-encoded, the header's volumes from the decoded positions. Vertices
+/// outside the bounds are clamped onto them. Throws internalError for no
+/// vertices or empty bounds.
+QuantizedTerrain quantizeTerrain(const GeodeticMesh& mesh);
+
 /// The tile with its vertices renumbered in the order its triangles first
 /// use them (what high-water-mark encoding needs), vertices no triangle uses
-/// after those; edges and normals follow their vertices.
-QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile);
+/// after those; edges and normals follow their vertices. With `renumbered`,
+/// each old vertex's new index there.
+QuantizedMeshTile inFirstUseOrder(const QuantizedMeshTile& tile,
+                                  std::vector<std::uint32_t>* renumbered = nullptr);
 
 /// Oct encoding of a unit vector in two bytes (Cigolle et al. 2014, "A Survey
 /// of Efficient Representations of Independent Unit Vectors", as CesiumJS's

@@ -244,5 +244,66 @@ TEST(QuantizedMesh, TheHeadersSphereHoldsEveryPosition) {
   EXPECT_THROW(setBoundingVolumes(tile, {}), Error);
 }
 
+TEST(QuantizedMesh, ATerrainTileDecodesWhereItsDecodedPositionsSayAndNoFarther) {
+  // A 0.02° tile near Red Butte, a 21 × 21 grid over it (84 m × 111 m
+  // cells), 1 680–1 720 m: slopes up to about 4°.
+  GeodeticMesh mesh;
+  mesh.west = -111.84;
+  mesh.south = 40.78;
+  mesh.east = -111.82;
+  mesh.north = 40.80;
+  constexpr int k = 21;
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i)
+      mesh.vertices.push_back({mesh.west + 0.001 * i, mesh.south + 0.001 * j,
+                               1700.0 + 20.0 * std::sin(0.3 * i) * std::cos(0.2 * j)});
+  for (std::uint32_t j = 0; j + 1 < k; ++j)
+    for (std::uint32_t i = 0; i + 1 < k; ++i) {
+      const std::uint32_t a = j * k + i;
+      mesh.triangles.push_back({a, a + 1, a + k + 1});
+      mesh.triangles.push_back({a, a + k + 1, a + k});
+    }
+  const QuantizedTerrain q = quantizeTerrain(mesh);
+  const auto d = test::decodeQuantizedMesh(encodeQuantizedMesh(q.tile));
+  ASSERT_TRUE(d.ok);
+  // What a client computes from the bytes alone is `decoded`.
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const std::uint32_t t = q.index[i];
+    const double lon = mesh.west + (mesh.east - mesh.west) * d.u[t] / 32767.0;
+    const double lat = mesh.south + (mesh.north - mesh.south) * d.v[t] / 32767.0;
+    const double h =
+        d.minHeight + (static_cast<double>(d.maxHeight) - d.minHeight) * d.height[t] / 32767.0;
+    const Point3 client = geodeticToEcef({lon, lat, h});
+    EXPECT_NEAR(client.x, q.decoded[i].x, 1e-6);
+    EXPECT_NEAR(client.y, q.decoded[i].y, 1e-6);
+    EXPECT_NEAR(client.z, q.decoded[i].z, 1e-6);
+    const Point3 exact = geodeticToEcef(mesh.vertices[i]);
+    EXPECT_LE(std::hypot(client.x - exact.x, client.y - exact.y, client.z - exact.z),
+              q.maxMove + 1e-9);
+  }
+  // Half a step of 1/32767 of 1.7 km across, 2.2 km north and 40 m up.
+  EXPECT_GT(q.maxMove, 0.0);
+  EXPECT_LT(q.maxMove, 0.5 * std::hypot(1700.0, 2230.0, 40.0) / 32767 * 1.01);
+  // The sides' vertices, and no others, in the edge lists.
+  for (int e = 0; e < 4; ++e) EXPECT_EQ(d.edges[e].size(), static_cast<std::size_t>(k)) << e;
+  for (int s = 0; s < k; ++s) {
+    EXPECT_EQ(d.u[q.index[s * k]], 0);
+    EXPECT_EQ(d.v[q.index[s]], 0);
+  }
+  // Normals: outward and in ECEF — each decodes within 6° of the
+  // ellipsoid's up (8-bit oct encoding adds up to about a degree).
+  ASSERT_EQ(d.extensions.count(1), 1u);
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const std::string& oct = d.extensions.at(1);
+    const std::uint32_t t = q.index[i];
+    const Point3 n = octDecode(
+        {static_cast<std::uint8_t>(oct[2 * t]), static_cast<std::uint8_t>(oct[2 * t + 1])});
+    const double lon = mesh.vertices[i].lon * std::numbers::pi / 180,
+                 lat = mesh.vertices[i].lat * std::numbers::pi / 180;
+    const Point3 up{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+    EXPECT_GT(n.x * up.x + n.y * up.y + n.z * up.z, std::cos(6 * std::numbers::pi / 180)) << i;
+  }
+}
+
 }  // namespace
 }  // namespace tinsmith::encode
