@@ -149,6 +149,84 @@ std::string encodeQuantizedMesh(const QuantizedMeshTile& tile) {
   return w.take();
 }
 
+QuantizedMeshLayout quantizedMeshLayout(std::string_view bytes) {
+  std::size_t at = 0;
+  auto need = [&](std::size_t n) {
+    if (at > bytes.size() || n > bytes.size() - at)
+      throw inputError("a quantized-mesh tile ends early (" + std::to_string(bytes.size()) +
+                       " bytes)");
+  };
+  auto u32 = [&] {
+    need(4);
+    std::uint32_t v = 0;
+    std::memcpy(&v, bytes.data() + at, 4);
+    at += 4;
+    return v;
+  };
+  constexpr std::size_t kHeader = 88;
+  need(kHeader);
+  at = kHeader;
+  const std::uint32_t n = u32();
+  need(std::size_t{6} * n);
+  at += std::size_t{6} * n;
+  const std::size_t width = n > 65536 ? 4 : 2;
+  at = (at + width - 1) / width * width;
+  const std::uint32_t triangles = u32();
+  need(std::size_t{3} * triangles * width);
+  at += std::size_t{3} * triangles * width;
+  for (int e = 0; e < 4; ++e) {
+    const std::uint32_t count = u32();
+    need(std::size_t{count} * width);
+    at += std::size_t{count} * width;
+  }
+  QuantizedMeshLayout layout;
+  layout.extensionsAt = at;
+  while (at < bytes.size()) {
+    need(5);
+    const auto id = static_cast<std::uint8_t>(bytes[at]);
+    ++at;
+    const std::uint32_t length = u32();
+    need(length);
+    layout.extensions.push_back({id, at, length});
+    at += length;
+  }
+  return layout;
+}
+
+std::string withExtensions(std::string_view bytes, std::span<const std::uint8_t> keep) {
+  const QuantizedMeshLayout layout = quantizedMeshLayout(bytes);
+  std::string out(bytes.substr(0, layout.extensionsAt));
+  for (const auto& e : layout.extensions)
+    if (std::find(keep.begin(), keep.end(), e.id) != keep.end())
+      out.append(bytes.substr(e.offset - 5, e.length + 5));
+  return out;
+}
+
+std::optional<std::string> quantizedMeshMetadata(std::string_view bytes) {
+  for (const auto& e : quantizedMeshLayout(bytes).extensions) {
+    if (e.id != kMetadata || e.length < 4) continue;
+    std::uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + e.offset, 4);
+    if (length > e.length - 4) throw inputError("a quantized-mesh tile's metadata runs past its end");
+    return std::string(bytes.substr(e.offset + 4, length));
+  }
+  return std::nullopt;
+}
+
+std::string withMetadata(std::string_view bytes, std::string_view json) {
+  const QuantizedMeshLayout layout = quantizedMeshLayout(bytes);
+  std::string out(bytes.substr(0, layout.extensionsAt));
+  for (const auto& e : layout.extensions)
+    if (e.id != kMetadata) out.append(bytes.substr(e.offset - 5, e.length + 5));
+  Writer w;
+  w.put(kMetadata);
+  w.put(static_cast<std::uint32_t>(json.size() + 4));
+  w.put(static_cast<std::uint32_t>(json.size()));
+  w.append(json);
+  out.append(w.take());
+  return out;
+}
+
 void setBoundingVolumes(QuantizedMeshTile& tile, std::span<const Point3> ecef) {
   if (ecef.empty()) throw internalError("setBoundingVolumes: a tile with no positions");
   Point3 lo = ecef[0], hi = ecef[0];

@@ -25,6 +25,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -58,6 +59,33 @@ struct QuantizedMeshTile {
 /// out of range, vertices not in first-use order (inFirstUseOrder), a water
 /// mask that is neither 1 nor 65 536 bytes.
 std::string encodeQuantizedMesh(const QuantizedMeshTile& tile);
+
+/// Where a tile's extensions are: what a server needs to answer a client that
+/// asks for some of them (Accept: application/vnd.quantized-mesh;extensions=…)
+/// and to read a tile's metadata, without decoding the mesh.
+struct QuantizedMeshExtension {
+  std::uint8_t id = 0;  ///< 1 normals, 2 water mask, 4 metadata
+  std::size_t offset = 0, length = 0;  ///< of the payload, in the tile's bytes
+};
+struct QuantizedMeshLayout {
+  std::size_t extensionsAt = 0;  ///< the end of the edge lists
+  std::vector<QuantizedMeshExtension> extensions;
+};
+inline constexpr std::uint8_t kOctVertexNormals = 1, kWaterMask = 2, kMetadata = 4;
+
+/// The layout of quantized-mesh-1.0 bytes. Throws inputError for bytes that
+/// end early or run past their end.
+QuantizedMeshLayout quantizedMeshLayout(std::string_view bytes);
+
+/// The tile with only the extensions whose ids `keep` holds (in their order
+/// in the tile).
+std::string withExtensions(std::string_view bytes, std::span<const std::uint8_t> keep);
+
+/// The tile's metadata JSON (extension 4), or nullopt when it has none.
+std::optional<std::string> quantizedMeshMetadata(std::string_view bytes);
+
+/// The tile with its metadata JSON replaced (or added, last).
+std::string withMetadata(std::string_view bytes, std::string_view json);
 
 /// Sets the header's volumes from the ECEF positions the tile draws: the
 /// centre and the sphere's centre at the middle of their box, the radius to

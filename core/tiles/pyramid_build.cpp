@@ -36,6 +36,14 @@ void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const T
 
 PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
                             int threads, const PyramidCallbacks& callbacks, int untilZoom) {
+  const TileEncoder encode = [&](const TileSurface& s) {
+    return encodeTile(s, skirtDepth(tiler, s.id, s.error), content);
+  };
+  return buildPyramid(tiler, encode, root, threads, callbacks, untilZoom);
+}
+
+PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const TileId& root,
+                            int threads, const PyramidCallbacks& callbacks, int untilZoom) {
   if (!tiler.geometry().inside(root))
     throw usageError("tile " + root.name() + " is outside the pyramid");
   const unsigned workers = resolveThreads(threads);
@@ -74,7 +82,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
         const std::size_t i = todo[k];
         try {
           const TileSurface s = tiler.buildTile(level[i]);
-          if (!s.empty()) built[i] = encodeTile(s, skirtDepth(tiler, s.id, s.error), content);
+          if (!s.empty()) built[i] = encode(s);
         } catch (...) {
           std::lock_guard lock(failureMutex);
           if (!failure) failure = std::current_exception();

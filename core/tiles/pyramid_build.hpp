@@ -46,4 +46,11 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
                             int threads, const PyramidCallbacks& callbacks,
                             int untilZoom = 1 << 20);
 
+/// How a walk encodes a non-empty tile surface (thread-safe).
+using TileEncoder = std::function<TileContent(const TileSurface&)>;
+/// The walk with another encoding (Cesium terrain: terrain_content.hpp).
+PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const TileId& root,
+                            int threads, const PyramidCallbacks& callbacks,
+                            int untilZoom = 1 << 20);
+
 }  // namespace tinsmith::tiles

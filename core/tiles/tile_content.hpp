@@ -69,7 +69,7 @@ std::optional<TileRecord> recordFromExtras(std::string_view assetExtras);
 std::optional<TileRecord> recordFromGlb(std::string_view glb);
 
 struct TileContent {
-  std::string glb;
+  std::string glb;  ///< the tile's bytes: a .glb (or a .terrain, terrain_content.hpp)
   TileRecord record;
 };
 

@@ -262,7 +262,16 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
     throw inputError("the TIN has no triangles to tile", {}, "build it with tinsmith tin first");
   }
   const Rect extent = boundsOf(tin.vertices);
-  geometry_ = PyramidGeometry({extent.x0, extent.y0}, std::max(extent.width(), extent.height()));
+  geometry_ = options_.fixed ? options_.fixed->geometry
+                             : PyramidGeometry({extent.x0, extent.y0},
+                                               std::max(extent.width(), extent.height()));
+  if (options_.fixed) {
+    const Rect square = geometry_.bounds({});
+    if (!(square.x0 <= extent.x0 && extent.x1 <= square.x1 && square.y0 <= extent.y0 &&
+          extent.y1 <= square.y1) ||
+        options_.fixed->finestZoom < 0 || options_.fixed->finestZoom > 30)
+      throw internalError("Tiler: the fixed pyramid does not hold the TIN");
+  }
   // levelsPerTile d: a tile refined d + 1 levels holds 2·4^(d+1) triangles;
   // keep that within half the budget, for break lines and sides.
   int d = 0;
@@ -283,17 +292,24 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   // triangles within a quarter of the budget each, on average over the
   // square. Zooms below it keep the finest tolerance: they exist only where a
   // tile of the planned finest zoom cannot meet it within levelsPerTile levels.
-  const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
-                           fit::BinaryTriangulation::kMaxGridLevels - 1);
+  const int cap = options_.fixed
+                      ? std::min(options_.fixed->finestZoom + levelsPerTile_,
+                                 fit::BinaryTriangulation::kMaxGridLevels - 1)
+                      : std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
+                                 fit::BinaryTriangulation::kMaxGridLevels - 1);
   auto planning = std::make_unique<fit::MultilevelFit>(
       fit::fitMultilevel(zoomData_, zoomFitOptions(options_, geometry_, options_.tolerance, cap)));
-  const double finestTriangles = static_cast<double>(planning->levels().back().triangles);
-  const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
   int zmax = 0;
-  while (zmax < options_.maxZoom.value_or(20) && finestTriangles > perTile * std::pow(4.0, zmax))
-    ++zmax;
+  if (options_.fixed) {
+    zmax = options_.fixed->finestZoom;
+  } else {
+    const double finestTriangles = static_cast<double>(planning->levels().back().triangles);
+    const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
+    while (zmax < options_.maxZoom.value_or(20) && finestTriangles > perTile * std::pow(4.0, zmax))
+      ++zmax;
+  }
   finestZoom_ = zmax;
-  maxZoom_ = std::min(options_.maxZoom.value_or(finestZoom_ + 6), 30);
+  maxZoom_ = std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
   if (finestZoom_ + levelsPerTile_ == cap) plannedFit_ = std::move(planning);
 }
 

@@ -65,6 +65,17 @@ struct TilerOptions {
   /// samples fill its large triangles.
   double lambdaFactor = 0.01;
   int threads = 0;  ///< for the zoom fits (0 = all cores)
+  /// A fixed pyramid instead of the TIN's bounding square and the planned
+  /// finest zoom: the square, the finest zoom (which meets `tolerance`, each
+  /// zoom above twice the one below) and the zooms every tile with terrain
+  /// refines above. Geographic terrain (terrain_tiling.hpp) tiles the globe's
+  /// grid, whose levels' errors are fixed by the client.
+  struct FixedPyramid {
+    PyramidGeometry geometry{{0, 0}, 1};
+    int finestZoom = 0;
+    int refineBelow = 0;
+  };
+  std::optional<FixedPyramid> fixed;
 };
 
 /// One tile's surface, in the project CRS.
@@ -130,7 +141,8 @@ class Tiler {
   [[nodiscard]] std::size_t dataPointCount() const { return data_.size(); }
   /// Whether a tile with these errors gets children (tileRefines).
   [[nodiscard]] bool refines(const TileId& id, double error, double reachableError) const {
-    return tileRefines(error, reachableError, id.z, options_.tolerance, finestZoom_, maxZoom_);
+    return (options_.fixed && id.z < options_.fixed->refineBelow) ||
+           tileRefines(error, reachableError, id.z, options_.tolerance, finestZoom_, maxZoom_);
   }
 
   /// The tile's surface (empty when the tile holds none of the TIN). Thread-safe.

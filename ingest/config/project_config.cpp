@@ -312,7 +312,7 @@ TilesConfig parseTiles(const Context& ctx, const toml::table& t,
   const std::string tn = "tiles";
   checkKeys(ctx, t, "[tiles]",
             {"tolerance", "max_triangles", "max_zoom", "lambda", "compression", "frame", "geoid",
-             "output"});
+             "scheme", "attribution", "output"});
   // "tiles.KEY = VALUE: PROBLEM", at the key's line.
   auto bad = [&](const std::string& key, const std::string& problem, const std::string& hint) {
     ctx.fail("tiles." + key + " = " + written(*t.get(key)) + ": " + problem, keyLine(t, key), hint);
@@ -359,6 +359,14 @@ TilesConfig parseTiles(const Context& ctx, const toml::table& t,
           "geoid = \"egm96\" when z are EGM96 (≈ mean sea level) heights, \"\" when ellipsoidal");
     tiles.job.geoid = *v;
   }
+  if (const auto v = getString(ctx, t, "scheme", tn)) {
+    const auto sc = parseTileScheme(*v);
+    if (!sc)
+      bad("scheme", "unknown scheme",
+          "scheme = \"3d-tiles\" | \"quantized-mesh\" (Cesium terrain) | \"both\"");
+    tiles.job.scheme = *sc;
+  }
+  if (const auto v = getString(ctx, t, "attribution", tn)) tiles.job.attribution = *v;
   if (const auto v = getString(ctx, t, "output", tn)) {
     if (v->empty())
       bad("output", "is empty", "give the tile store's path: NAME.3dtiles or a directory");

@@ -13,6 +13,7 @@
 #include "ingest/config/project_config.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/proj_georeference.hpp"
+#include "ingest/tiles/terrain_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 namespace tinsmith::ingest {
@@ -34,7 +35,7 @@ static_assert(std::string_view(kBuildKey) == store::kStoreMarkerKey);
 /// What the tiles are a function of (and nothing else: no subtree, no
 /// threads, no time), so shards and resumed runs can be checked against it.
 std::string buildRecord(const TinData& tin, const std::string& tinBytes, const std::string& tinName,
-                        const TileJobOptions& o, const tiles::Tiler& tiler,
+                        const TileJobOptions& o, const tiles::Tiler* tiler,
                         const tiles::ContentOptions& content) {
   nlohmann::ordered_json j;
   j["format"] = "tinsmith-tiles/1";
@@ -45,16 +46,24 @@ std::string buildRecord(const TinData& tin, const std::string& tinBytes, const s
               {"crs", tin.crs}};
   j["options"] = {{"tolerance", o.tiler.tolerance},
                   {"maxTriangles", o.tiler.maxTriangles},
-                  {"maxZoom", tiler.maxZoom()},
+                  {"maxZoom", tiler ? tiler->maxZoom() : 0},
                   {"lambdaFactor", o.tiler.lambdaFactor},
                   {"compression", compressionName(o.compression)},
                   {"frame", contentFrameName(o.frame)},
                   {"geoid", o.geoid}};
-  j["pyramid"] = {{"origin", {tiler.geometry().origin().x, tiler.geometry().origin().y}},
-                  {"size", tiler.geometry().size()},
-                  {"finestZoom", tiler.finestZoom()},
-                  {"levelsPerTile", tiler.levelsPerTile()}};
-  if (o.frame == tiles::ContentFrame::Local) {
+  // Only a job with Cesium terrain says so: a 3D Tiles store's record is
+  // what it was before there were schemes (its --resume and merge hold).
+  if (o.scheme != TileScheme::Tiles3D) {
+    j["options"]["scheme"] = tileSchemeName(o.scheme);
+    j["options"]["attribution"] = o.attribution;
+  }
+  if (tiler) {
+    j["pyramid"] = {{"origin", {tiler->geometry().origin().x, tiler->geometry().origin().y}},
+                    {"size", tiler->geometry().size()},
+                    {"finestZoom", tiler->finestZoom()},
+                    {"levelsPerTile", tiler->levelsPerTile()}};
+  }
+  if (tiler && o.frame == tiles::ContentFrame::Local) {
     const auto& g = content.localOrigin;
     j["pyramid"]["enuOrigin"] = {g.lon, g.lat, g.height};
   }
@@ -78,12 +87,14 @@ std::string shardRecord(const TileJobOptions& o) {
 /// TIN and a shard's record, the tiles in `records` (already in rowMajorLess
 /// order), then the tileset files.
 std::vector<std::string> canonicalKeys(const std::vector<TileRecord>& records,
-                                       std::vector<std::string> tilesetKeys, bool shard = false) {
+                                       std::vector<std::string> tilesetKeys, bool shard = false,
+                                       const std::vector<std::string>& terrainKeys = {}) {
   std::vector<std::string> out{kBuildKey, kTinKey};
   if (shard) out.push_back(kShardKey);
   for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
   std::sort(tilesetKeys.begin(), tilesetKeys.end());
   out.insert(out.end(), tilesetKeys.begin(), tilesetKeys.end());
+  out.insert(out.end(), terrainKeys.begin(), terrainKeys.end());
   return out;
 }
 
@@ -93,6 +104,7 @@ std::string tilesetExtras(const std::string& build) {
   e["tinsmith"] = {{"crs", b["tin"]["crs"]},
                    {"tolerance", b["options"]["tolerance"]},
                    {"finestZoom", b["pyramid"]["finestZoom"]}};
+  if (b["options"].contains("scheme")) e["tinsmith"]["terrain"] = "terrain/layer.json";
   if (b["pyramid"].contains("enuOrigin")) e["tinsmith"]["enuOrigin"] = b["pyramid"]["enuOrigin"];
   return e.dump();
 }
@@ -101,8 +113,9 @@ TileJobSummary summarize(const std::vector<TileRecord>& records, const std::stri
   TileJobSummary s;
   const auto b = nlohmann::json::parse(build, nullptr, false);
   const double tolerance = b.is_discarded() ? 0.0 : b["options"].value("tolerance", 0.0);
-  s.finestZoom = b.is_discarded() ? 0 : b["pyramid"].value("finestZoom", 0);
-  s.levelsPerTile = b.is_discarded() ? 0 : b["pyramid"].value("levelsPerTile", 0);
+  const bool pyramid = !b.is_discarded() && b.contains("pyramid");
+  s.finestZoom = pyramid ? b["pyramid"].value("finestZoom", 0) : 0;
+  s.levelsPerTile = pyramid ? b["pyramid"].value("levelsPerTile", 0) : 0;
   std::map<int, ZoomSummary> zooms;
   for (const auto& r : records) {
     auto& z = zooms[r.id.z];
@@ -210,18 +223,21 @@ void publish(std::unique_ptr<store::TileStore>& stage, const fs::path& stagePath
 /// it as the finished store.
 void finish(std::unique_ptr<store::TileStore>& stage, const fs::path& stagePath,
             const fs::path& output, const std::vector<TileRecord>& records,
-            const std::string& build, int storeUntilZoom = 1 << 20) {
-  tiles::TilesetOptions tileset;
-  tileset.extras = tilesetExtras(build);
+            const std::string& build, int storeUntilZoom = 1 << 20,
+            const std::vector<std::string>& terrainKeys = {}) {
   std::vector<std::string> tilesetKeys;
-  for (const auto& [key, json] : tiles::tilesetFiles(records, tileset)) {
-    stage->put(key, json);
-    tilesetKeys.push_back(key);
+  if (!records.empty()) {  // a job of Cesium terrain alone has no tileset
+    tiles::TilesetOptions tileset;
+    tileset.extras = tilesetExtras(build);
+    for (const auto& [key, json] : tiles::tilesetFiles(records, tileset)) {
+      stage->put(key, json);
+      tilesetKeys.push_back(key);
+    }
   }
   std::vector<TileRecord> stored;
   for (const auto& r : records)
     if (r.id.z < storeUntilZoom) stored.push_back(r);
-  publish(stage, stagePath, output, canonicalKeys(stored, tilesetKeys));
+  publish(stage, stagePath, output, canonicalKeys(stored, tilesetKeys, false, terrainKeys));
 }
 
 /// --resume: a store this run may take tiles from (its staging store or the
@@ -271,6 +287,22 @@ std::string_view contentFrameName(tiles::ContentFrame frame) {
   return frame == tiles::ContentFrame::Ecef ? "ecef" : "local";
 }
 
+std::optional<TileScheme> parseTileScheme(std::string_view name) {
+  if (name == "3d-tiles") return TileScheme::Tiles3D;
+  if (name == "quantized-mesh") return TileScheme::QuantizedMesh;
+  if (name == "both") return TileScheme::Both;
+  return std::nullopt;
+}
+
+std::string_view tileSchemeName(TileScheme scheme) {
+  switch (scheme) {
+    case TileScheme::Tiles3D: return "3d-tiles";
+    case TileScheme::QuantizedMesh: return "quantized-mesh";
+    case TileScheme::Both: return "both";
+  }
+  return "3d-tiles";
+}
+
 void checkTileJobOptions(const TileJobOptions& o) {
   const auto& t = o.tiler;
   if (!(t.tolerance > 0) || !std::isfinite(t.tolerance)) {
@@ -305,6 +337,11 @@ void checkTileJobOptions(const TileJobOptions& o) {
   if (o.storeUntilZoom && (o.subtree || o.untilZoom))
     throw usageError("--store-until-zoom is for a whole pyramid, not a shard",
                      "leave out --subtree and --until-zoom");
+  if (writesTerrain(o.scheme)) (void)tiles::terrainLevelFor(t.tolerance);
+  if (writesTerrain(o.scheme) && (o.subtree || o.untilZoom || o.storeUntilZoom))
+    throw usageError("Cesium terrain (--scheme " + std::string(tileSchemeName(o.scheme)) +
+                         ") is built whole: no --subtree, --until-zoom or --store-until-zoom",
+                     "shard the 3D Tiles with --scheme 3d-tiles");
 }
 
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const fs::path& output,
@@ -317,26 +354,31 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   // east-north-up axes stand at the pyramid's centre); a CRS PROJ cannot use
   // fails here, before the planning.
   const ProjGeoReference geo(tin.crs, options.geoid);
+  const bool tiles3d = writesTiles3D(options.scheme);
   tiles::TilerOptions tilerOptions = options.tiler;
   tilerOptions.threads = options.threads;
-  reportProgress(progress, "tiles.plan", "", 0, 0);
-  const tiles::Tiler tiler(tin, tilerOptions);
-  reportProgress(progress, "tiles.plan", "", 1, 1);
-
+  std::optional<tiles::Tiler> tiler;
   tiles::ContentOptions content;
   content.compression = options.compression;
   content.frame = options.frame;
   content.geo = &geo;
-  const Point2 o = tiler.geometry().origin();
-  const double half = 0.5 * tiler.geometry().size();
-  const Point3 centre{o.x + half, o.y + half, 0.0};
-  geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
-
-  // Everything that can refuse the run is checked before the output is touched.
   const TileId root = options.subtree.value_or(TileId{});
-  tiles::requireInPyramid(tiler, content, root);
+  if (tiles3d) {
+    reportProgress(progress, "tiles.plan", "", 0, 0);
+    tiler.emplace(tin, tilerOptions);
+    reportProgress(progress, "tiles.plan", "", 1, 1);
+    const Point2 o = tiler->geometry().origin();
+    const double half = 0.5 * tiler->geometry().size();
+    const Point3 centre{o.x + half, o.y + half, 0.0};
+    geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
+    // Everything that can refuse the run is checked before the output is touched.
+    tiles::requireInPyramid(*tiler, content, root);
+  }
+  std::optional<tiles::GeographicTin> geographic;  // Cesium terrain's working frame
+  if (writesTerrain(options.scheme)) geographic = tiles::toGeographicTin(tin, geo);
   const std::string tinBytes = encodeTin(tin);
-  const std::string build = buildRecord(tin, tinBytes, tinName, options, tiler, content);
+  const std::string build =
+      buildRecord(tin, tinBytes, tinName, options, tiler ? &*tiler : nullptr, content);
   const std::string shard = shardRecord(options);
   const fs::path out = storePathFor(output);
   const fs::path stagePath = stagingPath(out);
@@ -362,44 +404,51 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     fs::remove(stagePath / kShardKey, ec);
   }
 
-  tiles::PyramidCallbacks callbacks;
-  if (options.resume) {
-    callbacks.existing = [&](const TileId& id) -> std::optional<TileRecord> {
-      const std::string key = tiles::tileContentKey(id);
-      if (const auto bytes = stage->get(key)) return recordOfTile(key, *bytes, stagePath);
-      if (!previous) return std::nullopt;
-      const auto bytes = previous->get(key);
-      if (!bytes) return std::nullopt;
-      TileRecord record = recordOfTile(key, *bytes, out);
-      stage->put(key, *bytes);  // the stage becomes the whole new store
-      return record;
-    };
-  }
-  const int untilZoom = options.untilZoom.value_or(1 << 20);
   const int storeUntilZoom = options.storeUntilZoom.value_or(1 << 20);
-  callbacks.emit = [&](const tiles::TileContent& c) {
-    if (c.record.id.z < storeUntilZoom) stage->put(tiles::tileContentKey(c.record.id), c.glb);
-  };
-  callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
-    reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
-  };
-  const tiles::PyramidSummary walked =
-      tiles::buildPyramid(tiler, content, root, options.threads, callbacks, untilZoom);
+  tiles::PyramidSummary walked;
+  if (tiles3d) {
+    tiles::PyramidCallbacks callbacks;
+    if (options.resume) {
+      callbacks.existing = [&](const TileId& id) -> std::optional<TileRecord> {
+        const std::string key = tiles::tileContentKey(id);
+        if (const auto bytes = stage->get(key)) return recordOfTile(key, *bytes, stagePath);
+        if (!previous) return std::nullopt;
+        const auto bytes = previous->get(key);
+        if (!bytes) return std::nullopt;
+        TileRecord record = recordOfTile(key, *bytes, out);
+        stage->put(key, *bytes);  // the stage becomes the whole new store
+        return record;
+      };
+    }
+    callbacks.emit = [&](const tiles::TileContent& c) {
+      if (c.record.id.z < storeUntilZoom) stage->put(tiles::tileContentKey(c.record.id), c.glb);
+    };
+    callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
+      reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
+    };
+    walked = tiles::buildPyramid(*tiler, content, root, options.threads, callbacks,
+                                 options.untilZoom.value_or(1 << 20));
+  }
+  std::optional<TerrainSummary> terrain;
+  std::vector<std::string> terrainKeys;
+  if (writesTerrain(options.scheme))
+    terrain = tileTerrain(*geographic, options, *stage, previous.get(), terrainKeys, progress);
   previous.reset();
 
   // The walk's records are the stage's tiles: those it built and those a
   // resumed run found.
   const std::vector<TileRecord>& records = walked.records;
   if (shard.empty()) {
-    finish(stage, stagePath, out, records, build, storeUntilZoom);
+    finish(stage, stagePath, out, records, build, storeUntilZoom, terrainKeys);
   } else {
     // A shard: no tileset.json of its own; `tinsmith merge` writes it.
     publish(stage, stagePath, out, canonicalKeys(records, {}, true));
   }
   TileJobSummary summary = summarize(records, build);
+  summary.terrain = std::move(terrain);
   summary.built = walked.built;
   summary.reused = walked.reused;
-  summary.dataPoints = tiler.dataPointCount();
+  summary.dataPoints = tiler ? tiler->dataPointCount() : 0;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

@@ -36,8 +36,15 @@
 
 namespace tinsmith::ingest {
 
+/// What a job writes: 3D Tiles (tileset.json and .glb tiles), Cesium
+/// terrain (quantized-mesh-1.0, terrain_job.hpp), or both in one store.
+enum class TileScheme { Tiles3D, QuantizedMesh, Both };
+
 struct TileJobOptions {
   tiles::TilerOptions tiler;
+  TileScheme scheme = TileScheme::Tiles3D;
+  /// layer.json's attribution (Cesium terrain).
+  std::string attribution;
   encode::Compression compression = encode::Compression::Draco;
   tiles::ContentFrame frame = tiles::ContentFrame::Ecef;
   std::string geoid;                     ///< "" (ellipsoidal) or "egm96"
@@ -58,6 +65,11 @@ std::optional<tiles::ContentFrame> parseContentFrame(std::string_view name);
 bool isKnownGeoid(std::string_view name);
 std::string_view compressionName(encode::Compression compression);
 std::string_view contentFrameName(tiles::ContentFrame frame);
+/// "3d-tiles" | "quantized-mesh" | "both".
+std::optional<TileScheme> parseTileScheme(std::string_view name);
+std::string_view tileSchemeName(TileScheme scheme);
+inline bool writesTiles3D(TileScheme s) { return s != TileScheme::QuantizedMesh; }
+inline bool writesTerrain(TileScheme s) { return s != TileScheme::Tiles3D; }
 
 /// Throws usageError (naming the option and the bad value) unless the
 /// options can make a pyramid: tolerance > 0, max triangles ≥ 64, max zoom in
@@ -88,7 +100,17 @@ struct MissedTile {
   [[nodiscard]] bool outOfReach() const { return reachableError <= tolerance; }
 };
 
+/// Cesium terrain's part of a job: per level (ZoomSummary::z is the grid's
+/// level, its tolerance CesiumJS's error for the level).
+struct TerrainSummary {
+  std::vector<ZoomSummary> levels;
+  std::vector<MissedTile> missed;  ///< tiles over their level's error
+  std::size_t tiles = 0, built = 0, reused = 0, bytes = 0;
+  int finestLevel = 0;
+};
+
 struct TileJobSummary {
+  std::optional<TerrainSummary> terrain;
   std::vector<ZoomSummary> zooms;
   std::vector<MissedTile> missed;  ///< in (z, y, x) order
   std::size_t tiles = 0, built = 0, reused = 0, bytes = 0;

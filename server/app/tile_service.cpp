@@ -1,6 +1,7 @@
 #include "server/app/tile_service.hpp"
 
 #include "core/base/error.hpp"
+#include "core/encode/quantized_mesh.hpp"
 #include "server/app/break_lines.hpp"
 #include "core/tiles/tileset_json.hpp"
 #include "server/app/elevation.hpp"
@@ -276,6 +277,16 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
                : "tilesets/" + route.tile.name() + ".json";
       return serveStored(request, tileset, key, tile ? &route.tile : nullptr);
     }
+    case RouteKind::TerrainLayer:
+    case RouteKind::TerrainTile:
+      if (!tileset->hasTerrain())
+        return notFound("tileset '" + tileset->id() +
+                        "' holds no Cesium terrain (tinsmith tile --scheme both makes it)");
+      if (route.kind == RouteKind::TerrainLayer)
+        return serveStored(request, tileset, "terrain/layer.json", nullptr);
+      if (route.outsidePyramid)
+        return notFound("the tile is outside the geographic grid (2^(z+1) columns, 2^z rows)");
+      return serveTerrainTile(request, tileset, route.tile);
     case RouteKind::Elevation:
     case RouteKind::Profile:
       if (!tileset->hasTin())
@@ -359,6 +370,36 @@ Response TileService::serveStoredContent(const Request& request, const Content& 
                                          bool tile) const {
   return serveContent(request, content, tile ? "model/gltf-binary" : kJson,
                       tile ? kTileCacheControl : kTilesetCacheControl, tile);
+}
+
+Response TileService::serveTerrainTile(const Request& request,
+                                      const std::shared_ptr<const Tileset>& tileset,
+                                      const tiles::TileId& t) {
+  const std::vector<std::uint8_t> extensions = quantizedMeshExtensionsAccepted(request.accept);
+  const std::string key = "terrain/" + std::to_string(t.z) + "/" + std::to_string(t.x) + "/" +
+                          std::to_string(t.y) + ".terrain";
+  std::string cacheKey = std::to_string(tileset->generation()) + '/' + key + '#';
+  for (const std::uint8_t e : extensions) cacheKey += std::to_string(e);
+  auto serve = [&](const Content& content) {
+    Response r = serveContent(request, content, "application/vnd.quantized-mesh",
+                              kTileCacheControl, true);
+    r.addHeader("Vary", "Accept");
+    return r;
+  };
+  if (const auto content = cache_.find(cacheKey)) {
+    metrics_.countCache(true);
+    Response r = serve(*content);
+    r.cacheHit = true;
+    return r;
+  }
+  metrics_.countCache(false);
+  const auto bytes = tileset->store().get(key);
+  if (!bytes)
+    return notFound("tileset '" + tileset->id() + "' has no terrain tile " + t.name() +
+                    " (layer.json lists the tiles it has)");
+  const auto content = makeContent(encode::withExtensions(*bytes, extensions), true, false);
+  cache_.insert(cacheKey, content);
+  return serve(*content);
 }
 
 Response TileService::serveViewer(const Request& request, const std::string& asset, bool page) {

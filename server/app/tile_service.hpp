@@ -104,6 +104,10 @@ class TileService {
                          const tiles::TileId* tile, const std::string& cacheKey);
   /// A tile (`tile`) or tileset file: its content type and Cache-Control.
   Response serveStoredContent(const Request& request, const Content& content, bool tile) const;
+  /// A Cesium terrain tile with the extensions the request's Accept asks
+  /// for (the store holds every one), gzipped when accepted.
+  Response serveTerrainTile(const Request& request, const std::shared_ptr<const Tileset>& tileset,
+                            const tiles::TileId& gridTile);
   Response serveContent(const Request& request, const Content& content, const char* contentType,
                         const char* cacheControl, bool ranges) const;
   Response serveViewer(const Request& request, const std::string& asset, bool page);

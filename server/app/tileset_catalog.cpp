@@ -32,7 +32,8 @@ nlohmann::json parseStoredJson(const store::TileStore& s, const std::string& key
 
 bool isStoreDirectory(const fs::path& p) {
   std::error_code ec;
-  return fs::is_directory(p, ec) && fs::is_regular_file(p / "tileset.json", ec);
+  return fs::is_directory(p, ec) && (fs::is_regular_file(p / "tileset.json", ec) ||
+                                     fs::is_regular_file(p / "terrain/layer.json", ec));
 }
 
 bool isArchive(const fs::path& p) {
@@ -114,7 +115,10 @@ struct FileStamp {
 };
 
 FileStamp stampOf(const fs::path& store) {
-  const fs::path file = isArchive(store) ? store : store / "tileset.json";
+  std::error_code ec;
+  const fs::path file = isArchive(store)                                  ? store
+                        : fs::is_regular_file(store / "tileset.json", ec) ? store / "tileset.json"
+                                                                          : store / "terrain/layer.json";
   struct stat st {};
   if (::stat(file.c_str(), &st) != 0) return {};
   return {st.st_dev, st.st_ino, st.st_size,
@@ -167,8 +171,10 @@ Tileset::Tileset(std::string id, const fs::path& path)
     : id_(std::move(id)), generation_(nextGeneration++), store_(store::openStoreForReading(path)) {
   opened_ = store::fileIdentity(path);
   const auto tileset = parseStoredJson(*store_, "tileset.json");
-  if (!tileset.is_object())
-    throw inputError("has no readable tileset.json", fileLocation(path),
+  hasTerrain_ = parseStoredJson(*store_, "terrain/layer.json").is_object();
+  hasTiles3D_ = tileset.is_object();
+  if (!hasTiles3D_ && !hasTerrain_)
+    throw inputError("has no readable tileset.json or terrain/layer.json", fileLocation(path),
                      "serve a finished store (tinsmith tile writes tileset.json last)");
   const auto build = parseStoredJson(*store_, kBuildKey);
 
@@ -219,10 +225,12 @@ Tileset::Tileset(std::string id, const fs::path& path)
   if (const auto tolerance = number(build, "/options/tolerance")) summary_["tolerance"] = *tolerance;
   hasTin_ = store_->contains(kTinKey);
   summary_["elevation"] = hasTin_;
-  summary_["links"] = {{"tileset", "/tilesets/" + id_ + "/tileset.json"},
-                       {"elevation", "/tilesets/" + id_ + "/elevation"},
-                       {"profile", "/tilesets/" + id_ + "/profile"},
-                       {"lines", "/tilesets/" + id_ + "/lines.geojson"}};
+  auto& links = summary_["links"];
+  if (hasTiles3D_) links["tileset"] = "/tilesets/" + id_ + "/tileset.json";
+  links["elevation"] = "/tilesets/" + id_ + "/elevation";
+  links["profile"] = "/tilesets/" + id_ + "/profile";
+  links["lines"] = "/tilesets/" + id_ + "/lines.geojson";
+  if (hasTerrain_) links["terrain"] = "/tilesets/" + id_ + "/terrain/layer.json";
 }
 
 Tileset::~Tileset() {

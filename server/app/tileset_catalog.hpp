@@ -55,6 +55,10 @@ class Tileset {
 
   /// Whether the store carries its TIN (tinsmith/terrain.tin).
   [[nodiscard]] bool hasTin() const { return hasTin_; }
+  /// Whether the store holds 3D Tiles (tileset.json) and Cesium terrain
+  /// (terrain/layer.json); at least one.
+  [[nodiscard]] bool hasTiles3D() const { return hasTiles3D_; }
+  [[nodiscard]] bool hasTerrain() const { return hasTerrain_; }
   /// The TIN's surface, loaded from tinsmith/terrain.tin on first use
   /// (thread-safe). Throws inputError when the store carries no TIN, ioError
   /// when it cannot be decoded (the store is damaged: a server-side fault).
@@ -91,7 +95,7 @@ class Tileset {
   std::unique_ptr<store::TileStore> store_;
   nlohmann::ordered_json summary_;
   int maxZoom_ = 0;
-  bool hasTin_ = false;
+  bool hasTin_ = false, hasTiles3D_ = false, hasTerrain_ = false;
   std::string crs_;
   mutable std::once_flag surfaceOnce_;
   mutable std::unique_ptr<Surface> surface_;

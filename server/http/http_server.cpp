@@ -360,6 +360,7 @@ class HttpServer::Impl::Connection : public std::enable_shared_from_this<Connect
     request_.ifNoneMatch = field(http::field::if_none_match);
     request_.range = field(http::field::range);
     request_.ifRange = field(http::field::if_range);
+    request_.accept = field(http::field::accept);
     request_.acceptEncoding = field(http::field::accept_encoding);
     request_.origin = field(http::field::origin);
     request_.contentType = field(http::field::content_type);

@@ -19,7 +19,7 @@ namespace tinsmith::server {
 struct Request {
   std::string method;  ///< "GET", "HEAD", … (case-sensitive, RFC 9110 9.1)
   std::string target;
-  std::string ifNoneMatch, range, ifRange, acceptEncoding, origin, contentType;
+  std::string ifNoneMatch, range, ifRange, accept, acceptEncoding, origin, contentType;
   std::string body;
 };
 

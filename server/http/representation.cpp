@@ -1,5 +1,8 @@
 #include "server/http/representation.hpp"
 
+#include <algorithm>
+#include <cctype>
+
 #include <brotli/encode.h>
 #include <zlib.h>
 
@@ -151,6 +154,48 @@ std::string brotliCompress(std::string_view bytes) {
                         " bytes");
   out.resize(size);
   return out;
+}
+
+std::vector<std::uint8_t> quantizedMeshExtensionsAccepted(std::string_view accept) {
+  std::vector<std::uint8_t> ids;
+  const auto trim = [](std::string_view t) {
+    while (!t.empty() && (t.front() == ' ' || t.front() == '\t')) t.remove_prefix(1);
+    while (!t.empty() && (t.back() == ' ' || t.back() == '\t')) t.remove_suffix(1);
+    return t;
+  };
+  const auto lower = [](std::string_view t) {
+    std::string out(t);
+    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+  };
+  while (!accept.empty()) {
+    const std::size_t comma = accept.find(',');
+    std::string_view range = accept.substr(0, comma);
+    accept = comma == std::string_view::npos ? std::string_view{} : accept.substr(comma + 1);
+    std::size_t semi = range.find(';');
+    if (lower(trim(range.substr(0, semi))) != "application/vnd.quantized-mesh") continue;
+    while (semi != std::string_view::npos) {
+      range = range.substr(semi + 1);
+      semi = range.find(';');
+      const std::string_view param = trim(range.substr(0, semi));
+      const std::size_t eq = param.find('=');
+      if (eq == std::string_view::npos || lower(trim(param.substr(0, eq))) != "extensions") continue;
+      std::string_view names = trim(param.substr(eq + 1));
+      if (names.size() >= 2 && names.front() == '"' && names.back() == '"')
+        names = names.substr(1, names.size() - 2);
+      while (!names.empty()) {
+        const std::size_t dash = names.find('-');
+        const std::string name = lower(names.substr(0, dash));
+        names = dash == std::string_view::npos ? std::string_view{} : names.substr(dash + 1);
+        if (name == "octvertexnormals") ids.push_back(1);
+        if (name == "watermask") ids.push_back(2);
+        if (name == "metadata") ids.push_back(4);
+      }
+    }
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
 }
 
 }  // namespace tinsmith::server

@@ -7,6 +7,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
+#include <cstdint>
 
 namespace tinsmith::server {
 
@@ -39,6 +41,12 @@ bool acceptsBrotli(std::string_view acceptEncoding);  ///< "br"
 /// `bytes` compressed as gzip (RFC 1952) at zlib's default level. Throws
 /// internalError when zlib fails.
 std::string gzipCompress(std::string_view bytes);
+
+/// The quantized-mesh extensions an Accept header asks for (CesiumJS:
+/// "application/vnd.quantized-mesh;extensions=octvertexnormals-watermask-metadata"):
+/// their ids (1 octvertexnormals, 2 watermask, 4 metadata), ascending, each
+/// once; none without that media type. Unknown names are ignored.
+std::vector<std::uint8_t> quantizedMeshExtensionsAccepted(std::string_view accept);
 
 /// `bytes` compressed as brotli (RFC 7932), quality 5. Throws internalError
 /// when the encoder fails.

@@ -9,7 +9,8 @@ namespace {
 std::variant<Route, RouteError> parseTileSegments(Route route, const std::string& zText,
                                                   const std::string& xText,
                                                   const std::string& yFile,
-                                                  std::string_view suffix) {
+                                                  std::string_view suffix,
+                                                  bool geographic = false) {
   if (!yFile.ends_with(suffix)) return RouteError{"y", "the name must end in " + std::string(suffix)};
   const std::string_view yText = std::string_view(yFile).substr(0, yFile.size() - suffix.size());
   constexpr unsigned long long kMax = 0xffffffffULL;
@@ -19,7 +20,9 @@ std::variant<Route, RouteError> parseTileSegments(Route route, const std::string
   if (!x) return RouteError{"x", "x must be a non-negative integer below 2^32"};
   const auto y = parseBoundedUnsigned(yText, kMax);
   if (!y) return RouteError{"y", "y must be a non-negative integer below 2^32"};
-  if (*z > static_cast<unsigned long long>(kMaxZoom) || *x >> *z != 0 || *y >> *z != 0) {
+  // The geographic grid has twice the columns (two tiles at level 0).
+  if (*z > static_cast<unsigned long long>(kMaxZoom) || *x >> (*z + (geographic ? 1 : 0)) != 0 ||
+      *y >> *z != 0) {
     route.outsidePyramid = true;
     return route;
   }
@@ -38,6 +41,8 @@ std::string_view routeName(RouteKind kind) {
     case RouteKind::TilesetJson: return "tileset_json";
     case RouteKind::ExternalTileset: return "external_tileset";
     case RouteKind::Tile: return "tile";
+    case RouteKind::TerrainLayer: return "terrain_layer";
+    case RouteKind::TerrainTile: return "terrain_tile";
     case RouteKind::Elevation: return "elevation";
     case RouteKind::Profile: return "profile";
     case RouteKind::Lines: return "lines";
@@ -90,6 +95,14 @@ std::variant<Route, RouteError> matchRoute(const RequestTarget& target) {
     if (s[2] == "profile") route.kind = RouteKind::Profile;
     if (s[2] == "lines.geojson") route.kind = RouteKind::Lines;
     return route;
+  }
+  if (s.size() == 4 && s[2] == "terrain" && s[3] == "layer.json") {
+    route.kind = RouteKind::TerrainLayer;
+    return route;
+  }
+  if (s.size() == 6 && s[2] == "terrain") {
+    route.kind = RouteKind::TerrainTile;
+    return parseTileSegments(std::move(route), s[3], s[4], s[5], ".terrain", true);
   }
   if (s.size() == 6 && (s[2] == "tiles" || s[2] == "tilesets")) {
     const bool tile = s[2] == "tiles";

@@ -8,6 +8,8 @@
 //   /tilesets/{id}/tileset.json               TilesetJson
 //   /tilesets/{id}/tilesets/{z}/{x}/{y}.json  ExternalTileset
 //   /tilesets/{id}/tiles/{z}/{x}/{y}.glb      Tile
+//   /tilesets/{id}/terrain/layer.json         TerrainLayer (Cesium terrain)
+//   /tilesets/{id}/terrain/{z}/{x}/{y}.terrain  TerrainTile (TMS: 2^(z+1) columns)
 //   /tilesets/{id}/elevation                  Elevation
 //   /tilesets/{id}/profile                    Profile
 //   /tilesets/{id}/lines.geojson              Lines
@@ -32,6 +34,8 @@ enum class RouteKind {
   TilesetJson,
   ExternalTileset,
   Tile,
+  TerrainLayer,
+  TerrainTile,
   Elevation,
   Profile,
   Lines,
@@ -54,7 +58,7 @@ inline constexpr int kMaxZoom = 30;
 struct Route {
   RouteKind kind = RouteKind::Unknown;
   std::string tileset;  ///< the id, for the per-tileset routes
-  tiles::TileId tile;   ///< Tile and ExternalTileset
+  tiles::TileId tile;   ///< Tile, ExternalTileset and TerrainTile (a grid tile)
   /// z/x/y are integers but name no tile (z > kMaxZoom, x or y ≥ 2^z): a 404.
   bool outsidePyramid = false;
   /// ViewerAsset: the decoded segments joined by '/' ("viewer/lib/…"), a

@@ -30,6 +30,11 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig) {
                  "ecef (3D Tiles on the globe) or local (ENU metres)" + dflt("frame", "ecef"));
   cmd.add_option("--geoid", flags.geoid,
                  "egm96: the TIN's z are EGM96 heights; \"\": ellipsoidal" + dflt("geoid", "\"\""));
+  cmd.add_option("--scheme", flags.scheme,
+                 "3d-tiles (tileset.json), quantized-mesh (Cesium terrain: terrain/layer.json) or "
+                 "both in one store" + dflt("scheme", "3d-tiles"));
+  cmd.add_option("--attribution", flags.attribution,
+                 "Cesium terrain's credit line (layer.json)" + dflt("attribution", "\"Terrain: tinsmith\""));
   addThreadsOption(cmd, flags.threads, "Worker threads", "the same bytes for any count");
   cmd.add_flag("--resume", flags.resume,
                "Keep tiles already in the store (finished, or its .partial stage from a stopped run) "
@@ -58,6 +63,14 @@ ingest::TileJobOptions withTileFlags(ingest::TileJobOptions o, const TileFlags& 
     o.frame = *f;
   }
   if (flags.geoid) o.geoid = *flags.geoid;
+  if (flags.scheme) {
+    const auto sc = ingest::parseTileScheme(*flags.scheme);
+    if (!sc)
+      throw usageError("--scheme must be 3d-tiles, quantized-mesh or both (got '" + *flags.scheme +
+                       "')");
+    o.scheme = *sc;
+  }
+  if (flags.attribution) o.attribution = *flags.attribution;
   o.threads = flags.threads;
   o.resume = flags.resume;
   ingest::checkTileJobOptions(o);
@@ -75,7 +88,8 @@ void reportTileJob(const ingest::TileJobSummary& summary, const std::string& out
 }
 
 void requireWithinTolerance(const ingest::TileJobSummary& summary, const TileFlags& flags) {
-  if (flags.strict && !summary.missed.empty()) throw CheckFailed{};
+  if (flags.strict && (!summary.missed.empty() || (summary.terrain && !summary.terrain->missed.empty())))
+    throw CheckFailed{};
 }
 
 }  // namespace tinsmith::cli

@@ -18,7 +18,7 @@ struct TileFlags {
   std::optional<std::size_t> maxTriangles;
   std::optional<int> maxZoom;
   std::optional<double> lambda;
-  std::optional<std::string> compression, frame, geoid;
+  std::optional<std::string> compression, frame, geoid, scheme, attribution;
   int threads = 0;
   bool resume = false;
   bool strict = false;

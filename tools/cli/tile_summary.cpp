@@ -12,6 +12,19 @@ std::string format(const char* fmt, auto... args) {
   std::snprintf(buf, sizeof buf, fmt, args...);
   return buf;
 }
+std::string terrainText(const ingest::TerrainSummary& t) {
+  std::string out =
+      format("  Cesium terrain: %zu tiles in %zu levels, %.2f MB (finest level %d), built %zu, kept %zu\n",
+             t.tiles, t.levels.size(), static_cast<double>(t.bytes) / 1e6, t.finestLevel, t.built,
+             t.reused);
+  out += "  level  Cesium error m  tiles  triangles  bytes/tile  max error m  over\n";
+  for (const auto& z : t.levels) {
+    out += format("  %5d  %14.3f  %5zu  %9zu  %10.0f  %11.3f  %4zu\n", z.z, z.tolerance, z.tiles,
+                  z.triangles, static_cast<double>(z.bytes) / static_cast<double>(z.tiles),
+                  z.maxError, z.overTolerance);
+  }
+  return out;
+}
 }  // namespace
 
 std::string tileSummaryText(const ingest::TileJobSummary& s) {
@@ -32,11 +45,19 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
                z.triangles ? static_cast<double>(z.bytes) / static_cast<double>(z.triangles) : 0.0,
                z.maxError, z.breakLineVertices);
   }
+  if (s.terrain) out += terrainText(*s.terrain);
   return out;
 }
 
 std::string missedToleranceText(const ingest::TileJobSummary& s) {
-  if (s.missed.empty()) return {};
+  std::string terrain;
+  if (s.terrain && !s.terrain->missed.empty()) {
+    const auto& m = s.terrain->missed;
+    terrain = format("WARNING: %zu Cesium terrain tiles are over their level's error; the first: "
+                     "%s %.3f m against %.3f m (CesiumJS picks them for their level's error)\n",
+                     m.size(), m[0].id.name().c_str(), m[0].error, m[0].tolerance);
+  }
+  if (s.missed.empty()) return terrain;
   std::vector<ingest::MissedTile> worst = s.missed;
   std::stable_sort(worst.begin(), worst.end(), [](const auto& a, const auto& b) {
     return a.error / a.tolerance > b.error / b.tolerance;
@@ -61,7 +82,7 @@ std::string missedToleranceText(const ingest::TileJobSummary& s) {
         "on they get no children for it\n",
         unreachable);
   }
-  return out;
+  return out + terrain;
 }
 
 nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
@@ -97,6 +118,32 @@ nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
                       {"outOfReach", m.outOfReach()}});
   j["withinTolerance"] = s.missed.empty();
   j["overTolerance"] = missed;
+  if (s.terrain) {
+    const auto& t = *s.terrain;
+    nlohmann::ordered_json tj;
+    tj["tiles"] = t.tiles;
+    tj["bytes"] = t.bytes;
+    tj["built"] = t.built;
+    tj["kept"] = t.reused;
+    tj["finestLevel"] = t.finestLevel;
+    auto levels = nlohmann::ordered_json::array();
+    for (const auto& z : t.levels)
+      levels.push_back({{"level", z.z},
+                        {"cesiumError", z.tolerance},
+                        {"tiles", z.tiles},
+                        {"triangles", z.triangles},
+                        {"vertices", z.vertices},
+                        {"bytes", z.bytes},
+                        {"maxError", z.maxError},
+                        {"overError", z.overTolerance}});
+    tj["levels"] = levels;
+    auto over = nlohmann::ordered_json::array();
+    for (const auto& m : t.missed)
+      over.push_back({{"tile", m.id.name()}, {"error", m.error}, {"cesiumError", m.tolerance}});
+    tj["withinLevelErrors"] = t.missed.empty();
+    tj["overError"] = over;
+    j["terrain"] = tj;
+  }
   return j;
 }
 

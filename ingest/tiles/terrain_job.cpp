@@ -1,0 +1,229 @@
+#include "ingest/tiles/terrain_job.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "core/encode/quantized_mesh.hpp"
+#include "core/tiles/geographic_grid.hpp"
+#include "core/tiles/pyramid_build.hpp"
+#include "core/tiles/terrain_content.hpp"
+#include "core/tiles/terrain_tiling.hpp"
+
+namespace tinsmith::ingest {
+
+namespace fs = std::filesystem;
+using tiles::TileId;
+using tiles::TileRecord;
+
+namespace {
+
+/// Levels a tile's metadata tells the availability of (0, 10, 20 … carry it).
+constexpr int kMetadataLevels = 10;
+
+nlohmann::ordered_json layerJson(const std::vector<TileId>& gridTiles, int levels,
+                                 const tiles::GeoRect& bounds, const std::string& attribution) {
+  nlohmann::ordered_json j;
+  j["tilejson"] = "2.1.0";
+  j["name"] = "tinsmith terrain";
+  j["description"] = "quantized-mesh terrain built by tinsmith from a constrained TIN";
+  j["version"] = "1.0.0";
+  j["format"] = "quantized-mesh-1.0";
+  j["attribution"] = attribution;
+  j["scheme"] = "tms";
+  j["tiles"] = {"{z}/{x}/{y}.terrain"};
+  j["projection"] = "EPSG:4326";
+  j["bounds"] = {bounds.west, bounds.south, bounds.east, bounds.north};
+  j["minzoom"] = 0;
+  j["maxzoom"] = levels - 1;
+  j["extensions"] = {"octvertexnormals", "watermask", "metadata"};
+  j["available"] = availableRanges(gridTiles, levels);
+  return j;
+}
+
+}  // namespace
+
+std::string terrainTileKey(const TileId& t) {
+  return "terrain/" + std::to_string(t.z) + "/" + std::to_string(t.x) + "/" + std::to_string(t.y) +
+         ".terrain";
+}
+
+nlohmann::ordered_json availableRanges(std::vector<TileId> tiles, int levels) {
+  std::sort(tiles.begin(), tiles.end(), tiles::rowMajorLess);
+  auto out = nlohmann::ordered_json::array();
+  for (int level = 0; level < levels; ++level) {
+    // Runs of columns per row, then runs of equal rows.
+    struct Range {
+      std::uint32_t startX, endX, startY, endY;
+    };
+    std::vector<Range> rows;
+    for (const auto& t : tiles) {
+      if (t.z != level) continue;
+      if (!rows.empty() && rows.back().startY == t.y && rows.back().endX + 1 == t.x) {
+        rows.back().endX = t.x;
+      } else {
+        rows.push_back({t.x, t.x, t.y, t.y});
+      }
+    }
+    std::vector<Range> joined;
+    for (const Range& r : rows) {
+      auto above = std::find_if(joined.begin(), joined.end(), [&](const Range& j) {
+        return j.startX == r.startX && j.endX == r.endX && j.endY + 1 == r.startY;
+      });
+      if (above != joined.end()) {
+        above->endY = r.endY;
+      } else {
+        joined.push_back(r);
+      }
+    }
+    auto ranges = nlohmann::ordered_json::array();
+    for (const Range& r : joined)
+      ranges.push_back(
+          {{"startX", r.startX}, {"startY", r.startY}, {"endX", r.endX}, {"endY", r.endY}});
+    out.push_back(ranges);
+  }
+  return out;
+}
+
+TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
+                           const TileJobOptions& options, store::TileStore& stage,
+                           const store::TileStore* previous, std::vector<std::string>& keys,
+                           const Progress* progress) {
+  reportProgress(progress, "terrain.plan", "", 0, 0);
+  const int finestLevel = tiles::terrainLevelFor(options.tiler.tolerance);
+  tiles::TilerOptions tilerOptions = options.tiler;
+  tilerOptions.maxZoom.reset();  // the 3D Tiles' zooms are not the grid's levels
+  tilerOptions.threads = options.threads;
+  tilerOptions = tiles::terrainTilerOptions(tilerOptions, frame.west, finestLevel);
+  const tiles::Tiler tiler(frame.tin, tilerOptions);
+  reportProgress(progress, "terrain.plan", "", 1, 1);
+
+  std::vector<tiles::TerrainLine> lakes;
+  for (auto& line : tiles::extractTerrainLines(frame.tin))
+    if (line.kind == FeatureKind::Lake && line.closed) lakes.push_back(std::move(line));
+  const tiles::TerrainTileOptions content{frame.west, &lakes};
+  const auto gridTile = [&](const TileId& id) { return *tiles::geographicTileOf(id, frame.west); };
+  const tiles::TileEncoder encode = [&](const tiles::TileSurface& s) {
+    if (s.id.z == 0) return tiles::TileContent{{}, TileRecord{.id = s.id}};  // the frame's root
+    return tiles::encodeTerrainTile(s, s.id, tiler.geometry(), content);
+  };
+
+  tiles::PyramidCallbacks callbacks;
+  if (options.resume) {
+    callbacks.existing = [&](const TileId& id) -> std::optional<TileRecord> {
+      if (id.z == 0) return std::nullopt;
+      const std::string key = terrainTileKey(gridTile(id));
+      auto bytes = stage.get(key);
+      if (!bytes && previous) {
+        bytes = previous->get(key);
+        if (bytes) stage.put(key, *bytes);
+      }
+      if (!bytes) return std::nullopt;
+      auto record = tiles::recordFromTerrainTile(*bytes);
+      if (record && record->id == id) record->bytes = bytes->size();
+      return record && record->id == id ? record : std::nullopt;
+    };
+  }
+  callbacks.emit = [&](const tiles::TileContent& c) {
+    if (c.record.id.z > 0) stage.put(terrainTileKey(gridTile(c.record.id)), c.glb);
+  };
+  callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
+    if (z > 0)
+      reportProgress(progress, "terrain.level", "level " + std::to_string(z - 1), done, total);
+  };
+  const tiles::PyramidSummary walked =
+      tiles::buildPyramid(tiler, encode, TileId{}, options.threads, callbacks);
+
+  TerrainSummary summary;
+  summary.finestLevel = finestLevel;
+  summary.built = walked.built;
+  summary.reused = walked.reused;
+  std::vector<TileRecord> records;
+  for (const auto& r : walked.records)
+    if (r.id.z > 0) records.push_back(r);
+  // Both level-0 tiles, whether the TIN reaches them or not.
+  for (std::uint32_t x = 0; x < 2; ++x) {
+    const TileId id{1, x, 0};
+    if (std::any_of(records.begin(), records.end(), [&](const auto& r) { return r.id == id; }))
+      continue;
+    tiles::TileSurface none;
+    none.id = id;
+    tiles::TileContent c = tiles::encodeTerrainTile(none, id, tiler.geometry(), content);
+    stage.put(terrainTileKey(gridTile(id)), c.glb);
+    records.push_back(c.record);
+    ++summary.built;
+  }
+  std::sort(records.begin(), records.end(),
+            [&](const TileRecord& a, const TileRecord& b) {
+              return tiles::rowMajorLess(gridTile(a.id), gridTile(b.id));
+            });
+
+  // Availability in the metadata of levels 0, 10, 20: the tiles of the next
+  // ten levels under each.
+  std::vector<TileId> grid;
+  for (const auto& r : records) grid.push_back(gridTile(r.id));
+  for (const TileId& top : grid) {
+    if (top.z % kMetadataLevels != 0) continue;
+    std::vector<TileId> below;
+    for (const TileId& t : grid) {
+      const int dz = t.z - top.z;
+      if (dz >= 1 && dz <= kMetadataLevels && (t.x >> dz) == top.x && (t.y >> dz) == top.y)
+        below.push_back({dz - 1, t.x, t.y});
+    }
+    const std::string key = terrainTileKey(top);
+    const std::string bytes = *stage.get(key);
+    auto metadata = nlohmann::ordered_json::parse(encode::quantizedMeshMetadata(bytes).value());
+    metadata["available"] = availableRanges(below, kMetadataLevels);
+    // Trailing levels with nothing are left out.
+    auto& available = metadata["available"];
+    while (!available.empty() && available.back().empty()) available.erase(available.size() - 1);
+    if (available.empty()) metadata.erase("available");
+    stage.put(key, encode::withMetadata(bytes, metadata.dump()));
+  }
+
+  // The summary and layer.json, from the records.
+  std::map<int, ZoomSummary> levels;
+  tiles::GeoRect bounds{180, 90, -180, -90};
+  const tiles::Rect extent = tiles::boundsOf(frame.tin.vertices);
+  for (const auto& [x, y] : {std::pair{extent.x0, extent.y0}, std::pair{extent.x1, extent.y1}}) {
+    double lon = x / tiles::kMetresPerDegree;
+    if (lon > 180) lon -= 360;
+    bounds.west = std::min(bounds.west, lon);
+    bounds.east = std::max(bounds.east, lon);
+    bounds.south = std::min(bounds.south, y / tiles::kMetresPerDegree);
+    bounds.north = std::max(bounds.north, y / tiles::kMetresPerDegree);
+  }
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const TileRecord& r = records[i];
+    const std::string key = terrainTileKey(grid[i]);
+    const std::size_t bytes = stage.get(key)->size();
+    auto& z = levels[grid[i].z];
+    z.z = grid[i].z;
+    z.tolerance = tiles::cesiumLevelMaximumGeometricError(grid[i].z);
+    ++z.tiles;
+    z.triangles += r.triangles;
+    z.vertices += r.vertices;
+    z.bytes += bytes;
+    z.breakLineVertices += r.breakLineVertices;
+    z.maxError = std::max(z.maxError, r.error);
+    if (r.error > z.tolerance) {
+      ++z.overTolerance;
+      summary.missed.push_back({grid[i], r.error, z.tolerance, r.reachableError});
+    }
+    summary.bytes += bytes;
+    keys.push_back(key);
+  }
+  for (auto& [z, s] : levels) summary.levels.push_back(s);
+  summary.tiles = records.size();
+  const std::string attribution =
+      options.attribution.empty() ? "Terrain: tinsmith" : options.attribution;
+  const int deepest = grid.empty() ? 0 : std::max_element(grid.begin(), grid.end(), [](const auto& a, const auto& b) { return a.z < b.z; })->z;
+  const std::string layer = layerJson(grid, deepest + 1, bounds, attribution).dump(2) + "\n";
+  stage.put(kTerrainLayerKey, layer);
+  summary.bytes += layer.size();
+  keys.push_back(kTerrainLayerKey);
+  return summary;
+}
+
+}  // namespace tinsmith::ingest
