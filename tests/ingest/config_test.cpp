@@ -273,7 +273,7 @@ TEST(Config, BadTilesKeysNameTheFileLineKeyAndValue) {
       {"frame = \"enu\"", "tiles.frame = \"enu\": unknown frame", "\"local\""},
       {"geoid = \"egm2008\"", "tiles.geoid = \"egm2008\": unknown geoid", "egm96"},
       {"output = \"\"", "tiles.output = \"\": is empty", ".3dtiles"},
-      {"threads = 2", "unknown key 'threads' in [tiles]", "allowed keys: compression, frame"},
+      {"threads = 2", "unknown key 'threads' in [tiles]", "allowed keys: attribution, compression, frame"},
   };
   for (const auto& c : cases) {
     const auto e =
