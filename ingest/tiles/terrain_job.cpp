@@ -137,7 +137,10 @@ TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
 
   TerrainSummary summary;
   summary.finestLevel = finestLevel;
-  summary.built = walked.built;
+  // The frame's root (no tile of the grid) is walked, never stored.
+  const bool rootWalked = std::any_of(walked.records.begin(), walked.records.end(),
+                                      [](const TileRecord& r) { return r.id.z == 0; });
+  summary.built = walked.built - (rootWalked ? 1 : 0);
   summary.reused = walked.reused;
   std::vector<TileRecord> records;
   for (const auto& r : walked.records)
@@ -184,16 +187,15 @@ TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
 
   // The summary and layer.json, from the records.
   std::map<int, ZoomSummary> levels;
-  tiles::GeoRect bounds{180, 90, -180, -90};
+  // The TIN's extent as layer.json's bounds; across the antimeridian west >
+  // east (the frame's x run on past 180°), as TileJSON reads them.
   const tiles::Rect extent = tiles::boundsOf(frame.tin.vertices);
-  for (const auto& [x, y] : {std::pair{extent.x0, extent.y0}, std::pair{extent.x1, extent.y1}}) {
-    double lon = x / tiles::kMetresPerDegree;
-    if (lon > 180) lon -= 360;
-    bounds.west = std::min(bounds.west, lon);
-    bounds.east = std::max(bounds.east, lon);
-    bounds.south = std::min(bounds.south, y / tiles::kMetresPerDegree);
-    bounds.north = std::max(bounds.north, y / tiles::kMetresPerDegree);
-  }
+  const auto longitude = [](double x) {
+    const double lon = x / tiles::kMetresPerDegree;
+    return lon > 180 ? lon - 360 : lon;
+  };
+  const tiles::GeoRect bounds{longitude(extent.x0), extent.y0 / tiles::kMetresPerDegree,
+                              longitude(extent.x1), extent.y1 / tiles::kMetresPerDegree};
   for (std::size_t i = 0; i < records.size(); ++i) {
     const TileRecord& r = records[i];
     const std::string key = terrainTileKey(grid[i]);

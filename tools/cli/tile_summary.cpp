@@ -28,7 +28,13 @@ std::string terrainText(const ingest::TerrainSummary& t) {
 }  // namespace
 
 std::string tileSummaryText(const ingest::TileJobSummary& s) {
-  std::string out = format(
+  std::string out;
+  // Cesium terrain alone (--scheme quantized-mesh) has no 3D Tiles to tell of.
+  if (s.zooms.empty() && s.terrain) {
+    out += format("  %.1f s\n", s.seconds);
+    return out + terrainText(*s.terrain);
+  }
+  out += format(
       "  tiles: %zu in %zu zooms, %.2f MB (finest planned zoom %d, %d binary levels a tile)\n",
       s.tiles, s.zooms.size(), static_cast<double>(s.bytes) / 1e6, s.finestZoom,
       s.levelsPerTile + 1);

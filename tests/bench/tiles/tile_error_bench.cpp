@@ -22,6 +22,39 @@
 //     the triangles wholly inside the TIN, and the largest difference at a
 //     TIN vertex (a DEM cell). JSON lines.
 //
+//
+// Cesium terrain (terrain_vs_martini.sh), on the geographic working frame of
+// core/tiles/terrain_tiling.hpp (x = lon·k, y = lat·k, k = kMetresPerDegree,
+// z the ellipsoidal height; the geographic TIN is toGeographicTin of SITE.tin
+// with the TIN's CRS and no geoid, as `tinsmith tile --scheme quantized-mesh`
+// without --geoid builds it):
+//
+//   tile_error_bench terrain-store STORE
+//     Per level, the quantized-mesh tiles terrain/z/x/y.terrain of STORE (a
+//     .3dtiles archive or a directory): tiles, bytes, gzip -6 bytes, bytes of
+//     the metadata extension (5 + its length), vertices, triangles, and the
+//     max of the records' errors when the tiles carry one. JSON lines.
+//   tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids
+//     For every terrain tile of STORE, the geographic TIN sampled at the
+//     nodes of a (2^k + 1)² longitude/latitude grid over the tile's rectangle
+//     (geographicTileBounds), 2^k the least power of two whose spacing in the
+//     working frame is at most SPACING, capped at MAXCELLS cells. Nodes
+//     outside the TIN as for `grids` (the TIN's z at the nearest boundary
+//     point), except in a tile whose rectangle misses the TIN's bounding box:
+//     there 0, the ellipsoid. Format: per tile int32 level, x, y, n; float64
+//     west, south, east, north (degrees); n·n float64 heights; n·n uint8
+//     inside-flags; rows south to north.
+//   tile_error_bench terrain-error SITE.tin STORE [THREADS [TILES.jsonl]]
+//     Decodes every terrain/z/x/y.terrain of STORE as a client does (u, v
+//     across the grid's rectangle of the tile, heights across the header's
+//     range) into the working frame and measures it against the geographic
+//     TIN with tiles::triangleDifferences. A triangle with a corner at height
+//     exactly 0 is fill (the ellipsoid outside the TIN and the walls down to
+//     it, as tinsmith's terrain_fill.hpp makes them): not counted in the
+//     error, its largest difference over the TIN reported apart. Per level:
+//     max error, where, the largest at a TIN vertex. JSON lines; with
+//     TILES.jsonl, one line per tile there too.
+//
 // The pyramid's square is computed as the tiler computes it
 // (core/tiles/tiler.cpp): origin the TIN's min corner, size the larger side.
 //
@@ -47,10 +80,17 @@
 #include <unordered_set>
 #include <vector>
 
+#include <zlib.h>
+
+#include "core/encode/quantized_mesh.hpp"
+#include "core/tiles/geographic_grid.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "core/tiles/surface_difference.hpp"
+#include "core/tiles/terrain_content.hpp"
+#include "core/tiles/terrain_tiling.hpp"
 #include "core/tiles/tile_content.hpp"
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 using namespace tinsmith;
@@ -429,6 +469,380 @@ int errorCommand(const std::string& tinPath, const std::string& meshPath, int th
   return 0;
 }
 
+// ---- Cesium terrain (terrain_vs_martini.sh) ----
+
+tiles::GeographicTin geographicTinOf(const TinData& tin) {
+  const ingest::ProjGeoReference geo(tin.crs, "");
+  return tiles::toGeographicTin(tin, geo);
+}
+
+// The terrain tiles of a store: "terrain/z/x/y.terrain" keys, level by level.
+std::vector<TileId> terrainTiles(const store::TileStore& s) {
+  std::vector<TileId> ids;
+  for (const std::string& key : s.keys()) {
+    TileId id;
+    char tail[16] = {};
+    if (std::sscanf(key.c_str(), "terrain/%d/%u/%u.%15s", &id.z, &id.x, &id.y, tail) == 4 &&
+        std::string(tail) == "terrain")
+      ids.push_back(id);
+  }
+  std::sort(ids.begin(), ids.end(), rowMajorLess);
+  if (ids.empty()) fail("no terrain/z/x/y.terrain in " + s.path().string());
+  return ids;
+}
+
+std::string terrainKey(const TileId& id) {
+  return "terrain/" + std::to_string(id.z) + "/" + std::to_string(id.x) + "/" +
+         std::to_string(id.y) + ".terrain";
+}
+
+std::size_t gzipBytes(const std::string& in) {
+  z_stream z{};
+  if (deflateInit2(&z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) fail("zlib");
+  std::string out(deflateBound(&z, in.size()) + 64, '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data()));
+  z.avail_in = static_cast<uInt>(in.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = static_cast<uInt>(out.size());
+  if (deflate(&z, Z_FINISH) != Z_STREAM_END) fail("zlib deflate");
+  const std::size_t n = z.total_out;
+  deflateEnd(&z);
+  return n;
+}
+
+// A quantized-mesh-1.0 tile as a client reads it (the format's text, not
+// tinsmith's encoder): header, zig-zag deltas, high-water-mark indices, edge
+// lists, extensions. Throws on bytes that end early or are left over.
+struct DecodedTerrain {
+  double minHeight = 0, maxHeight = 0;
+  std::vector<std::uint16_t> u, v, h;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::array<std::vector<std::uint32_t>, 4> edges;
+  std::map<int, std::size_t> extensionBytes;  // id → 5 + length
+};
+
+DecodedTerrain decodeTerrain(const std::string& b, const std::string& name) {
+  DecodedTerrain d;
+  std::size_t at = 0;
+  auto read = [&](void* out, std::size_t n) {
+    if (at + n > b.size()) fail(name + ": ends early");
+    std::memcpy(out, b.data() + at, n);
+    at += n;
+  };
+  auto u32 = [&] {
+    std::uint32_t x;
+    read(&x, 4);
+    return x;
+  };
+  at = 24;  // centre
+  float lo, hi;
+  read(&lo, 4);
+  read(&hi, 4);
+  d.minHeight = lo;
+  d.maxHeight = hi;
+  at = 88;
+  const std::uint32_t n = u32();
+  for (auto* values : {&d.u, &d.v, &d.h}) {
+    values->resize(n);
+    int value = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      std::uint16_t code;
+      read(&code, 2);
+      value += (code >> 1) ^ (-(code & 1));
+      if (value < 0 || value > 32767) fail(name + ": a quantized value out of 0..32767");
+      (*values)[i] = static_cast<std::uint16_t>(value);
+    }
+  }
+  const bool wide = n > 65536;
+  const std::size_t width = wide ? 4 : 2;
+  while (at % width != 0) ++at;
+  auto index = [&]() -> std::uint32_t {
+    if (wide) return u32();
+    std::uint16_t i;
+    read(&i, 2);
+    return i;
+  };
+  const std::uint32_t triangles = u32();
+  d.triangles.resize(triangles);
+  std::uint32_t highest = 0;
+  for (auto& t : d.triangles) {
+    for (auto& c : t) {
+      const std::uint32_t code = index();
+      c = highest - code;
+      if (code == 0) ++highest;
+      if (c >= n) fail(name + ": a triangle index out of range");
+    }
+  }
+  for (auto& edge : d.edges) {
+    const std::uint32_t count = u32();
+    for (std::uint32_t k = 0; k < count; ++k) edge.push_back(index());
+  }
+  while (at < b.size()) {
+    std::uint8_t id;
+    read(&id, 1);
+    const std::uint32_t length = u32();
+    if (at + length > b.size()) fail(name + ": an extension runs past the end");
+    d.extensionBytes[id] += 5 + length;
+    at += length;
+  }
+  return d;
+}
+
+struct TerrainLevelRow {
+  std::size_t tiles = 0, bytes = 0, gzip = 0, metadata = 0, vertices = 0, triangles = 0;
+  double recordError = -1;
+  TileId recordWorst;
+};
+
+int terrainStoreCommand(const std::string& path) {
+  const auto s = store::openStoreForReading(path);
+  std::map<int, TerrainLevelRow> rows;
+  for (const TileId& id : terrainTiles(*s)) {
+    const std::string bytes = *s->get(terrainKey(id));
+    const DecodedTerrain d = decodeTerrain(bytes, id.name());
+    TerrainLevelRow& r = rows[id.z];
+    ++r.tiles;
+    r.bytes += bytes.size();
+    r.gzip += gzipBytes(bytes);
+    if (d.extensionBytes.contains(encode::kMetadata)) r.metadata += d.extensionBytes.at(encode::kMetadata);
+    r.vertices += d.u.size();
+    r.triangles += d.triangles.size();
+    if (const auto record = tiles::recordFromTerrainTile(bytes); record && record->error >= r.recordError) {
+      r.recordError = record->error;
+      r.recordWorst = id;
+    }
+  }
+  for (const auto& [z, r] : rows) {
+    std::printf(
+        "{\"level\":%d,\"tiles\":%zu,\"bytes\":%zu,\"gzip\":%zu,\"metadata\":%zu,\"vertices\":%zu,"
+        "\"triangles\":%zu,\"recordError\":%.6f,\"recordWorst\":\"%s\",\"cesiumError\":%.6f}\n",
+        z, r.tiles, r.bytes, r.gzip, r.metadata, r.vertices, r.triangles, r.recordError,
+        r.recordWorst.name().c_str(), tiles::cesiumLevelMaximumGeometricError(z));
+  }
+  return 0;
+}
+
+int terrainGridsCommand(const std::string& tinPath, const std::string& storePath,
+                        const std::string& spacing, const std::string& maxCellsText,
+                        const std::string& outPath) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const TinData projectTin = ingest::readTinFile(tinPath);
+  const tiles::GeographicTin g = geographicTinOf(projectTin);
+  const TinData& tin = g.tin;
+  const TinIndex index(tin);
+  const TinBoundary boundary(tin);
+  const Rect extent = boundsOf(tin.vertices);
+  const double resolution = std::stod(spacing);
+  const int maxCells = std::stoi(maxCellsText);
+  if (!(resolution > 0) || maxCells < 1 || (maxCells & (maxCells - 1)) != 0)
+    fail("SPACING > 0 and MAXCELLS a power of two");
+  const auto s = store::openStoreForReading(storePath);
+  std::ofstream out(outPath, std::ios::binary);
+  if (!out) fail("cannot write " + outPath);
+  std::size_t nodes = 0, outside = 0, tiles = 0;
+  std::map<int, int> levelCells;
+  for (const TileId& id : terrainTiles(*s)) {
+    const tiles::GeoRect geo = tiles::geographicTileBounds(id);
+    const Rect b{geo.west * kMetresPerDegree, geo.south * kMetresPerDegree,
+                 geo.east * kMetresPerDegree, geo.north * kMetresPerDegree};
+    int cells = 1;
+    while (b.width() / cells > resolution && cells < maxCells) cells *= 2;
+    levelCells[id.z] = std::max(levelCells[id.z], cells);
+    const int n = cells + 1;
+    const double step = b.width() / cells;
+    std::vector<double> z(static_cast<std::size_t>(n) * n, 0.0);
+    std::vector<std::uint8_t> inside(z.size(), 0);
+    auto nodeAt = [&](int i, int j) {
+      return Point2{i == cells ? b.x1 : b.x0 + i * step, j == cells ? b.y1 : b.y0 + j * step};
+    };
+    if (b.overlaps(extent)) {
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          const std::size_t k = static_cast<std::size_t>(j) * n + i;
+          if (const auto h = index.z(nodeAt(i, j))) {
+            z[k] = *h;
+            inside[k] = 1;
+          }
+        }
+      }
+      // Outside: the TIN's z at the nearest boundary point, candidates per
+      // block of nodes (a coarse tile is mostly outside).
+      constexpr int kBlock = 32;
+      for (int bj = 0; bj < n; bj += kBlock) {
+        for (int bi = 0; bi < n; bi += kBlock) {
+          const int ei = std::min(n, bi + kBlock) - 1, ej = std::min(n, bj + kBlock) - 1;
+          bool any = false;
+          for (int j = bj; j <= ej && !any; ++j)
+            for (int i = bi; i <= ei && !any; ++i) any = !inside[static_cast<std::size_t>(j) * n + i];
+          if (!any) continue;
+          const Point2 lo = nodeAt(bi, bj), hi = nodeAt(ei, ej);
+          const std::vector<std::uint32_t> near = boundary.candidates(Rect{lo.x, lo.y, hi.x, hi.y});
+          for (int j = bj; j <= ej; ++j)
+            for (int i = bi; i <= ei; ++i) {
+              const std::size_t k = static_cast<std::size_t>(j) * n + i;
+              if (!inside[k]) z[k] = boundary.nearestZ(nodeAt(i, j), near);
+            }
+        }
+      }
+    }
+    put(out, id.z);
+    put(out, static_cast<std::int32_t>(id.x));
+    put(out, static_cast<std::int32_t>(id.y));
+    put(out, static_cast<std::int32_t>(n));
+    for (double v : {geo.west, geo.south, geo.east, geo.north}) put(out, v);
+    out.write(reinterpret_cast<const char*>(z.data()), static_cast<std::streamsize>(z.size() * 8));
+    out.write(reinterpret_cast<const char*>(inside.data()),
+              static_cast<std::streamsize>(inside.size()));
+    nodes += z.size();
+    outside += z.size() - static_cast<std::size_t>(std::count(inside.begin(), inside.end(), 1));
+    ++tiles;
+  }
+  if (!out.flush()) fail("cannot write " + outPath);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::string grid;
+  for (const auto& [z, c] : levelCells)
+    grid += (grid.empty() ? "" : ",") + ("\"" + std::to_string(z) + "\":" + std::to_string(c + 1));
+  std::printf("{\"tiles\":%zu,\"nodes\":%zu,\"outside\":%zu,\"seconds\":%.3f,\"grid\":{%s}}\n",
+              tiles, nodes, outside, seconds, grid.c_str());
+  return 0;
+}
+
+struct TerrainTileError {
+  TileId id;
+  std::size_t triangles = 0, measured = 0, fill = 0;
+  std::size_t collapsed = 0;  // surface triangles quantization left with no area or flipped
+  SurfaceDifference worst;
+  double atVertex = 0;
+  Point2 vertex;
+  double fillOverTin = 0;  // the fill's largest difference over the TIN
+  Point2 fillAt;
+};
+
+TerrainTileError measureTerrainTile(const TileId& id, const std::string& bytes,
+                                    const TinIndex& index) {
+  const DecodedTerrain d = decodeTerrain(bytes, id.name());
+  const tiles::GeoRect g = tiles::geographicTileBounds(id);
+  std::vector<Point3> p(d.u.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double lon = g.west + (g.east - g.west) * (d.u[i] / 32767.0);
+    const double lat = g.south + (g.north - g.south) * (d.v[i] / 32767.0);
+    const double h = d.minHeight + (d.maxHeight - d.minHeight) * (d.h[i] / 32767.0);
+    p[i] = {lon * kMetresPerDegree, lat * kMetresPerDegree, h};
+  }
+  TerrainTileError e;
+  e.id = id;
+  e.triangles = d.triangles.size();
+  // Walls are vertical: no area in the plane; skip them (and any degenerate
+  // triangle) before measuring.
+  std::vector<std::array<std::uint32_t, 3>> surface, fill;
+  for (const auto& t : d.triangles) {
+    const Point3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]];
+    const double area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    const bool isFill = a.z == 0.0 || b.z == 0.0 || c.z == 0.0;
+    if (isFill) ++e.fill;
+    if (area <= 0) {  // walls; or a surface triangle collapsed or flipped by quantization
+      if (!isFill) ++e.collapsed;
+      continue;
+    }
+    (isFill ? fill : surface).push_back(t);
+  }
+  e.measured = surface.size();
+  for (const SurfaceDifference& s : triangleDifferences(p, surface, index)) {
+    if (s.maxAbs > e.worst.maxAbs) e.worst = s;
+    if (s.vertexAbs > e.atVertex) {
+      e.atVertex = s.vertexAbs;
+      e.vertex = s.vertex;
+    }
+  }
+  for (const SurfaceDifference& s : triangleDifferences(p, fill, index)) {
+    if (s.maxAbs > e.fillOverTin) {
+      e.fillOverTin = s.maxAbs;
+      e.fillAt = s.at;
+    }
+  }
+  return e;
+}
+
+int terrainErrorCommand(const std::string& tinPath, const std::string& storePath, int threads,
+                        const std::string& tilesPath) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const TinData projectTin = ingest::readTinFile(tinPath);
+  const tiles::GeographicTin g = geographicTinOf(projectTin);
+  const TinIndex index(g.tin);
+  const auto s = store::openStoreForReading(storePath);
+  const std::vector<TileId> ids = terrainTiles(*s);
+  std::vector<TerrainTileError> errors(ids.size());
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failureLock;
+  auto work = [&] {
+    try {
+      for (std::size_t i; (i = next++) < ids.size();)
+        errors[i] = measureTerrainTile(ids[i], *s->get(terrainKey(ids[i])), index);
+    } catch (...) {
+      const std::lock_guard lock(failureLock);
+      failure = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  auto degrees = [](Point2 q) { return Point2{q.x / kMetresPerDegree, q.y / kMetresPerDegree}; };
+  if (!tilesPath.empty()) {
+    std::FILE* f = std::fopen(tilesPath.c_str(), "w");
+    if (!f) fail("cannot write " + tilesPath);
+    for (const auto& e : errors) {
+      const Point2 at = degrees(e.worst.at), fa = degrees(e.fillAt);
+      std::fprintf(f,
+                   "{\"tile\":\"%s\",\"triangles\":%zu,\"measured\":%zu,\"fill\":%zu,\"collapsed\":%zu,"
+                   "\"maxError\":%.6f,\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,"
+                   "\"maxAtDemPoints\":%.6f,\"fillOverTin\":%.6f,\"fillAt\":[%.9f,%.9f]}\n",
+                   e.id.name().c_str(), e.triangles, e.measured, e.fill, e.collapsed, e.worst.maxAbs, at.x,
+                   at.y, e.worst.meshZ, e.worst.tinZ, e.atVertex, e.fillOverTin, fa.x, fa.y);
+    }
+    std::fclose(f);
+  }
+  std::map<int, TerrainTileError> rows;  // the worst of each measure per level
+  std::map<int, std::size_t> tileCount, triangleCount, fillCount, collapsedCount;
+  std::map<int, TileId> fillWorst;
+  for (const auto& e : errors) {
+    TerrainTileError& r = rows[e.id.z];
+    ++tileCount[e.id.z];
+    triangleCount[e.id.z] += e.triangles;
+    fillCount[e.id.z] += e.fill;
+    collapsedCount[e.id.z] += e.collapsed;
+    if (e.worst.maxAbs >= r.worst.maxAbs) {
+      r.worst = e.worst;
+      r.id = e.id;
+    }
+    if (e.atVertex >= r.atVertex) {
+      r.atVertex = e.atVertex;
+      r.vertex = e.vertex;
+    }
+    if (e.fillOverTin >= r.fillOverTin) {
+      r.fillOverTin = e.fillOverTin;
+      r.fillAt = e.fillAt;
+      fillWorst[e.id.z] = e.id;
+    }
+  }
+  for (const auto& [z, r] : rows) {
+    const Point2 at = degrees(r.worst.at), fa = degrees(r.fillAt);
+    std::printf(
+        "{\"level\":%d,\"tiles\":%zu,\"triangles\":%zu,\"fillTriangles\":%zu,\"collapsed\":%zu,\"maxError\":%.6f,"
+        "\"worst\":\"%s\",\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,\"maxAtDemPoints\":%.6f,"
+        "\"fillOverTin\":%.6f,\"fillWorst\":\"%s\",\"fillAt\":[%.9f,%.9f],\"cesiumError\":%.6f}\n",
+        z, tileCount[z], triangleCount[z], fillCount[z], collapsedCount[z], r.worst.maxAbs, r.id.name().c_str(), at.x,
+        at.y, r.worst.meshZ, r.worst.tinZ, r.atVertex, r.fillOverTin, fillWorst[z].name().c_str(),
+        fa.x, fa.y, tiles::cesiumLevelMaximumGeometricError(z));
+  }
+  std::printf("{\"seconds\":%.3f}\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -438,6 +852,12 @@ int main(int argc, char** argv) {
     if (a.size() == 6 && a[0] == "grids") return gridsCommand(a[1], a[2], a[3], a[4], a[5]);
     if ((a.size() == 3 || a.size() == 4) && a[0] == "error")
       return errorCommand(a[1], a[2], a.size() == 4 ? std::stoi(a[3]) : 1);
+    if (a.size() == 2 && a[0] == "terrain-store") return terrainStoreCommand(a[1]);
+    if (a.size() == 6 && a[0] == "terrain-grids")
+      return terrainGridsCommand(a[1], a[2], a[3], a[4], a[5]);
+    if (a.size() >= 3 && a.size() <= 5 && a[0] == "terrain-error")
+      return terrainErrorCommand(a[1], a[2], a.size() >= 4 ? std::stoi(a[3]) : 1,
+                                 a.size() == 5 ? a[4] : "");
   } catch (const std::exception& e) {
     fail(e.what());
   }
@@ -445,6 +865,9 @@ int main(int argc, char** argv) {
       stderr,
       "usage: tile_error_bench store SITE.3dtiles\n"
       "       tile_error_bench grids SITE.tin SITE.3dtiles SPACING|n=NODES Z:TOL,... OUT.grids\n"
-      "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n");
+      "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n"
+      "       tile_error_bench terrain-store STORE\n"
+      "       tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids\n"
+      "       tile_error_bench terrain-error SITE.tin STORE [THREADS [TILES.jsonl]]\n");
   return 2;
 }
