@@ -51,7 +51,7 @@ StoreKind storeKindFor(const std::filesystem::path& path) {
 
 bool isStoreKey(std::string_view key) {
   if (key == "tileset.json") return true;
-  for (const std::string_view folder : {"tiles/", "tilesets/", "tinsmith/"})
+  for (const std::string_view folder : {"tiles/", "tilesets/", "terrain/", "tinsmith/"})
     if (key.size() > folder.size() && key.starts_with(folder)) return true;
   return false;
 }
@@ -128,7 +128,8 @@ namespace {
 [[noreturn]] void refuseReplacing(const std::filesystem::path& path, const std::string& problem) {
   throw ioError(problem, fileLocation(path),
                 "choose another output path, or move what is there away: tinsmith replaces "
-                "only a tile store it wrote (one holding " + std::string(kStoreMarkerKey) + ")");
+                "only a tile store it wrote (one holding " +
+                    std::string(kStoreMarkerKey) + ")");
 }
 
 // An archive a run was killed in before it made its table: an empty file or
@@ -152,8 +153,8 @@ bool holdsNoTable(const std::filesystem::path& path) {
 
 std::string foreignText(std::size_t count, const std::string& first) {
   return "it holds '" + first + "'" +
-         (count > 1 ? " and " + std::to_string(count - 1) + " other file" +
-                          (count > 2 ? "s" : "") + " that are not a tile store's"
+         (count > 1 ? " and " + std::to_string(count - 1) + " other file" + (count > 2 ? "s" : "") +
+                          " that are not a tile store's"
                     : std::string(", which is not a tile store's"));
 }
 
@@ -196,8 +197,8 @@ void requireReplaceable(const std::filesystem::path& path) {
     if (!isStoreKey(key) && foreign++ == 0) first = key;
   }
   if (foreign > 0)
-    refuseReplacing(clean,
-                    "is an archive that is not a tinsmith tile store: " + foreignText(foreign, first));
+    refuseReplacing(
+        clean, "is an archive that is not a tinsmith tile store: " + foreignText(foreign, first));
   if (!marker && !keys.empty())
     refuseReplacing(clean, "is an archive that is not a tinsmith tile store (it has no " +
                                std::string(kStoreMarkerKey) + ")");
@@ -231,8 +232,8 @@ std::unique_ptr<TileStore> openStoreForWriting(const std::filesystem::path& path
                                          : detail::openDirectory(clean, access);
   // Kept content must be a store's: tiles are never added to other files.
   if (keepExisting && !store->contains(kStoreMarkerKey) && !store->keys().empty())
-    refuseReplacing(clean, "is not a tinsmith tile store (it has no " +
-                               std::string(kStoreMarkerKey) + ")");
+    refuseReplacing(
+        clean, "is not a tinsmith tile store (it has no " + std::string(kStoreMarkerKey) + ")");
   return store;
 }
 

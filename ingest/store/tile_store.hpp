@@ -43,7 +43,7 @@ bool isValidKey(std::string_view key);
 inline constexpr std::string_view kStoreMarkerKey = "tinsmith/build.json";
 
 /// Whether `key` is one a tinsmith store writes: "tileset.json", or a key
-/// under "tiles/", "tilesets/" or "tinsmith/".
+/// under "tiles/", "tilesets/", "terrain/" (Cesium terrain) or "tinsmith/".
 bool isStoreKey(std::string_view key);
 
 /// Throws ioError naming `path` unless a new store may take its place with

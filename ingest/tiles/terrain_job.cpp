@@ -1,10 +1,13 @@
 #include "ingest/tiles/terrain_job.hpp"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <map>
 #include <set>
 
+#include "core/base/error.hpp"
 #include "core/encode/quantized_mesh.hpp"
 #include "core/tiles/geographic_grid.hpp"
 #include "core/tiles/pyramid_build.hpp"
@@ -43,6 +46,24 @@ nlohmann::ordered_json layerJson(const std::vector<TileId>& gridTiles, int level
 }
 
 }  // namespace
+
+std::optional<TileId> gridTileOfKey(std::string_view key) {
+  constexpr std::string_view kPrefix = "terrain/", kSuffix = ".terrain";
+  if (!key.starts_with(kPrefix) || !key.ends_with(kSuffix)) return std::nullopt;
+  std::string_view rest = key.substr(kPrefix.size(), key.size() - kPrefix.size() - kSuffix.size());
+  std::array<std::uint32_t, 3> zxy{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const std::size_t slash = i < 2 ? rest.find('/') : rest.size();
+    if (slash == std::string_view::npos || slash == 0) return std::nullopt;
+    const auto [end, ec] = std::from_chars(rest.data(), rest.data() + slash, zxy[i]);
+    if (ec != std::errc{} || end != rest.data() + slash) return std::nullopt;
+    rest = rest.substr(std::min(slash + 1, rest.size()));
+  }
+  if (zxy[0] > 30) return std::nullopt;
+  const TileId id{static_cast<int>(zxy[0]), zxy[1], zxy[2]};
+  if (!tiles::isGeographicTile(id)) return std::nullopt;
+  return id;
+}
 
 std::string terrainTileKey(const TileId& t) {
   return "terrain/" + std::to_string(t.z) + "/" + std::to_string(t.x) + "/" + std::to_string(t.y) +
@@ -86,10 +107,9 @@ nlohmann::ordered_json availableRanges(std::vector<TileId> tiles, int levels) {
   return out;
 }
 
-TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
-                           const TileJobOptions& options, store::TileStore& stage,
-                           const store::TileStore* previous, std::vector<std::string>& keys,
-                           const Progress* progress) {
+TerrainSummary tileTerrain(const tiles::GeographicTin& frame, const TileJobOptions& options,
+                           store::TileStore& stage, const store::TileStore* previous,
+                           std::vector<std::string>& keys, const Progress* progress) {
   reportProgress(progress, "terrain.plan", "", 0, 0);
   const int finestLevel = tiles::terrainLevelFor(options.tiler.tolerance);
   tiles::TilerOptions tilerOptions = options.tiler;
@@ -157,10 +177,9 @@ TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
     records.push_back(c.record);
     ++summary.built;
   }
-  std::sort(records.begin(), records.end(),
-            [&](const TileRecord& a, const TileRecord& b) {
-              return tiles::rowMajorLess(gridTile(a.id), gridTile(b.id));
-            });
+  std::sort(records.begin(), records.end(), [&](const TileRecord& a, const TileRecord& b) {
+    return tiles::rowMajorLess(gridTile(a.id), gridTile(b.id));
+  });
 
   // Availability in the metadata of levels 0, 10, 20: the tiles of the next
   // ten levels under each.
@@ -186,7 +205,17 @@ TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
   }
 
   // The summary and layer.json, from the records.
-  std::map<int, ZoomSummary> levels;
+  std::vector<TerrainTileEntry> entries;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const std::string key = terrainTileKey(grid[i]);
+    entries.push_back({grid[i], records[i], stage.get(key)->size()});
+    keys.push_back(key);
+  }
+  TerrainSummary described = summarizeTerrain(entries);
+  described.finestLevel = summary.finestLevel;
+  described.built = summary.built;
+  described.reused = summary.reused;
+  summary = std::move(described);
   // The TIN's extent as layer.json's bounds; across the antimeridian west >
   // east (the frame's x run on past 180°), as TileJSON reads them.
   const tiles::Rect extent = tiles::boundsOf(frame.tin.vertices);
@@ -196,13 +225,23 @@ TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
   };
   const tiles::GeoRect bounds{longitude(extent.x0), extent.y0 / tiles::kMetresPerDegree,
                               longitude(extent.x1), extent.y1 / tiles::kMetresPerDegree};
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    const TileRecord& r = records[i];
-    const std::string key = terrainTileKey(grid[i]);
-    const std::size_t bytes = stage.get(key)->size();
-    auto& z = levels[grid[i].z];
-    z.z = grid[i].z;
-    z.tolerance = tiles::cesiumLevelMaximumGeometricError(grid[i].z);
+  const std::string attribution =
+      options.attribution.empty() ? "Terrain: tinsmith" : options.attribution;
+  const int levels = summary.levels.empty() ? 1 : summary.levels.back().z + 1;
+  const std::string layer = layerJson(grid, levels, bounds, attribution).dump(2) + "\n";
+  stage.put(kTerrainLayerKey, layer);
+  summary.bytes += layer.size();
+  keys.push_back(kTerrainLayerKey);
+  return summary;
+}
+
+TerrainSummary summarizeTerrain(const std::vector<TerrainTileEntry>& tiles) {
+  TerrainSummary summary;
+  std::map<int, ZoomSummary> levels;
+  for (const auto& [grid, r, bytes] : tiles) {
+    auto& z = levels[grid.z];
+    z.z = grid.z;
+    z.tolerance = tiles::cesiumLevelMaximumGeometricError(grid.z);
     ++z.tiles;
     z.triangles += r.triangles;
     z.vertices += r.vertices;
@@ -211,20 +250,45 @@ TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
     z.maxError = std::max(z.maxError, r.error);
     if (r.error > z.tolerance) {
       ++z.overTolerance;
-      summary.missed.push_back({grid[i], r.error, z.tolerance, r.reachableError});
+      summary.missed.push_back({grid, r.error, z.tolerance, r.reachableError});
     }
     summary.bytes += bytes;
-    keys.push_back(key);
   }
   for (auto& [z, s] : levels) summary.levels.push_back(s);
-  summary.tiles = records.size();
-  const std::string attribution =
-      options.attribution.empty() ? "Terrain: tinsmith" : options.attribution;
-  const int deepest = grid.empty() ? 0 : std::max_element(grid.begin(), grid.end(), [](const auto& a, const auto& b) { return a.z < b.z; })->z;
-  const std::string layer = layerJson(grid, deepest + 1, bounds, attribution).dump(2) + "\n";
-  stage.put(kTerrainLayerKey, layer);
-  summary.bytes += layer.size();
-  keys.push_back(kTerrainLayerKey);
+  summary.tiles = tiles.size();
+  return summary;
+}
+
+std::optional<TerrainSummary> describeTerrain(const store::TileStore& store) {
+  std::vector<TerrainTileEntry> entries;
+  for (const auto& key : store.keys()) {
+    if (!key.starts_with("terrain/") || !key.ends_with(".terrain")) continue;
+    const auto grid = gridTileOfKey(key);
+    if (!grid)
+      throw inputError("'" + key + "' is no tile of the geographic grid",
+                       fileLocation(store.path()),
+                       "terrain/{level}/{x}/{y}.terrain with x < 2^(level+1), y < 2^level");
+    const auto bytes = store.get(key);
+    if (!bytes) continue;
+    const auto record = tiles::recordFromTerrainTile(*bytes);
+    if (!record)
+      throw inputError("the terrain tile " + key + " carries no tinsmith record in its metadata",
+                       fileLocation(store.path()),
+                       "rebuild the terrain with tinsmith tile --scheme quantized-mesh");
+    entries.push_back({*grid, *record, bytes->size()});
+  }
+  const auto layer = store.get(kTerrainLayerKey);
+  if (entries.empty() && !layer) return std::nullopt;
+  std::sort(entries.begin(), entries.end(),
+            [](const auto& a, const auto& b) { return tiles::rowMajorLess(a.grid, b.grid); });
+  TerrainSummary summary = summarizeTerrain(entries);
+  if (!summary.levels.empty()) summary.finestLevel = summary.levels.back().z;
+  if (layer) {
+    summary.bytes += layer->size();
+    const auto json = nlohmann::json::parse(*layer, nullptr, false);
+    if (json.is_object() && json.contains("maxzoom") && json["maxzoom"].is_number_integer())
+      summary.finestLevel = json["maxzoom"].get<int>();
+  }
   return summary;
 }
 

@@ -13,7 +13,9 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/tiles/terrain_tiling.hpp"
@@ -29,15 +31,34 @@ inline constexpr const char* kTerrainLayerKey = "terrain/layer.json";
 
 /// "terrain/{level}/{x}/{y}.terrain" of a grid tile (TMS numbering).
 std::string terrainTileKey(const tiles::TileId& gridTile);
+/// The grid tile of such a key; nullopt for any other key.
+std::optional<tiles::TileId> gridTileOfKey(std::string_view key);
 
 /// Tiles `frame` (the TIN in the geographic working frame) as Cesium terrain into `stage`, the
 /// tiles first and layer.json last. With `resume`, tiles already in `stage`
 /// or in `previous` (a finished store of the same build) are taken as they
 /// are. Returns the summary and, in `keys`, what it wrote in canonical order.
-TerrainSummary tileTerrain(const tiles::GeographicTin& frame,
-                           const TileJobOptions& options, store::TileStore& stage,
-                           const store::TileStore* previous, std::vector<std::string>& keys,
-                           const Progress* progress);
+TerrainSummary tileTerrain(const tiles::GeographicTin& frame, const TileJobOptions& options,
+                           store::TileStore& stage, const store::TileStore* previous,
+                           std::vector<std::string>& keys, const Progress* progress);
+
+/// A stored terrain tile: its grid tile, its record, its size in bytes.
+struct TerrainTileEntry {
+  tiles::TileId grid;
+  tiles::TileRecord record;
+  std::size_t bytes = 0;
+};
+
+/// Per level: tiles, triangles, bytes, the largest error and the tiles over
+/// CesiumJS's error for the level (missed). Leaves finestLevel, built and
+/// reused at 0.
+TerrainSummary summarizeTerrain(const std::vector<TerrainTileEntry>& tiles);
+
+/// The terrain a store holds, from its tiles' records (tinsmith info):
+/// nullopt for a store with none; finestLevel is layer.json's maxzoom (the
+/// deepest tile's level while it is missing). Throws inputError for a tile
+/// without a record.
+std::optional<TerrainSummary> describeTerrain(const store::TileStore& store);
 
 /// The grid tiles a layer.json's "available" lists, per level: rows of
 /// consecutive columns, rows with the same columns one above the other

@@ -296,9 +296,12 @@ std::optional<TileScheme> parseTileScheme(std::string_view name) {
 
 std::string_view tileSchemeName(TileScheme scheme) {
   switch (scheme) {
-    case TileScheme::Tiles3D: return "3d-tiles";
-    case TileScheme::QuantizedMesh: return "quantized-mesh";
-    case TileScheme::Both: return "both";
+    case TileScheme::Tiles3D:
+      return "3d-tiles";
+    case TileScheme::QuantizedMesh:
+      return "quantized-mesh";
+    case TileScheme::Both:
+      return "both";
   }
   return "3d-tiles";
 }
@@ -473,10 +476,10 @@ ShardCoverage coverageOf(const store::TileStore& in) {
   const auto record = in.get(kShardKey);
   if (!record) {
     if (in.contains("tileset.json")) return {};
-    throw inputError(
-        "the store is neither a shard (no " + std::string(kShardKey) + ") nor finished (no tileset.json)",
-        fileLocation(in.path().string()),
-        "build the shard again with tinsmith tile --subtree or --until-zoom");
+    throw inputError("the store is neither a shard (no " + std::string(kShardKey) +
+                         ") nor finished (no tileset.json)",
+                     fileLocation(in.path().string()),
+                     "build the shard again with tinsmith tile --subtree or --until-zoom");
   }
   const auto j = nlohmann::json::parse(*record, nullptr, false);
   ShardCoverage c;
@@ -589,8 +592,20 @@ StoreInfo describeTileStore(const fs::path& path) {
   auto st = store::openStoreForReading(path);
   StoreInfo info;
   if (auto b = st->get(kBuildKey)) info.build = *b;
-  info.complete = st->contains("tileset.json");
   info.summary = summarize(storeRecords(*st), info.build);
+  info.summary.terrain = describeTerrain(*st);
+  // Complete when every scheme the build asked for has its index.
+  const auto build = nlohmann::json::parse(info.build, nullptr, false);
+  const auto scheme = parseTileScheme(
+      build.is_object() ? build.value("/options/scheme"_json_pointer, std::string("3d-tiles"))
+                        : std::string("3d-tiles"));
+  const bool wants3d = !scheme || *scheme != TileScheme::QuantizedMesh;
+  const bool wantsTerrain = scheme && *scheme != TileScheme::Tiles3D;
+  info.missing.clear();
+  if (wants3d && !st->contains("tileset.json")) info.missing = "tileset.json";
+  if (wantsTerrain && !st->contains(kTerrainLayerKey))
+    info.missing += std::string(info.missing.empty() ? "" : " and ") + kTerrainLayerKey;
+  info.complete = info.missing.empty();
   return info;
 }
 

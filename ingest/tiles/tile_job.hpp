@@ -68,8 +68,12 @@ std::string_view contentFrameName(tiles::ContentFrame frame);
 /// "3d-tiles" | "quantized-mesh" | "both".
 std::optional<TileScheme> parseTileScheme(std::string_view name);
 std::string_view tileSchemeName(TileScheme scheme);
-inline bool writesTiles3D(TileScheme s) { return s != TileScheme::QuantizedMesh; }
-inline bool writesTerrain(TileScheme s) { return s != TileScheme::Tiles3D; }
+inline bool writesTiles3D(TileScheme s) {
+  return s != TileScheme::QuantizedMesh;
+}
+inline bool writesTerrain(TileScheme s) {
+  return s != TileScheme::Tiles3D;
+}
 
 /// Throws usageError (naming the option and the bad value) unless the
 /// options can make a pyramid: tolerance > 0, max triangles ≥ 64, max zoom in
@@ -143,8 +147,11 @@ TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs,
 /// What `tinsmith info` tells of a store: its build record (JSON text) and the
 /// per-zoom summary from the tiles' records.
 struct StoreInfo {
-  std::string build;      ///< tinsmith/build.json, or empty
-  bool complete = false;  ///< tileset.json present
+  std::string build;  ///< tinsmith/build.json, or empty
+  /// Every scheme the build asked for has its index (tileset.json,
+  /// terrain/layer.json); `missing` names those that are not there.
+  bool complete = false;
+  std::string missing;
   TileJobSummary summary;
 };
 StoreInfo describeTileStore(const std::filesystem::path& path);

@@ -482,12 +482,13 @@ TEST(DirectoryStore, KeysSkipTemporaryFiles) {
             (std::vector<std::string>{"a.glb", "b.glb", "b.glb.tmp-123-4"}));
 }
 
-TEST(StoreKey, StoreKeysAreTheTilesetsTilesAndTinsmithFolders) {
-  for (const char* key : {"tileset.json", "tiles/0/0/0.glb", "tilesets/1/0/0.json",
-                          "tinsmith/build.json", "tinsmith/terrain.tin"})
+TEST(StoreKey, StoreKeysAreTheTilesetsTilesTerrainAndTinsmithFolders) {
+  for (const char* key :
+       {"tileset.json", "tiles/0/0/0.glb", "tilesets/1/0/0.json", "tinsmith/build.json",
+        "tinsmith/terrain.tin", "terrain/layer.json", "terrain/0/1/0.terrain"})
     EXPECT_TRUE(isStoreKey(key)) << key;
   for (const char* key : {"index.html", "tiles", "tiles/", "tileset.json.bak", "a/tileset.json",
-                          "tinsmithx/build.json"})
+                          "tinsmithx/build.json", "terrain", "terrain/"})
     EXPECT_FALSE(isStoreKey(key)) << key;
 }
 
@@ -565,14 +566,14 @@ TEST(StaleTemps, OnlyTheLeftoversOfProcessesThatAreGoneAreRemoved) {
   std::ofstream(dir / "site.3dtiles") << "x";
   for (const std::string& name : std::vector<std::string>{
            "site.3dtiles.tmp-" + gone + "-0", "site.3dtiles.tmp-" + gone + "-0-journal",
-        "site.3dtiles.tmp-" + alive + "-3", "other.3dtiles.tmp-" + gone + "-1",
-        "site.3dtiles.tmp-x-1"})
+           "site.3dtiles.tmp-" + alive + "-3", "other.3dtiles.tmp-" + gone + "-1",
+           "site.3dtiles.tmp-x-1"})
     std::ofstream(dir / name) << "x";
   fs::create_directories(dir / ("site.3dtiles.tmp-" + gone + "-7") / "tiles");
   removeStaleTemps(dir / "site.3dtiles");
-  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"other.3dtiles.tmp-" + gone + "-1",
-                                                   "site.3dtiles", "site.3dtiles.tmp-" + alive + "-3",
-                                                   "site.3dtiles.tmp-x-1"}));
+  EXPECT_EQ(treeOf(dir),
+            (std::vector<std::string>{"other.3dtiles.tmp-" + gone + "-1", "site.3dtiles",
+                                      "site.3dtiles.tmp-" + alive + "-3", "site.3dtiles.tmp-x-1"}));
 }
 
 }  // namespace

@@ -414,6 +414,50 @@ TEST(TerrainTiles, ATinAcrossTheAntimeridianIsTiledOnBothSides) {
   EXPECT_LT(b[2].get<double>(), -179.0);
 }
 
+std::map<std::string, std::string> filesUnder(const fs::path& root) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    if (e.is_regular_file()) out[fs::relative(e.path(), root).string()] = test::readFile(e.path());
+  return out;
+}
+
+TEST(TerrainTiles, OneThreadOrTwoAResumedRunOrARebuildWriteTheSameBytes) {
+  const fs::path dir = test::scratchDir("terrain-same-bytes");
+  const fs::path tinPath = makeTin(
+      dir, "--points 'synthetic:grid?nx=31&ny=31&spacing=200&x0=430000&y0=4510000&surface=franke'",
+      "EPSG:26912");
+  const std::string tile =
+      "tile " + tinPath.string() + " --scheme quantized-mesh --tolerance 2 -q ";
+  ASSERT_EQ(test::runTinsmith(tile + "--threads 1 -o " + (dir / "one").string()).exitCode, 0);
+  ASSERT_EQ(test::runTinsmith(tile + "--threads 2 -o " + (dir / "two").string()).exitCode, 0);
+  const auto one = filesUnder(dir / "one");
+  ASSERT_GT(one.size(), 20u);
+  EXPECT_TRUE(one == filesUnder(dir / "two")) << "another thread count, other bytes";
+
+  // A run stopped before its deepest level and layer.json, then resumed.
+  const int deepest = nlohmann::json::parse(one.at("terrain/layer.json")).at("maxzoom");
+  fs::remove_all(dir / "two" / "terrain" / std::to_string(deepest));
+  fs::remove(dir / "two" / "terrain" / "layer.json");
+  const auto info = test::runTinsmith("info " + (dir / "two").string());
+  EXPECT_NE(info.out.find("incomplete: no terrain/layer.json"), std::string::npos) << info.out;
+  const auto resumed = test::runTinsmith(tile + "--resume --json -o " + (dir / "two").string());
+  ASSERT_EQ(resumed.exitCode, 0) << resumed.err;
+  const auto summary = nlohmann::json::parse(resumed.out).at("terrain");
+  EXPECT_GT(summary.at("kept").get<int>(), 0);
+  EXPECT_GT(summary.at("built").get<int>(), 0);
+  EXPECT_EQ(summary.at("built").get<int>() + summary.at("kept").get<int>(),
+            summary.at("tiles").get<int>());
+  EXPECT_TRUE(one == filesUnder(dir / "two")) << "resumed, other bytes";
+
+  // Built again over itself (it is a store tinsmith wrote), and described.
+  ASSERT_EQ(test::runTinsmith(tile + "-o " + (dir / "two").string()).exitCode, 0);
+  EXPECT_TRUE(one == filesUnder(dir / "two"));
+  const auto described = test::runTinsmith("info --json " + (dir / "two").string());
+  ASSERT_EQ(described.exitCode, 0) << described.err;
+  EXPECT_EQ(nlohmann::json::parse(described.out).at("terrain").at("tiles").get<std::size_t>(),
+            one.size() - 3);  // less layer.json, build.json and the TIN
+}
+
 TEST(TerrainTiles, ATinAroundAPoleIsRefusedAndLeavesNoStore) {
   const fs::path dir = test::scratchDir("terrain-pole");
   const fs::path tinPath = makeTin(

@@ -7,9 +7,9 @@
 #include <string>
 
 #include "core/base/error.hpp"
+#include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "ingest/tinfile/tin_summary.hpp"
-#include "ingest/tiles/tile_job.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/cli/shared_options.hpp"
 #include "tools/cli/tile_summary.hpp"
@@ -36,7 +36,10 @@ void addInfoCommand(CLI::App& app) {
       if (opt->json) {
         std::cout << tileSummaryJson(info.summary, opt->file);
       } else {
-        std::cout << opt->file << (info.complete ? "" : " (incomplete: no tileset.json; finish it with --resume)")
+        std::cout << opt->file
+                  << (info.complete ? ""
+                                    : " (incomplete: no " + info.missing +
+                                          "; finish it with tinsmith tile --resume)")
                   << "\n"
                   << tileSummaryText(info.summary);
       }

@@ -14,9 +14,10 @@ std::string format(const char* fmt, auto... args) {
 }
 std::string terrainText(const ingest::TerrainSummary& t) {
   std::string out =
-      format("  Cesium terrain: %zu tiles in %zu levels, %.2f MB (finest level %d), built %zu, kept %zu\n",
-             t.tiles, t.levels.size(), static_cast<double>(t.bytes) / 1e6, t.finestLevel, t.built,
-             t.reused);
+      format("  Cesium terrain: %zu tiles in %zu levels, %.2f MB (finest level %d)", t.tiles,
+             t.levels.size(), static_cast<double>(t.bytes) / 1e6, t.finestLevel);
+  // A store described (tinsmith info) was not built by this run.
+  out += t.built + t.reused > 0 ? format(", built %zu, kept %zu\n", t.built, t.reused) : "\n";
   out += "  level  Cesium error m  tiles  triangles  bytes/tile  max error m  over\n";
   for (const auto& z : t.levels) {
     out += format("  %5d  %14.3f  %5zu  %9zu  %10.0f  %11.3f  %4zu\n", z.z, z.tolerance, z.tiles,
@@ -31,7 +32,7 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
   std::string out;
   // Cesium terrain alone (--scheme quantized-mesh) has no 3D Tiles to tell of.
   if (s.zooms.empty() && s.terrain) {
-    out += format("  %.1f s\n", s.seconds);
+    if (s.seconds > 0) out += format("  %.1f s\n", s.seconds);
     return out + terrainText(*s.terrain);
   }
   out += format(
@@ -59,9 +60,10 @@ std::string missedToleranceText(const ingest::TileJobSummary& s) {
   std::string terrain;
   if (s.terrain && !s.terrain->missed.empty()) {
     const auto& m = s.terrain->missed;
-    terrain = format("WARNING: %zu Cesium terrain tiles are over their level's error; the first: "
-                     "%s %.3f m against %.3f m (CesiumJS picks them for their level's error)\n",
-                     m.size(), m[0].id.name().c_str(), m[0].error, m[0].tolerance);
+    terrain = format(
+        "WARNING: %zu Cesium terrain tiles are over their level's error; the first: "
+        "%s %.3f m against %.3f m (CesiumJS picks them for their level's error)\n",
+        m.size(), m[0].id.name().c_str(), m[0].error, m[0].tolerance);
   }
   if (s.missed.empty()) return terrain;
   std::vector<ingest::MissedTile> worst = s.missed;
@@ -71,14 +73,16 @@ std::string missedToleranceText(const ingest::TileJobSummary& s) {
   std::string zooms;
   for (const auto& z : s.zooms)
     if (z.overTolerance > 0) zooms += (zooms.empty() ? "" : ", ") + std::to_string(z.z);
-  std::string out = format("WARNING: %zu of %zu tiles are over their zoom's tolerance (zoom%s ",
-                           s.missed.size(), s.tiles, zooms.find(',') != std::string::npos ? "s" : "");
+  std::string out =
+      format("WARNING: %zu of %zu tiles are over their zoom's tolerance (zoom%s ", s.missed.size(),
+             s.tiles, zooms.find(',') != std::string::npos ? "s" : "");
   out += zooms + "); the worst:";
   for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 5); ++i)
     out += format("%s %s %.3f m against %.3f m", i ? "," : "", worst[i].id.name().c_str(),
                   worst[i].error, worst[i].tolerance);
-  out += "\n  their geometricError is what they measure, so viewers refine them sooner; "
-         "a larger --max-triangles or a looser --tolerance may meet it (--strict: exit code 1)\n";
+  out +=
+      "\n  their geometricError is what they measure, so viewers refine them sooner; "
+      "a larger --max-triangles or a looser --tolerance may meet it (--strict: exit code 1)\n";
   const auto unreachable = static_cast<std::size_t>(std::count_if(
       s.missed.begin(), s.missed.end(), [](const auto& m) { return m.outOfReach(); }));
   if (unreachable > 0) {

@@ -17,14 +17,15 @@
 //
 //   node martini_terrain.mjs OUT.grids TOLERANCES OUTDIR
 // Writes OUTDIR/terrain/{z}/{x}/{y}.terrain; prints one JSON line per level
-// (tiles, vertices, triangles, bytes, gzip -6 bytes, seconds) and a total.
+// (tiles, vertices, triangles, those with a grid node in the TIN, bytes,
+// gzip -6 bytes, seconds) and a total.
 // Seconds count meshing and encoding (one thread), not reading the grids,
 // gzip or writing the files.
+import Martini from '@mapbox/martini';
 import fs from 'node:fs';
 import path from 'node:path';
+import {performance} from 'node:perf_hooks';
 import zlib from 'node:zlib';
-import { performance } from 'node:perf_hooks';
-import Martini from '@mapbox/martini';
 
 const [gridsPath, tolerancesText, outDir] = process.argv.slice(2);
 if (!gridsPath || !tolerancesText || !outDir) {
@@ -41,7 +42,9 @@ const RAD = Math.PI / 180;
 function ecef(lon, lat, h) {
   const sl = Math.sin(lat * RAD), cl = Math.cos(lat * RAD);
   const n = A / Math.sqrt(1 - E2 * sl * sl);
-  return [(n + h) * cl * Math.cos(lon * RAD), (n + h) * cl * Math.sin(lon * RAD), (n * (1 - E2) + h) * sl];
+  return [
+    (n + h) * cl * Math.cos(lon * RAD), (n + h) * cl * Math.sin(lon * RAD), (n * (1 - E2) + h) * sl
+  ];
 }
 
 // Cesium's EllipsoidalOccluder.computeHorizonCullingPointFromPoints on WGS84.
@@ -59,7 +62,8 @@ function horizonOcclusionPoint(points, direction) {
     m2 = Math.max(1, m2);
     m = Math.max(1, m);
     const cosAlpha = u[0] * dir[0] + u[1] * dir[1] + u[2] * dir[2];
-    const cx = u[1] * dir[2] - u[2] * dir[1], cy = u[2] * dir[0] - u[0] * dir[2], cz = u[0] * dir[1] - u[1] * dir[0];
+    const cx = u[1] * dir[2] - u[2] * dir[1], cy = u[2] * dir[0] - u[0] * dir[2],
+          cz = u[0] * dir[1] - u[1] * dir[0];
     const sinAlpha = Math.hypot(cx, cy, cz);
     const cosBeta = 1 / m, sinBeta = Math.sqrt(m2 - 1) * cosBeta;
     magnitude = Math.max(magnitude, 1 / (cosAlpha * cosBeta - sinAlpha * sinBeta));
@@ -83,22 +87,28 @@ function octEncode(x, y, z) {
 const zig = (v) => ((v << 1) ^ (v >> 31)) & 0xffff;
 
 function encodeTile(tile, tolerance) {
-  const { n, west, south, east, north, heights } = tile;
+  const {n, west, south, east, north, heights, inside} = tile;
   const rtin = martinis.get(n) ?? martinis.set(n, new Martini(n)).get(n);
-  const { vertices: gv, triangles: gt } = rtin.createTile(heights).getMesh(tolerance);
+  const {vertices: gv, triangles: gt} = rtin.createTile(heights).getMesh(tolerance);
 
   // Triangles counter-clockwise in lon/lat (grid rows run south to north);
   // vertices renumbered in first-use order.
   const newIndex = new Int32Array(gv.length / 2).fill(-1);
   const order = [];
   const tris = new Uint32Array(gt.length);
+  let overTin = 0;  // triangles with a grid node in the TIN
+  const node = (v) => gv[2 * v + 1] * n + gv[2 * v];
   for (let t = 0; t < gt.length; t += 3) {
     let a = gt[t], b = gt[t + 1], c = gt[t + 2];
+    if (inside[node(a)] || inside[node(b)] || inside[node(c)]) ++overTin;
     const cross = (gv[2 * b] - gv[2 * a]) * (gv[2 * c + 1] - gv[2 * a + 1]) -
-                  (gv[2 * b + 1] - gv[2 * a + 1]) * (gv[2 * c] - gv[2 * a]);
+        (gv[2 * b + 1] - gv[2 * a + 1]) * (gv[2 * c] - gv[2 * a]);
     if (cross < 0) [b, c] = [c, b];
     [a, b, c].forEach((v, i) => {
-      if (newIndex[v] < 0) { newIndex[v] = order.length; order.push(v); }
+      if (newIndex[v] < 0) {
+        newIndex[v] = order.length;
+        order.push(v);
+      }
       tris[t + i] = newIndex[v];
     });
   }
@@ -109,14 +119,18 @@ function encodeTile(tile, tolerance) {
   const zs = new Float64Array(count);
   for (let i = 0; i < count; ++i) {
     zs[i] = heights[gv[2 * order[i] + 1] * n + gv[2 * order[i]]];
-    lo = Math.min(lo, zs[i]); hi = Math.max(hi, zs[i]);
+    lo = Math.min(lo, zs[i]);
+    hi = Math.max(hi, zs[i]);
   }
   const minH = Math.fround(lo), maxH = Math.fround(hi);
-  const lons = new Float64Array(count), lats = new Float64Array(count), hts = new Float64Array(count);
+  const lons = new Float64Array(count), lats = new Float64Array(count),
+        hts = new Float64Array(count);
   for (let i = 0; i < count; ++i) {
     us[i] = Math.round((gv[2 * order[i]] / cells) * 32767);
     vs[i] = Math.round((gv[2 * order[i] + 1] / cells) * 32767);
-    hs[i] = maxH > minH ? Math.min(32767, Math.max(0, Math.round(((zs[i] - minH) / (maxH - minH)) * 32767))) : 0;
+    hs[i] = maxH > minH ?
+        Math.min(32767, Math.max(0, Math.round(((zs[i] - minH) / (maxH - minH)) * 32767))) :
+        0;
     // As a client decodes them.
     lons[i] = west + (east - west) * (us[i] / 32767);
     lats[i] = south + (north - south) * (vs[i] / 32767);
@@ -127,11 +141,15 @@ function encodeTile(tile, tolerance) {
   for (let i = 0; i < count; ++i) {
     const p = ecef(lons[i], lats[i], hts[i]);
     pos.push(p);
-    for (let c = 0; c < 3; ++c) { boxLo[c] = Math.min(boxLo[c], p[c]); boxHi[c] = Math.max(boxHi[c], p[c]); }
+    for (let c = 0; c < 3; ++c) {
+      boxLo[c] = Math.min(boxLo[c], p[c]);
+      boxHi[c] = Math.max(boxHi[c], p[c]);
+    }
   }
   const centre = [0, 1, 2].map((c) => 0.5 * (boxLo[c] + boxHi[c]));
   let radius = 0;
-  for (const p of pos) radius = Math.max(radius, Math.hypot(p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]));
+  for (const p of pos)
+    radius = Math.max(radius, Math.hypot(p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]));
   const horizon = horizonOcclusionPoint(pos, centre);
 
   // Area-weighted normals in ECEF.
@@ -139,10 +157,13 @@ function encodeTile(tile, tolerance) {
   for (let t = 0; t < tris.length; t += 3) {
     const [a, b, c] = [pos[tris[t]], pos[tris[t + 1]], pos[tris[t + 2]]];
     const u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]], w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    const nx = u[1] * w[2] - u[2] * w[1], ny = u[2] * w[0] - u[0] * w[2], nz = u[0] * w[1] - u[1] * w[0];
+    const nx = u[1] * w[2] - u[2] * w[1], ny = u[2] * w[0] - u[0] * w[2],
+          nz = u[0] * w[1] - u[1] * w[0];
     for (let k = 0; k < 3; ++k) {
       const v = tris[t + k];
-      normals[3 * v] += nx; normals[3 * v + 1] += ny; normals[3 * v + 2] += nz;
+      normals[3 * v] += nx;
+      normals[3 * v + 1] += ny;
+      normals[3 * v + 2] += nz;
     }
   }
 
@@ -162,33 +183,68 @@ function encodeTile(tile, tolerance) {
   size += 5 + 2 * count + 5 + 1;
   const b = Buffer.alloc(size);
   let o = 0;
-  const f64 = (v) => { b.writeDoubleLE(v, o); o += 8; };
-  const u32 = (v) => { b.writeUInt32LE(v, o); o += 4; };
-  const idx = (v) => { if (wide) u32(v); else { b.writeUInt16LE(v, o); o += 2; } };
+  const f64 = (v) => {
+    b.writeDoubleLE(v, o);
+    o += 8;
+  };
+  const u32 = (v) => {
+    b.writeUInt32LE(v, o);
+    o += 4;
+  };
+  const idx = (v) => {
+    if (wide)
+      u32(v);
+    else {
+      b.writeUInt16LE(v, o);
+      o += 2;
+    }
+  };
   centre.forEach(f64);
-  b.writeFloatLE(minH, o); b.writeFloatLE(maxH, o + 4); o += 8;
-  centre.forEach(f64); f64(radius);
+  b.writeFloatLE(minH, o);
+  b.writeFloatLE(maxH, o + 4);
+  o += 8;
+  centre.forEach(f64);
+  f64(radius);
   horizon.forEach(f64);
   u32(count);
   for (const arr of [us, vs, hs]) {
     let prev = 0;
-    for (let i = 0; i < count; ++i) { b.writeUInt16LE(zig(arr[i] - prev), o); o += 2; prev = arr[i]; }
+    for (let i = 0; i < count; ++i) {
+      b.writeUInt16LE(zig(arr[i] - prev), o);
+      o += 2;
+      prev = arr[i];
+    }
   }
   o += (iw - (o % iw)) % iw;
   u32(tris.length / 3);
   let highest = 0;
-  for (const v of tris) { idx(highest - v); if (v === highest) ++highest; }
-  for (const e of edges) { u32(e.length); e.forEach(idx); }
-  b.writeUInt8(1, o); o += 1; u32(2 * count);
+  for (const v of tris) {
+    idx(highest - v);
+    if (v === highest) ++highest;
+  }
+  for (const e of edges) {
+    u32(e.length);
+    e.forEach(idx);
+  }
+  b.writeUInt8(1, o);
+  o += 1;
+  u32(2 * count);
   for (let i = 0; i < count; ++i) {
     const l = Math.hypot(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-    const [x, y] = l > 0 ? octEncode(normals[3 * i] / l, normals[3 * i + 1] / l, normals[3 * i + 2] / l)
-                         : octEncode(...pos[i].map((c) => c / Math.hypot(...pos[i])));
-    b.writeUInt8(x, o); b.writeUInt8(y, o + 1); o += 2;
+    const [x, y] = l > 0 ?
+        octEncode(normals[3 * i] / l, normals[3 * i + 1] / l, normals[3 * i + 2] / l) :
+        octEncode(...pos[i].map((c) => c / Math.hypot(...pos[i])));
+    b.writeUInt8(x, o);
+    b.writeUInt8(y, o + 1);
+    o += 2;
   }
-  b.writeUInt8(2, o); o += 1; u32(1); b.writeUInt8(0, o); o += 1;
+  b.writeUInt8(2, o);
+  o += 1;
+  u32(1);
+  b.writeUInt8(0, o);
+  o += 1;
   if (o !== size) throw new Error(`encoder size mismatch ${o} != ${size}`);
-  return { bytes: b, vertices: count, triangles: tris.length / 3 };
+  return {bytes: b, vertices: count, triangles: tris.length / 3, overTin};
 }
 
 const martinis = new Map();
@@ -202,28 +258,42 @@ for (let at = 0; at < grids.length;) {
   at += 48;
   const heights = new Float32Array(n * n);
   for (let k = 0; k < n * n; ++k) heights[k] = grids.readDoubleLE(at + 8 * k);
-  at += 9 * n * n;  // heights, then the inside flags (unused: the whole tile is meshed)
+  at += 8 * n * n;
+  const inside = grids.subarray(at, at + n * n);
+  at += n * n;
   if (!tolerances.has(z)) throw new Error(`no tolerance for level ${z}`);
 
   const start = performance.now();
-  const tile = encodeTile({ n, west, south, east, north, heights }, tolerances.get(z));
+  const tile = encodeTile({n, west, south, east, north, heights, inside}, tolerances.get(z));
   const seconds = (performance.now() - start) / 1000;
   totalSeconds += seconds;
   const file = path.join(outDir, 'terrain', String(z), String(x), `${y}.terrain`);
-  fs.mkdirSync(path.dirname(file), { recursive: true });
+  fs.mkdirSync(path.dirname(file), {recursive: true});
   fs.writeFileSync(file, tile.bytes);
   if (!levels.has(z)) {
-    levels.set(z, { level: z, tolerance: tolerances.get(z), grid: n, tiles: 0, vertices: 0, triangles: 0,
-                    bytes: 0, gzip: 0, seconds: 0 });
+    levels.set(z, {
+      level: z,
+      tolerance: tolerances.get(z),
+      grid: n,
+      tiles: 0,
+      vertices: 0,
+      triangles: 0,
+      overTin: 0,
+      bytes: 0,
+      gzip: 0,
+      seconds: 0
+    });
   }
   const row = levels.get(z);
   row.tiles += 1;
   row.grid = Math.max(row.grid, n);
   row.vertices += tile.vertices;
   row.triangles += tile.triangles;
+  row.overTin += tile.overTin;
   row.bytes += tile.bytes.length;
-  row.gzip += zlib.gzipSync(tile.bytes, { level: 6 }).length;
+  row.gzip += zlib.gzipSync(tile.bytes, {level: 6}).length;
   row.seconds += seconds;
 }
-for (const row of [...levels.values()].sort((a, b) => a.level - b.level)) console.log(JSON.stringify(row));
-console.log(JSON.stringify({ seconds: totalSeconds }));
+for (const row of [...levels.values()].sort((a, b) => a.level - b.level))
+  console.log(JSON.stringify(row));
+console.log(JSON.stringify({seconds: totalSeconds}));

@@ -34,14 +34,22 @@
 //     .3dtiles archive or a directory): tiles, bytes, gzip -6 bytes, bytes of
 //     the metadata extension (5 + its length), vertices, triangles, and the
 //     max of the records' errors when the tiles carry one. JSON lines.
-//   tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids
+//   tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids [FILL]
 //     For every terrain tile of STORE, the geographic TIN sampled at the
 //     nodes of a (2^k + 1)² longitude/latitude grid over the tile's rectangle
 //     (geographicTileBounds), 2^k the least power of two whose spacing in the
 //     working frame is at most SPACING, capped at MAXCELLS cells. Nodes
-//     outside the TIN as for `grids` (the TIN's z at the nearest boundary
-//     point), except in a tile whose rectangle misses the TIN's bounding box:
-//     there 0, the ellipsoid. Format: per tile int32 level, x, y, n; float64
+//     outside the TIN: FILL pullpush (the default) gives those within two
+//     nodes of an inside node the TIN's z at the nearest boundary point and
+//     fills the rest from them by pull-push (a pyramid of averages, bilinear
+//     back down: smooth, so martini spends few triangles where no data is);
+//     nearest
+//     as for `grids`, the TIN's z at the nearest boundary point (continuous
+//     along the boundary but not across the exterior's medial axis, where
+//     the nearest point jumps between two sides of a bay: martini follows
+//     those steps with thousands of triangles). Pull-push falls back to
+//     nearest in a tile with no node inside; a tile whose rectangle misses
+//     the TIN's bounding box is 0 (the ellipsoid). Format: per tile int32 level, x, y, n; float64
 //     west, south, east, north (degrees); n·n float64 heights; n·n uint8
 //     inside-flags; rows south to north.
 //   tile_error_bench terrain-error SITE.tin STORE [THREADS [TILES.jsonl]]
@@ -49,9 +57,12 @@
 //     across the grid's rectangle of the tile, heights across the header's
 //     range) into the working frame and measures it against the geographic
 //     TIN with tiles::triangleDifferences. A triangle with a corner at height
-//     exactly 0 is fill (the ellipsoid outside the TIN and the walls down to
+//     0 (within 1e-6 m) is fill (the ellipsoid outside the TIN and the walls down to
 //     it, as tinsmith's terrain_fill.hpp makes them): not counted in the
-//     error, its largest difference over the TIN reported apart. Per level:
+//     error, its largest difference over the TIN reported apart, and so are
+//     the TIN vertices off the TIN's boundary that lie inside a fill triangle
+//     and in no surface triangle ("underFill": the fill reaching into the
+//     TIN by more than quantization can move the TIN's edge). Per level:
 //     max error, where, the largest at a TIN vertex. JSON lines; with
 //     TILES.jsonl, one line per tile there too.
 //
@@ -63,6 +74,8 @@
 // uint8 inside-flags, row j (y = y0 + j·step, south to north) after row j − 1.
 // MESHES.bin, per tile: int32 z, x, y; uint32 vertex count, triangle count;
 // float64 x, y, z per vertex (project CRS); uint32 a, b, c per triangle (CCW).
+#include <zlib.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -80,9 +93,8 @@
 #include <unordered_set>
 #include <vector>
 
-#include <zlib.h>
-
 #include "core/encode/quantized_mesh.hpp"
+#include "core/geometry/predicates.hpp"
 #include "core/tiles/geographic_grid.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "core/tiles/surface_difference.hpp"
@@ -229,6 +241,8 @@ class TinBoundary {
     }
     return out;
   }
+
+  [[nodiscard]] const std::vector<std::array<std::uint32_t, 2>>& edges() const { return edges_; }
 
   /// z of the boundary point nearest p, interpolated along its edge, over
   /// `candidates` (of a rectangle holding p).
@@ -604,10 +618,12 @@ int terrainStoreCommand(const std::string& path) {
     ++r.tiles;
     r.bytes += bytes.size();
     r.gzip += gzipBytes(bytes);
-    if (d.extensionBytes.contains(encode::kMetadata)) r.metadata += d.extensionBytes.at(encode::kMetadata);
+    if (d.extensionBytes.contains(encode::kMetadata))
+      r.metadata += d.extensionBytes.at(encode::kMetadata);
     r.vertices += d.u.size();
     r.triangles += d.triangles.size();
-    if (const auto record = tiles::recordFromTerrainTile(bytes); record && record->error >= r.recordError) {
+    if (const auto record = tiles::recordFromTerrainTile(bytes);
+        record && record->error >= r.recordError) {
       r.recordError = record->error;
       r.recordWorst = id;
     }
@@ -622,9 +638,80 @@ int terrainStoreCommand(const std::string& path) {
   return 0;
 }
 
+// Pull-push fill of the nodes of an n × n grid (n = 2^k + 1) where `valid`
+// is 0: a pyramid of tent-weighted averages of the valid nodes (pull), then
+// each level's missing weight filled by bilinear interpolation of the level
+// above (push). Smooth away from the valid nodes, with small steps next to
+// them; false when no node is valid.
+bool pullPushFill(std::vector<double>& z, const std::vector<std::uint8_t>& valid, int n) {
+  struct Level {
+    int n;
+    std::vector<double> v, w;
+  };
+  std::vector<Level> levels;
+  levels.push_back({n, z, std::vector<double>(z.size())});
+  for (std::size_t k = 0; k < z.size(); ++k) levels[0].w[k] = valid[k] ? 1.0 : 0.0;
+  while (levels.back().n > 2) {
+    const Level& f = levels.back();
+    Level c{(f.n - 1) / 2 + 1, {}, {}};
+    c.v.assign(static_cast<std::size_t>(c.n) * c.n, 0.0);
+    c.w.assign(c.v.size(), 0.0);
+    for (int j = 0; j < c.n; ++j)
+      for (int i = 0; i < c.n; ++i) {
+        double sv = 0, sw = 0, st = 0;
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const int fi = 2 * i + di, fj = 2 * j + dj;
+            if (fi < 0 || fj < 0 || fi >= f.n || fj >= f.n) continue;
+            const double t = (di == 0 ? 1.0 : 0.5) * (dj == 0 ? 1.0 : 0.5);
+            const std::size_t k = static_cast<std::size_t>(fj) * f.n + fi;
+            sv += t * f.w[k] * f.v[k];
+            sw += t * f.w[k];
+            st += t;
+          }
+        const std::size_t k = static_cast<std::size_t>(j) * c.n + i;
+        c.v[k] = sw > 0 ? sv / sw : 0.0;
+        c.w[k] =
+            std::min(1.0, sw / st * 4.0);  // a node with a quarter of its tent valid counts fully
+      }
+    levels.push_back(std::move(c));
+  }
+  {  // the top (2 × 2): the mean of what is there
+    Level& t = levels.back();
+    double sv = 0, sw = 0;
+    for (std::size_t k = 0; k < t.v.size(); ++k) {
+      sv += t.w[k] * t.v[k];
+      sw += t.w[k];
+    }
+    if (sw <= 0) return false;
+    for (std::size_t k = 0; k < t.v.size(); ++k) {
+      t.v[k] = t.w[k] * t.v[k] + (1 - t.w[k]) * (sv / sw);
+      t.w[k] = 1;
+    }
+  }
+  for (std::size_t l = levels.size() - 1; l-- > 0;) {
+    Level& f = levels[l];
+    const Level& c = levels[l + 1];
+    for (int j = 0; j < f.n; ++j)
+      for (int i = 0; i < f.n; ++i) {
+        const std::size_t k = static_cast<std::size_t>(j) * f.n + i;
+        if (f.w[k] >= 1) continue;
+        const int ci = i / 2, cj = j / 2, ci1 = std::min(ci + (i & 1), c.n - 1),
+                  cj1 = std::min(cj + (j & 1), c.n - 1);
+        const auto at = [&](int a, int b) { return c.v[static_cast<std::size_t>(b) * c.n + a]; };
+        const double up = 0.25 * (at(ci, cj) + at(ci1, cj) + at(ci, cj1) + at(ci1, cj1));
+        f.v[k] = f.w[k] * f.v[k] + (1 - f.w[k]) * up;
+      }
+  }
+  for (std::size_t k = 0; k < z.size(); ++k)
+    if (!valid[k]) z[k] = levels[0].v[k];
+  return true;
+}
+
 int terrainGridsCommand(const std::string& tinPath, const std::string& storePath,
                         const std::string& spacing, const std::string& maxCellsText,
-                        const std::string& outPath) {
+                        const std::string& outPath, const std::string& fillMode) {
+  if (fillMode != "pullpush" && fillMode != "nearest") fail("FILL is pullpush or nearest");
   const auto t0 = std::chrono::steady_clock::now();
   const TinData projectTin = ingest::readTinFile(tinPath);
   const tiles::GeographicTin g = geographicTinOf(projectTin);
@@ -665,24 +752,48 @@ int terrainGridsCommand(const std::string& tinPath, const std::string& storePath
           }
         }
       }
-      // Outside: the TIN's z at the nearest boundary point, candidates per
-      // block of nodes (a coarse tile is mostly outside).
+      // Outside: pull-push, or (nearest, or no node inside) the TIN's z at the
+      // nearest boundary point, candidates per block of nodes (a coarse tile
+      // is mostly outside).
+      // With pull-push, the nodes within two of an inside node still take the
+      // nearest boundary point's z (so the triangles across the TIN's edge
+      // follow it), and pull-push fills the rest from those and the inside.
+      const bool pullPush =
+          fillMode == "pullpush" && std::find(inside.begin(), inside.end(), 1) != inside.end();
+      std::vector<std::uint8_t> want(z.size(), 0);  // outside nodes to give the nearest z
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const std::size_t k = static_cast<std::size_t>(j) * n + i;
+          if (inside[k]) continue;
+          bool near = !pullPush;
+          for (int dj = -2; dj <= 2 && !near; ++dj)
+            for (int di = -2; di <= 2 && !near; ++di) {
+              const int a = i + di, c = j + dj;
+              near =
+                  a >= 0 && c >= 0 && a < n && c < n && inside[static_cast<std::size_t>(c) * n + a];
+            }
+          want[k] = near;
+        }
       constexpr int kBlock = 32;
       for (int bj = 0; bj < n; bj += kBlock) {
         for (int bi = 0; bi < n; bi += kBlock) {
           const int ei = std::min(n, bi + kBlock) - 1, ej = std::min(n, bj + kBlock) - 1;
           bool any = false;
           for (int j = bj; j <= ej && !any; ++j)
-            for (int i = bi; i <= ei && !any; ++i) any = !inside[static_cast<std::size_t>(j) * n + i];
+            for (int i = bi; i <= ei && !any; ++i) any = want[static_cast<std::size_t>(j) * n + i];
           if (!any) continue;
           const Point2 lo = nodeAt(bi, bj), hi = nodeAt(ei, ej);
           const std::vector<std::uint32_t> near = boundary.candidates(Rect{lo.x, lo.y, hi.x, hi.y});
           for (int j = bj; j <= ej; ++j)
             for (int i = bi; i <= ei; ++i) {
               const std::size_t k = static_cast<std::size_t>(j) * n + i;
-              if (!inside[k]) z[k] = boundary.nearestZ(nodeAt(i, j), near);
+              if (want[k]) z[k] = boundary.nearestZ(nodeAt(i, j), near);
             }
         }
+      }
+      if (pullPush) {
+        for (std::size_t k = 0; k < z.size(); ++k) want[k] |= inside[k];
+        pullPushFill(z, want, n);
       }
     }
     put(out, id.z);
@@ -717,10 +828,15 @@ struct TerrainTileError {
   Point2 vertex;
   double fillOverTin = 0;  // the fill's largest difference over the TIN
   Point2 fillAt;
+  // TIN vertices off the TIN's boundary inside a fill triangle and in no
+  // surface triangle (the fill reaching into the TIN), and one of them.
+  std::size_t underFill = 0;
+  Point2 underFillAt;
 };
 
 TerrainTileError measureTerrainTile(const TileId& id, const std::string& bytes,
-                                    const TinIndex& index) {
+                                    const TinIndex& index,
+                                    const std::vector<std::uint8_t>& onTinBoundary) {
   const DecodedTerrain d = decodeTerrain(bytes, id.name());
   const tiles::GeoRect g = tiles::geographicTileBounds(id);
   std::vector<Point3> p(d.u.size());
@@ -739,7 +855,9 @@ TerrainTileError measureTerrainTile(const TileId& id, const std::string& bytes,
   for (const auto& t : d.triangles) {
     const Point3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]];
     const double area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    const bool isFill = a.z == 0.0 || b.z == 0.0 || c.z == 0.0;
+    // (tinsmith's header says -1.4e-45, the float below 0, as the minimum
+    // height of a tile with fill: its fill decodes to that, not to 0.)
+    const bool isFill = std::abs(a.z) < 1e-6 || std::abs(b.z) < 1e-6 || std::abs(c.z) < 1e-6;
     if (isFill) ++e.fill;
     if (area <= 0) {  // walls; or a surface triangle collapsed or flipped by quantization
       if (!isFill) ++e.collapsed;
@@ -761,6 +879,34 @@ TerrainTileError measureTerrainTile(const TileId& id, const std::string& bytes,
       e.fillAt = s.at;
     }
   }
+  // Which TIN vertices the surface covers (closed triangles) and which the
+  // fill holds strictly inside.
+  const auto& tv = index.tin().vertices;
+  std::unordered_set<std::uint32_t> bySurface, byFill;
+  std::vector<std::uint32_t> near;
+  auto visit = [&](const std::vector<std::array<std::uint32_t, 3>>& tris, bool strict,
+                   std::unordered_set<std::uint32_t>& out) {
+    for (const auto& t : tris) {
+      const Point3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]];
+      near.clear();
+      index.verticesIn(Rect{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}),
+                            std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y})},
+                       near);
+      for (const std::uint32_t v : near) {
+        const Point3& q = tv[v];
+        const int o1 = geometry::orient2d(a.x, a.y, b.x, b.y, q.x, q.y);
+        const int o2 = geometry::orient2d(b.x, b.y, c.x, c.y, q.x, q.y);
+        const int o3 = geometry::orient2d(c.x, c.y, a.x, a.y, q.x, q.y);
+        if (strict ? (o1 > 0 && o2 > 0 && o3 > 0) : (o1 >= 0 && o2 >= 0 && o3 >= 0)) out.insert(v);
+      }
+    }
+  };
+  visit(surface, false, bySurface);
+  visit(fill, true, byFill);
+  for (const std::uint32_t v : byFill) {
+    if (bySurface.contains(v) || onTinBoundary[v]) continue;
+    if (e.underFill++ == 0) e.underFillAt = tv[v].xy();
+  }
   return e;
 }
 
@@ -770,6 +916,8 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
   const TinData projectTin = ingest::readTinFile(tinPath);
   const tiles::GeographicTin g = geographicTinOf(projectTin);
   const TinIndex index(g.tin);
+  std::vector<std::uint8_t> onBoundary(g.tin.vertices.size(), 0);
+  for (const auto& e : TinBoundary(g.tin).edges()) onBoundary[e[0]] = onBoundary[e[1]] = 1;
   const auto s = store::openStoreForReading(storePath);
   const std::vector<TileId> ids = terrainTiles(*s);
   std::vector<TerrainTileError> errors(ids.size());
@@ -779,7 +927,7 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
   auto work = [&] {
     try {
       for (std::size_t i; (i = next++) < ids.size();)
-        errors[i] = measureTerrainTile(ids[i], *s->get(terrainKey(ids[i])), index);
+        errors[i] = measureTerrainTile(ids[i], *s->get(terrainKey(ids[i])), index, onBoundary);
     } catch (...) {
       const std::lock_guard lock(failureLock);
       failure = std::current_exception();
@@ -796,17 +944,20 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
     if (!f) fail("cannot write " + tilesPath);
     for (const auto& e : errors) {
       const Point2 at = degrees(e.worst.at), fa = degrees(e.fillAt);
-      std::fprintf(f,
-                   "{\"tile\":\"%s\",\"triangles\":%zu,\"measured\":%zu,\"fill\":%zu,\"collapsed\":%zu,"
-                   "\"maxError\":%.6f,\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,"
-                   "\"maxAtDemPoints\":%.6f,\"fillOverTin\":%.6f,\"fillAt\":[%.9f,%.9f]}\n",
-                   e.id.name().c_str(), e.triangles, e.measured, e.fill, e.collapsed, e.worst.maxAbs, at.x,
-                   at.y, e.worst.meshZ, e.worst.tinZ, e.atVertex, e.fillOverTin, fa.x, fa.y);
+      std::fprintf(
+          f,
+          "{\"tile\":\"%s\",\"triangles\":%zu,\"measured\":%zu,\"fill\":%zu,\"collapsed\":%zu,"
+          "\"maxError\":%.6f,\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,"
+          "\"maxAtDemPoints\":%.6f,\"fillOverTin\":%.6f,\"fillAt\":[%.9f,%.9f],"
+          "\"underFill\":%zu,\"underFillAt\":[%.9f,%.9f]}\n",
+          e.id.name().c_str(), e.triangles, e.measured, e.fill, e.collapsed, e.worst.maxAbs, at.x,
+          at.y, e.worst.meshZ, e.worst.tinZ, e.atVertex, e.fillOverTin, fa.x, fa.y, e.underFill,
+          degrees(e.underFillAt).x, degrees(e.underFillAt).y);
     }
     std::fclose(f);
   }
   std::map<int, TerrainTileError> rows;  // the worst of each measure per level
-  std::map<int, std::size_t> tileCount, triangleCount, fillCount, collapsedCount;
+  std::map<int, std::size_t> tileCount, triangleCount, fillCount, collapsedCount, underFillCount;
   std::map<int, TileId> fillWorst;
   for (const auto& e : errors) {
     TerrainTileError& r = rows[e.id.z];
@@ -814,6 +965,7 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
     triangleCount[e.id.z] += e.triangles;
     fillCount[e.id.z] += e.fill;
     collapsedCount[e.id.z] += e.collapsed;
+    underFillCount[e.id.z] += e.underFill;
     if (e.worst.maxAbs >= r.worst.maxAbs) {
       r.worst = e.worst;
       r.id = e.id;
@@ -831,12 +983,15 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
   for (const auto& [z, r] : rows) {
     const Point2 at = degrees(r.worst.at), fa = degrees(r.fillAt);
     std::printf(
-        "{\"level\":%d,\"tiles\":%zu,\"triangles\":%zu,\"fillTriangles\":%zu,\"collapsed\":%zu,\"maxError\":%.6f,"
+        "{\"level\":%d,\"tiles\":%zu,\"triangles\":%zu,\"fillTriangles\":%zu,\"collapsed\":%zu,"
+        "\"maxError\":%.6f,"
         "\"worst\":\"%s\",\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,\"maxAtDemPoints\":%.6f,"
-        "\"fillOverTin\":%.6f,\"fillWorst\":\"%s\",\"fillAt\":[%.9f,%.9f],\"cesiumError\":%.6f}\n",
-        z, tileCount[z], triangleCount[z], fillCount[z], collapsedCount[z], r.worst.maxAbs, r.id.name().c_str(), at.x,
-        at.y, r.worst.meshZ, r.worst.tinZ, r.atVertex, r.fillOverTin, fillWorst[z].name().c_str(),
-        fa.x, fa.y, tiles::cesiumLevelMaximumGeometricError(z));
+        "\"fillOverTin\":%.6f,\"fillWorst\":\"%s\",\"fillAt\":[%.9f,%.9f],\"underFill\":%zu,"
+        "\"cesiumError\":%.6f}\n",
+        z, tileCount[z], triangleCount[z], fillCount[z], collapsedCount[z], r.worst.maxAbs,
+        r.id.name().c_str(), at.x, at.y, r.worst.meshZ, r.worst.tinZ, r.atVertex, r.fillOverTin,
+        fillWorst[z].name().c_str(), fa.x, fa.y, underFillCount[z],
+        tiles::cesiumLevelMaximumGeometricError(z));
   }
   std::printf("{\"seconds\":%.3f}\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
@@ -853,8 +1008,8 @@ int main(int argc, char** argv) {
     if ((a.size() == 3 || a.size() == 4) && a[0] == "error")
       return errorCommand(a[1], a[2], a.size() == 4 ? std::stoi(a[3]) : 1);
     if (a.size() == 2 && a[0] == "terrain-store") return terrainStoreCommand(a[1]);
-    if (a.size() == 6 && a[0] == "terrain-grids")
-      return terrainGridsCommand(a[1], a[2], a[3], a[4], a[5]);
+    if ((a.size() == 6 || a.size() == 7) && a[0] == "terrain-grids")
+      return terrainGridsCommand(a[1], a[2], a[3], a[4], a[5], a.size() == 7 ? a[6] : "pullpush");
     if (a.size() >= 3 && a.size() <= 5 && a[0] == "terrain-error")
       return terrainErrorCommand(a[1], a[2], a.size() >= 4 ? std::stoi(a[3]) : 1,
                                  a.size() == 5 ? a[4] : "");
@@ -867,7 +1022,8 @@ int main(int argc, char** argv) {
       "       tile_error_bench grids SITE.tin SITE.3dtiles SPACING|n=NODES Z:TOL,... OUT.grids\n"
       "       tile_error_bench error SITE.tin MESHES.bin [THREADS]\n"
       "       tile_error_bench terrain-store STORE\n"
-      "       tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids\n"
+      "       tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids "
+      "[pullpush|nearest]\n"
       "       tile_error_bench terrain-error SITE.tin STORE [THREADS [TILES.jsonl]]\n");
   return 2;
 }
