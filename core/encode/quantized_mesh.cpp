@@ -207,7 +207,8 @@ std::optional<std::string> quantizedMeshMetadata(std::string_view bytes) {
     if (e.id != kMetadata || e.length < 4) continue;
     std::uint32_t length = 0;
     std::memcpy(&length, bytes.data() + e.offset, 4);
-    if (length > e.length - 4) throw inputError("a quantized-mesh tile's metadata runs past its end");
+    if (length > e.length - 4)
+      throw inputError("a quantized-mesh tile's metadata runs past its end");
     return std::string(bytes.substr(e.offset + 4, length));
   }
   return std::nullopt;
@@ -256,8 +257,10 @@ QuantizedTerrain quantizeTerrain(const GeodeticMesh& mesh) {
   }
   // The header's range is float: take the floats around the range, so that
   // every height lies within it as a client reads it.
-  const auto minHeight = std::nextafter(static_cast<float>(lo), -HUGE_VALF);
-  const auto maxHeight = std::nextafter(static_cast<float>(hi), HUGE_VALF);
+  auto minHeight = static_cast<float>(lo), maxHeight = static_cast<float>(hi);
+  if (minHeight > lo) minHeight = std::nextafter(minHeight, -HUGE_VALF);
+  if (maxHeight < hi) maxHeight = std::nextafter(maxHeight, HUGE_VALF);
+  if (maxHeight == minHeight) maxHeight = std::nextafter(maxHeight, HUGE_VALF);
   const double h0 = minHeight, h1 = maxHeight;
   auto quantize = [](double value, double a, double b) {
     return static_cast<std::uint16_t>(
@@ -289,7 +292,9 @@ QuantizedTerrain quantizeTerrain(const GeodeticMesh& mesh) {
     if (raw.u[i] == kQuantizedMax) raw.edges[2].push_back(v);
     if (raw.v[i] == kQuantizedMax) raw.edges[3].push_back(v);
   }
-  const auto normals = areaWeightedNormals(exact, mesh.triangles);
+  const std::span<const std::array<std::uint32_t, 3>> shading(
+      mesh.triangles.data(), std::min(mesh.shadingTriangles, mesh.triangles.size()));
+  const auto normals = areaWeightedNormals(exact, shading);
   for (std::size_t i = 0; i < n; ++i) {
     // A vertex no triangle uses: the radial direction, about up.
     const bool none = normals[i].x == 0 && normals[i].y == 0 && normals[i].z == 0;

@@ -64,7 +64,7 @@ std::string encodeQuantizedMesh(const QuantizedMeshTile& tile);
 /// asks for some of them (Accept: application/vnd.quantized-mesh;extensions=…)
 /// and to read a tile's metadata, without decoding the mesh.
 struct QuantizedMeshExtension {
-  std::uint8_t id = 0;  ///< 1 normals, 2 water mask, 4 metadata
+  std::uint8_t id = 0;                 ///< 1 normals, 2 water mask, 4 metadata
   std::size_t offset = 0, length = 0;  ///< of the payload, in the tile's bytes
 };
 struct QuantizedMeshLayout {
@@ -99,6 +99,9 @@ void setBoundingVolumes(QuantizedMeshTile& tile, std::span<const Point3> ecef);
 struct GeodeticMesh {
   std::vector<Geodetic> vertices;
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  /// The first this many triangles give the vertex normals; those after
+  /// them (walls standing on the ground) are drawn but shade nothing.
+  std::size_t shadingTriangles = static_cast<std::size_t>(-1);
   double west = 0, south = 0, east = 0, north = 0;  ///< degrees
 };
 

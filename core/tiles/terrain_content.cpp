@@ -36,7 +36,8 @@ std::vector<std::uint8_t> waterMask(const Rect& rect, const std::vector<TerrainL
       std::sort(crossings.begin(), crossings.end());
       for (int col = 0; col < kSize; ++col) {
         const double x = rect.x0 + (col + 0.5) / kSize * rect.width();
-        const auto left = std::lower_bound(crossings.begin(), crossings.end(), x) - crossings.begin();
+        const auto left =
+            std::lower_bound(crossings.begin(), crossings.end(), x) - crossings.begin();
         if (left % 2 == 1) mask[static_cast<std::size_t>(row * kSize + col)] = 255;
       }
     }
@@ -76,6 +77,7 @@ TileContent encodeTerrainTile(const TileSurface& surface, const TileId& id,
   mesh.vertices.resize(measured.vertices.size());
   frame.toGeodetic(measured.vertices, mesh.vertices);
   mesh.triangles = measured.triangles;
+  mesh.shadingTriangles = mesh.triangles.size();  // a wall's foot is lit as the ground
   mesh.triangles.insert(mesh.triangles.end(), fill.walls.begin(), fill.walls.end());
   encode::QuantizedTerrain q = encode::quantizeTerrain(mesh);
 
@@ -91,14 +93,17 @@ TileContent encodeTerrainTile(const TileSurface& surface, const TileId& id,
   record.reachableError = error.reachable;
   constexpr double kRadian = std::numbers::pi / 180.0;
   const GeoRect g = geographicTileBounds(*geographicTileOf(id, options.west));
-  record.region = {g.west * kRadian, g.south * kRadian, g.east * kRadian, g.north * kRadian,
-                   q.tile.minHeight, q.tile.maxHeight};
+  record.region = {g.west * kRadian,  g.south * kRadian, g.east * kRadian,
+                   g.north * kRadian, q.tile.minHeight,  q.tile.maxHeight};
   record.vertices = q.tile.u.size();
   record.triangles = q.tile.triangles.size();
   record.breakLineVertices = surface.breakLineVertices;
   record.positionErrorBound = q.maxMove;
   q.tile.waterMask = options.lakes ? waterMask(rect, *options.lakes) : std::vector<std::uint8_t>{0};
-  q.tile.metadata = recordToJson(record);
+  // The metadata names the tile as a client does: its grid tile.
+  TileRecord shipped = record;
+  shipped.id = *geographicTileOf(id, options.west);
+  q.tile.metadata = recordToJson(shipped);
   TileContent content{encode::encodeQuantizedMesh(q.tile), record};
   content.record.bytes = content.glb.size();
   return content;

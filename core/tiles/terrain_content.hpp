@@ -37,12 +37,13 @@ struct TerrainTileOptions {
 /// `geometry` (geographicPyramid) from its surface, which may be empty (the
 /// tile is then all fill). Extensions: vertex normals, the water mask (256 ×
 /// 256 from the lakes, or one byte when the tile is all land or all water),
-/// metadata (the record).
+/// metadata (the record, naming the grid tile). The content's record names
+/// the pyramid tile `id`.
 TileContent encodeTerrainTile(const TileSurface& surface, const TileId& id,
                               const PyramidGeometry& geometry, const TerrainTileOptions& options);
 
-/// The record in a terrain tile's metadata; nullopt for bytes that are no
-/// quantized-mesh tile with a record.
+/// The record in a terrain tile's metadata, its id the grid tile (TMS); nullopt
+/// for bytes that are no quantized-mesh tile with a record.
 std::optional<TileRecord> recordFromTerrainTile(std::string_view bytes);
 
 /// The water mask of a rectangle of the working frame: 256 × 256 bytes from

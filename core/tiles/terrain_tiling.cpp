@@ -48,7 +48,8 @@ GeographicTin toGeographicTin(const TinData& tin, const GeoReference& project) {
     for (const auto& t : tin.triangles) {
       if (lonSpan(t) > 180.0) {
         throw geometryError("the TIN's triangle at " + place(tin.vertices[t[0]]) + " in " +
-                                tin.crs + " spans more than 180° of longitude (a TIN around a pole)",
+                                tin.crs +
+                                " spans more than 180° of longitude (a TIN around a pole)",
                             {}, "cut the TIN short of the pole to tile it as Cesium terrain");
       }
     }
@@ -64,7 +65,10 @@ GeographicTin toGeographicTin(const TinData& tin, const GeoReference& project) {
       throw geometryError("the TIN's triangle at " + place(tin.vertices[t[0]]) + " in " + tin.crs +
                               " folds over in longitude and latitude (a sliver thinner than the "
                               "projection's rounding)",
-                          {}, "rebuild the TIN with a snap tolerance (tinsmith tin --snap 0.001)");
+                          {},
+                          "a sliver on the TIN's hull (a DEM's edge): rebuild it with tinsmith tin "
+                          "--trim-hull M (M about 3 × the point spacing); near points merged by "
+                          "--snap 0.001 mend one inside");
     }
   }
   out.tin.triangles = tin.triangles;
@@ -82,8 +86,8 @@ std::optional<TileId> geographicTileOf(const TileId& t, double west) {
   if (t.z < 1 || t.y >= (std::uint64_t{1} << (t.z - 1))) return std::nullopt;
   const std::uint64_t columns = std::uint64_t{1} << t.z;
   // The frame's column 0 starts at `west`; the grid's at −180°.
-  const auto shift = static_cast<std::uint64_t>(std::llround((west + 180.0) / 360.0 *
-                                                             static_cast<double>(columns)));
+  const auto shift = static_cast<std::uint64_t>(
+      std::llround((west + 180.0) / 360.0 * static_cast<double>(columns)));
   return TileId{t.z - 1, static_cast<std::uint32_t>((t.x + shift) % columns), t.y};
 }
 

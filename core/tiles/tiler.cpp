@@ -292,11 +292,10 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   // triangles within a quarter of the budget each, on average over the
   // square. Zooms below it keep the finest tolerance: they exist only where a
   // tile of the planned finest zoom cannot meet it within levelsPerTile levels.
-  const int cap = options_.fixed
-                      ? std::min(options_.fixed->finestZoom + levelsPerTile_,
-                                 fit::BinaryTriangulation::kMaxGridLevels - 1)
-                      : std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
-                                 fit::BinaryTriangulation::kMaxGridLevels - 1);
+  const int cap = options_.fixed ? std::min(options_.fixed->finestZoom + levelsPerTile_,
+                                            fit::BinaryTriangulation::kMaxGridLevels - 1)
+                                 : std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
+                                            fit::BinaryTriangulation::kMaxGridLevels - 1);
   auto planning = std::make_unique<fit::MultilevelFit>(
       fit::fitMultilevel(zoomData_, zoomFitOptions(options_, geometry_, options_.tolerance, cap)));
   int zmax = 0;
@@ -309,7 +308,8 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
       ++zmax;
   }
   finestZoom_ = zmax;
-  maxZoom_ = std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
+  maxZoom_ =
+      std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
   if (finestZoom_ + levelsPerTile_ == cap) plannedFit_ = std::move(planning);
 }
 
@@ -382,7 +382,7 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
   return zd;
 }
 
-TileSurface Tiler::buildTile(const TileId& id) const {
+TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   if (!geometry_.inside(id)) throw usageError("tile " + id.name() + " is outside the pyramid");
   const Zoom& zd = zoom(id.z);
   const Rect rect = geometry_.bounds(id);
@@ -396,7 +396,8 @@ TileSurface Tiler::buildTile(const TileId& id) const {
   // Each triangle's chord sag counts (the content is straight triangles on
   // the curved Earth), and encoding keeps its share of the tolerance.
   RefineOptions refine;
-  refine.tolerance = (1 - kEncodingShare) * zd.tolerance;
+  refine.tolerance = std::max((1 - kEncodingShare) * zd.tolerance - encodingAllowance,
+                              0.5 * (1 - kEncodingShare) * zd.tolerance);
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = sideMargin(rect);
   refine.earthRadius = kEarthRadiusOfCurvature;

@@ -146,7 +146,10 @@ class Tiler {
   }
 
   /// The tile's surface (empty when the tile holds none of the TIN). Thread-safe.
-  [[nodiscard]] TileSurface buildTile(const TileId& id) const;
+  /// `encodingAllowance` (metres) is kept from the refinement's target
+  /// besides kEncodingShare, for an encoding whose rounding the caller
+  /// cannot choose (quantized-mesh's 0..32767 over the tile).
+  [[nodiscard]] TileSurface buildTile(const TileId& id, double encodingAllowance = 0.0) const;
 
  private:
   struct Zoom;

@@ -2,8 +2,8 @@
 
 #include "core/base/error.hpp"
 #include "core/encode/quantized_mesh.hpp"
-#include "server/app/break_lines.hpp"
 #include "core/tiles/tileset_json.hpp"
+#include "server/app/break_lines.hpp"
 #include "server/app/elevation.hpp"
 #include "server/app/index_page.hpp"
 #include "server/http/error_status.hpp"
@@ -89,15 +89,18 @@ std::string normalizeBasePath(std::string_view text) {
   std::size_t at = 0;
   while (at < text.size()) {
     const std::size_t slash = text.find('/', at);
-    const std::string_view segment = text.substr(at, slash == std::string_view::npos ? slash : slash - at);
+    const std::string_view segment =
+        text.substr(at, slash == std::string_view::npos ? slash : slash - at);
     at = slash == std::string_view::npos ? text.size() : slash + 1;
     if (segment.empty()) {
       if (at == 1 || at == text.size()) continue;  // a leading or trailing '/'
-      throw usageError("--base-path '" + std::string(text) + "' has an empty segment", "write /a/b");
+      throw usageError("--base-path '" + std::string(text) + "' has an empty segment",
+                       "write /a/b");
     }
     const bool ok = segment.size() <= 64 && segment != "." && segment != ".." &&
-                    segment.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
-                                              "0123456789._~-") == std::string_view::npos;
+                    segment.find_first_not_of(
+                        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                        "0123456789._~-") == std::string_view::npos;
     if (!ok)
       throw usageError("--base-path '" + std::string(text) + "': '" + std::string(segment) +
                            "' is not a plain path segment",
@@ -135,7 +138,8 @@ std::shared_ptr<const TileService::Listing> TileService::listing() {
   }
   fresh->tilesets = makeContent(list.dump(2) + "\n", true);
   const bool cesium = options_.viewer && options_.viewer->hasCesium();
-  fresh->index = makeContent(indexPageHtml(tilesets, options_.basePath, cesium ? "" : kNoViewer), true);
+  fresh->index =
+      makeContent(indexPageHtml(tilesets, options_.basePath, cesium ? "" : kNoViewer), true);
   fresh->threeFallback = makeContent(indexPageHtml(tilesets, options_.basePath, kNoThree), true);
   listing_ = std::move(fresh);
   return listing_;
@@ -235,18 +239,23 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
 
   switch (route.kind) {
     case RouteKind::Index:
-      if (options_.viewer && options_.viewer->hasCesium()) return serveViewer(request, "viewer/index.html", true);
-      return serveContent(request, *listing()->index, "text/html; charset=utf-8", "no-cache", false);
-    case RouteKind::ThreePage:
-      if (options_.viewer && options_.viewer->hasThree()) return serveViewer(request, "viewer/three.html", true);
-      return serveContent(request, *listing()->threeFallback, "text/html; charset=utf-8", "no-cache",
+      if (options_.viewer && options_.viewer->hasCesium())
+        return serveViewer(request, "viewer/index.html", true);
+      return serveContent(request, *listing()->index, "text/html; charset=utf-8", "no-cache",
                           false);
-    case RouteKind::ViewerAsset: return serveViewer(request, route.asset, false);
+    case RouteKind::ThreePage:
+      if (options_.viewer && options_.viewer->hasThree())
+        return serveViewer(request, "viewer/three.html", true);
+      return serveContent(request, *listing()->threeFallback, "text/html; charset=utf-8",
+                          "no-cache", false);
+    case RouteKind::ViewerAsset:
+      return serveViewer(request, route.asset, false);
     case RouteKind::Health: {
       Response r;
       r.addHeader("Content-Type", kJson);
       r.addHeader("Cache-Control", "no-store");
-      r.setBody("{\"status\":\"ok\",\"tilesets\":" + std::to_string(catalog_.tilesets().size()) + "}\n");
+      r.setBody("{\"status\":\"ok\",\"tilesets\":" + std::to_string(catalog_.tilesets().size()) +
+                "}\n");
       return r;
     }
     case RouteKind::Metrics: {
@@ -258,7 +267,8 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
     }
     case RouteKind::Tilesets:
       return serveContent(request, *listing()->tilesets, kJson, "no-cache", false);
-    default: break;
+    default:
+      break;
   }
 
   const auto tileset = catalog_.find(route.tileset);  // held for the whole request
@@ -270,11 +280,10 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
     case RouteKind::Tile: {
       const bool tile = route.kind == RouteKind::Tile;
       if (route.outsidePyramid || route.tile.z > tileset->maxZoom())
-        return notFound("the tile is outside the pyramid of '" +
-                        tileset->id() + "' (zooms 0 to " + std::to_string(tileset->maxZoom()) + ")");
+        return notFound("the tile is outside the pyramid of '" + tileset->id() + "' (zooms 0 to " +
+                        std::to_string(tileset->maxZoom()) + ")");
       const std::string key =
-          tile ? tiles::tileContentKey(route.tile)
-               : "tilesets/" + route.tile.name() + ".json";
+          tile ? tiles::tileContentKey(route.tile) : "tilesets/" + route.tile.name() + ".json";
       return serveStored(request, tileset, key, tile ? &route.tile : nullptr);
     }
     case RouteKind::TerrainLayer:
@@ -296,7 +305,8 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
       if (!tileset->hasTin())
         return notFound("tileset '" + tileset->id() + "' carries no TIN, so it has no break lines");
       return serveLines(request, tileset);
-    default: break;
+    default:
+      break;
   }
   switch (route.kind) {
     case RouteKind::Elevation: {
@@ -316,7 +326,8 @@ Response TileService::dispatch(const Request& request, const RequestTarget& targ
         });
       return serveJson(request, profileAlong(*tileset, target).dump(), kTilesetCacheControl);
     }
-    default: break;
+    default:
+      break;
   }
   return notFound("no route for this path");
 }
@@ -373,16 +384,16 @@ Response TileService::serveStoredContent(const Request& request, const Content& 
 }
 
 Response TileService::serveTerrainTile(const Request& request,
-                                      const std::shared_ptr<const Tileset>& tileset,
-                                      const tiles::TileId& t) {
+                                       const std::shared_ptr<const Tileset>& tileset,
+                                       const tiles::TileId& t) {
   const std::vector<std::uint8_t> extensions = quantizedMeshExtensionsAccepted(request.accept);
   const std::string key = "terrain/" + std::to_string(t.z) + "/" + std::to_string(t.x) + "/" +
                           std::to_string(t.y) + ".terrain";
   std::string cacheKey = std::to_string(tileset->generation()) + '/' + key + '#';
   for (const std::uint8_t e : extensions) cacheKey += std::to_string(e);
   auto serve = [&](const Content& content) {
-    Response r = serveContent(request, content, "application/vnd.quantized-mesh",
-                              kTileCacheControl, true);
+    Response r =
+        serveContent(request, content, "application/vnd.quantized-mesh", kTileCacheControl, true);
     r.addHeader("Vary", "Accept");
     return r;
   };
@@ -397,7 +408,16 @@ Response TileService::serveTerrainTile(const Request& request,
   if (!bytes)
     return notFound("tileset '" + tileset->id() + "' has no terrain tile " + t.name() +
                     " (layer.json lists the tiles it has)");
-  const auto content = makeContent(encode::withExtensions(*bytes, extensions), true, false);
+  std::string shipped;
+  try {
+    shipped = encode::withExtensions(*bytes, extensions);
+  } catch (const Error& e) {
+    // The request is fine; the store is not.
+    return internalFailure(ErrorKind::Io, "tileset '" + tileset->id() + "': the stored " + key +
+                                              " is damaged (" + e.what() +
+                                              "); rebuild the store's terrain");
+  }
+  const auto content = makeContent(shipped, true, false);
   cache_.insert(cacheKey, content);
   return serve(*content);
 }
@@ -465,8 +485,8 @@ Response TileService::serveContent(const Request& request, const Content& conten
     const auto range = parseRange(request.range, r.body->size());
     const std::string size = std::to_string(r.body->size());
     if (range.kind == RangeRequest::Kind::Unsatisfiable) {
-      Response e = errorResponse(416, ErrorKind::Input, "the range is outside the " + size + " bytes",
-                                 "Range");
+      Response e = errorResponse(416, ErrorKind::Input,
+                                 "the range is outside the " + size + " bytes", "Range");
       e.addHeader("Content-Range", "bytes */" + size);
       return e;
     }

@@ -1,11 +1,10 @@
 #include "server/http/representation.hpp"
 
-#include <algorithm>
-#include <cctype>
-
 #include <brotli/encode.h>
 #include <zlib.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 
@@ -172,14 +171,16 @@ std::vector<std::uint8_t> quantizedMeshExtensionsAccepted(std::string_view accep
     const std::size_t comma = accept.find(',');
     std::string_view range = accept.substr(0, comma);
     accept = comma == std::string_view::npos ? std::string_view{} : accept.substr(comma + 1);
+    // On any range: CesiumJS puts the parameter on the quantized-mesh type,
+    // 3d-tiles-renderer's plugin on application/octet-stream after it.
     std::size_t semi = range.find(';');
-    if (lower(trim(range.substr(0, semi))) != "application/vnd.quantized-mesh") continue;
     while (semi != std::string_view::npos) {
       range = range.substr(semi + 1);
       semi = range.find(';');
       const std::string_view param = trim(range.substr(0, semi));
       const std::size_t eq = param.find('=');
-      if (eq == std::string_view::npos || lower(trim(param.substr(0, eq))) != "extensions") continue;
+      if (eq == std::string_view::npos || lower(trim(param.substr(0, eq))) != "extensions")
+        continue;
       std::string_view names = trim(param.substr(eq + 1));
       if (names.size() >= 2 && names.front() == '"' && names.back() == '"')
         names = names.substr(1, names.size() - 2);

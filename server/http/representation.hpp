@@ -4,11 +4,11 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
-#include <cstdint>
 
 namespace tinsmith::server {
 
@@ -43,9 +43,11 @@ bool acceptsBrotli(std::string_view acceptEncoding);  ///< "br"
 std::string gzipCompress(std::string_view bytes);
 
 /// The quantized-mesh extensions an Accept header asks for (CesiumJS:
-/// "application/vnd.quantized-mesh;extensions=octvertexnormals-watermask-metadata"):
+/// "application/vnd.quantized-mesh;extensions=octvertexnormals-watermask-metadata";
+/// 3d-tiles-renderer: "…,application/octet-stream;q=0.9;extensions=…"):
 /// their ids (1 octvertexnormals, 2 watermask, 4 metadata), ascending, each
-/// once; none without that media type. Unknown names are ignored.
+/// once, from an `extensions` parameter on any media range; none without
+/// one. Unknown names are ignored.
 std::vector<std::uint8_t> quantizedMeshExtensionsAccepted(std::string_view accept);
 
 /// `bytes` compressed as brotli (RFC 7932), quality 5. Throws internalError

@@ -28,6 +28,7 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <set>
 
 #include "core/encode/frames.hpp"
@@ -164,6 +165,7 @@ void expectAWellFormedStore(const TerrainStore& store) {
     const auto& m = t.mesh;
     const std::string name = t.id.name();
     ASSERT_FALSE(m.u.empty()) << name;
+    EXPECT_EQ(t.record.id, t.id) << name << ": its metadata names another tile";
     EXPECT_EQ(t.record.vertices, m.u.size()) << name;
     EXPECT_EQ(t.record.triangles * 3, m.indices.size()) << name;
     // The edge lists are exactly the vertices on each side.
@@ -203,6 +205,20 @@ void expectAWellFormedStore(const TerrainStore& store) {
     if (metadata.contains("available")) listed = availableTiles(metadata["available"], 1);
     EXPECT_EQ(listed, below) << t.id.name() << "'s metadata availability";
   }
+}
+
+/// An oct-encoded unit vector (quantized-mesh's octvertexnormals), decoded
+/// as the format's text gives it.
+Point3 octDecode(std::uint8_t ou, std::uint8_t ov) {
+  double x = ou / 255.0 * 2 - 1, y = ov / 255.0 * 2 - 1;
+  const double z = 1 - std::abs(x) - std::abs(y);
+  if (z < 0) {
+    const double ox = x;
+    x = (1 - std::abs(y)) * (ox >= 0 ? 1 : -1);
+    y = (1 - std::abs(ox)) * (y >= 0 ? 1 : -1);
+  }
+  const double l = std::sqrt(x * x + y * y + z * z);
+  return {x / l, y / l, z / l};
 }
 
 struct SurfaceCheck {
@@ -258,6 +274,19 @@ SurfaceCheck expectTheSurfaceWithinItsErrors(const TerrainRun& run, const TinDat
     };
     for (std::size_t i = 0; i < g.size(); ++i)
       if (!fill[i]) measure(g[i], "vertex");
+    // The fill is the ellipsoid, lit as the ground: a wall's foot too (its
+    // normal is the fill's, not bent towards the wall).
+    const std::string& normals = m.extensions.at(encode::kOctVertexNormals);
+    EXPECT_EQ(normals.size(), 2 * m.u.size()) << name;
+    for (std::size_t i = 0; i < g.size() && normals.size() == 2 * m.u.size(); ++i) {
+      if (!fill[i]) continue;
+      const Point3 n = octDecode(static_cast<std::uint8_t>(normals[2 * i]),
+                                 static_cast<std::uint8_t>(normals[2 * i + 1]));
+      const double lon = g[i].lon * std::numbers::pi / 180, lat = g[i].lat * std::numbers::pi / 180;
+      const Point3 up{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+      EXPECT_GT(n.x * up.x + n.y * up.y + n.z * up.z, std::cos(5 * std::numbers::pi / 180))
+          << name << ": the ground at " << g[i].lon << ", " << g[i].lat << " is not lit as level";
+    }
     for (std::size_t k = 0; k < m.indices.size(); k += 3) {
       const std::uint32_t a = m.indices[k], b = m.indices[k + 1], c = m.indices[k + 2];
       if (fill[a] || fill[b] || fill[c]) continue;

@@ -8,6 +8,7 @@
 // schemes (tinsmith tile --scheme both), as the demo's does.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/encode/quantized_mesh.hpp"
@@ -106,6 +107,13 @@ TEST_F(TerrainRoutes, EveryTileCarriesTheExtensionsAskedForAndNoOthers) {
     EXPECT_EQ(all.header("vary"), "Accept");
     EXPECT_EQ(all.header("access-control-allow-origin"), "*");
     EXPECT_EQ((extensionIds(all.body)), (std::vector<int>{1, 2, 4})) << key;
+    // 3d-tiles-renderer's QuantizedMeshPlugin puts the parameter on the
+    // octet-stream range.
+    const auto three =
+        c.request(target,
+                  "Accept: application/vnd.quantized-mesh,application/octet-stream;q=0.9;"
+                  "extensions=octvertexnormals-watermask-metadata\r\n");
+    EXPECT_EQ(three.body, stored(key)) << key;
     // No parameter: the mesh alone, which still decodes.
     const auto plain = c.request(target);
     ASSERT_EQ(plain.status, 200) << key;
@@ -150,6 +158,21 @@ TEST_F(TerrainRoutes, MissingTilesOffGridTilesAndTilesetsWithoutTerrainAre404) {
   EXPECT_EQ(none.status, 404);
   EXPECT_NE(none.body.find("--scheme both"), std::string::npos) << none.body;
   EXPECT_EQ(httpGet(port(), "/tilesets/hill-both/terrain/0/0/x.terrain").status, 400);
+}
+
+TEST(TerrainRoutesDamaged, ADamagedStoredTileIsTheServers500NotTheClients400) {
+  const auto source = store::openStoreForReading(bothSchemesStore());
+  const auto dir = scratchDir("terrain-damaged-" + std::to_string(::getpid())) / "hill-both";
+  store::writeStore(*source, source->keys(), dir);
+  const std::string key = "terrain/0/0/0.terrain";
+  std::ofstream(dir / key, std::ios::binary | std::ios::trunc)
+      << source->get(key).value().substr(0, 300);
+  auto options = RunningServer::defaults();
+  options.stores = {dir};
+  RunningServer server(options);
+  const auto r = httpGet(server.port(), "/tilesets/hill-both/" + key);
+  EXPECT_EQ(r.status, 500) << r.body;
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/hill-both/terrain/0/1/0.terrain").status, 200);
 }
 
 }  // namespace
