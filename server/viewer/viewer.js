@@ -1,15 +1,32 @@
 // tinsmith's CesiumJS viewer (GET /). Offline: no Ion, no imagery unless the
 // page is given ?imagery=XYZ-URL-TEMPLATE, a plain globe colour. Everything
 // it asks the server for is relative to the page (tilesets, …/tileset.json,
-// …/elevation, …/profile, …/lines.geojson), so any port and any
+// …/elevation, …/profile, …/lines.geojson, …/terrain/…), so any port and any
 // --base-path prefix work.
+//
+// Two globes: the ellipsoid with the 3D Tiles tileset on it (the default),
+// or, for a tileset whose store holds Cesium terrain (links.terrain in
+// /tilesets), tinsmith's quantized-mesh terrain as the globe itself
+// (?terrain=1 or the panel's Globe choice), the tileset hidden.
 //
 // What the cursor panel shows comes from the elevation route (the TIN), not
 // from the rendered mesh: the mesh only says where on the ground the cursor
-// is (lon, lat). window.tinsmithViewer is for tests and scripts:
+// is (lon, lat). In terrain mode it also shows the terrain tiles' own height
+// there (sampleTerrainMostDetailed), beside the route's ellipsoidal height.
+// window.tinsmithViewer is for tests and scripts:
 //   ready                 resolves when the first tileset is in view and loaded
+//   mode                  'tiles' (3D Tiles on the ellipsoid) or 'terrain'
+//   hasTerrain            whether the tileset shown has Cesium terrain
+//   setMode(mode)         switches the globe; resolves once the view is loaded
+//   settled()             resolves once what the view needs is loaded and drawn
 //   probe(x, y)           what the panel shows for the screen point (CSS px)
 //   profileScreen(ax, ay, bx, by)  a profile between two screen points
+//   terrainHeightAt(lon, lat)  (terrain mode) the terrain tiles' height there,
+//                         the deepest level available there, and the elevation
+//                         route's z and ellipsoidalHeight
+//   clampedEntity(lon, lat)  (terrain mode) adds a point clamped to the ground;
+//                         resolves with the height CesiumJS clamped it to
+//   errors                terrain tiles CesiumJS failed to load
 //   colours               the page's flat colours (sky, globe), to measure renders
 //   viewer                the Cesium.Viewer
 (() => {
@@ -18,6 +35,7 @@
   const SKY = [12, 14, 20];        // background (space) colour
   const GLOBE = [38, 58, 92];      // the plain globe colour: no lit terrain is this blue
   const TERRAIN = '#d9c7a3';       // the tiles' colour, shaded by the fixed light
+  const WATER = '#3d6f9e';         // the terrain's water mask (lakes), terrain mode
   const PROFILE_COLOUR = '#ff5ad2';
   const LINE_COLOURS = {
     road: '#ff7a1a', river: '#1f8fff', lake: '#2fd0ff', boundary: '#f2f2f2',
@@ -34,6 +52,7 @@
     ready: new Promise((resolve, reject) => { resolveReady = resolve; rejectReady = reject; }),
     colours: { sky: SKY, globe: GLOBE, terrain: TERRAIN },
     tileset: null, id: null, summary: null, lastProbe: null, lastProfile: null, profiles: 0,
+    mode: 'tiles', hasTerrain: false, errors: [],
   };
   api.ready.catch(() => {});
 
@@ -85,6 +104,7 @@
   if (scene.sun) scene.sun.show = false;
   if (scene.moon) scene.moon.show = false;
 
+  let wantTerrain = params.get('terrain') === '1';  // the globe asked for, kept across tilesets
   const imagery = params.get('imagery');
   let imageryProvider = null;
   if (imagery) {
@@ -103,6 +123,112 @@
     Cesium.Cartesian3.add(dir, Cesium.Cartesian3.multiplyByScalar(north, 0.4, new Cesium.Cartesian3()), dir);
     scene.light = new Cesium.DirectionalLight({ direction: Cesium.Cartesian3.normalize(dir, dir), intensity: 2.2 });
   }
+
+  // --- the globe: the ellipsoid, or tinsmith's terrain ----------------------
+  // The terrain tiles fill the world outside the TIN with the ellipsoid
+  // itself (height 0), so a height within half a metre of 0 keeps the plain
+  // globe colour and only the TIN's ground is sandy; the water mask paints
+  // the lakes. Lit by the fixed light through the tiles' vertex normals.
+  // With ?imagery= the imagery colours the globe instead.
+  const groundMaterial = new Cesium.Material({
+    fabric: {
+      type: 'TinsmithGround',
+      uniforms: {
+        ground: Cesium.Color.fromCssColorString(TERRAIN),
+        ellipsoid: Cesium.Color.fromBytes(...GLOBE, 255),
+        water: Cesium.Color.fromCssColorString(WATER),
+      },
+      source: `czm_material czm_getMaterial(czm_materialInput materialInput) {
+        czm_material material = czm_getDefaultMaterial(materialInput);
+        material.diffuse = abs(materialInput.height) < 0.5 ? ellipsoid.rgb : ground.rgb;
+#ifdef HAS_WATER_MASK
+        material.diffuse = mix(material.diffuse, water.rgb, materialInput.waterMask);
+#endif
+        material.alpha = 1.0;
+        return material;
+      }`,
+    },
+  });
+  const terrainProviders = new Map();  // tileset id → Promise<CesiumTerrainProvider>
+  function terrainProviderFor(id) {
+    if (!terrainProviders.has(id)) {
+      const provider = Cesium.CesiumTerrainProvider.fromUrl(url(`tilesets/${encodeURIComponent(id)}/terrain/`), {
+        requestVertexNormals: true, requestWaterMask: true,
+      }).then((p) => {
+        p.errorEvent.addEventListener((e) => {
+          api.errors.push(e.message);
+          status(`A terrain tile failed: ${e.message}`, true);
+        });
+        return p;
+      });
+      provider.catch(() => terrainProviders.delete(id));
+      terrainProviders.set(id, provider);
+    }
+    return terrainProviders.get(id);
+  }
+
+  // Resolves once the globe has no tile left to load, drawn three times over.
+  function globeLoaded() {
+    return new Promise((resolve) => {
+      let frames = 0;
+      const remove = scene.postRender.addEventListener(() => {
+        frames = scene.globe.tilesLoaded ? frames + 1 : 0;
+        if (frames < 3) { scene.requestRender(); return; }
+        remove();
+        resolve();
+      });
+      scene.requestRender();
+    });
+  }
+
+  // mode 'terrain' needs the tileset's terrain (api.hasTerrain).
+  async function setGlobe(mode) {
+    const terrain = mode === 'terrain';
+    const id = api.id;
+    const provider = terrain ? await terrainProviderFor(id) : new Cesium.EllipsoidTerrainProvider();
+    if (id !== api.id) return;
+    viewer.terrainProvider = provider;
+    scene.globe.enableLighting = terrain;
+    scene.globe.material = terrain && !imageryProvider ? groundMaterial : undefined;
+    scene.globe.depthTestAgainstTerrain = terrain;
+    api.mode = mode;
+    if (api.tileset) api.tileset.show = !terrain;
+    $(terrain ? 'globe-terrain' : 'globe-ellipsoid').checked = true;
+    // The tile controls act on the 3D Tiles tileset, hidden in terrain mode.
+    for (const control of ['show-wireframe', 'show-tiles', 'sse']) $(control).disabled = terrain;
+    $('c-terrain-name').hidden = $('c-terrain').hidden = !terrain;
+    scene.requestRender();
+  }
+
+  function settled() {
+    if (api.mode === 'terrain') return globeLoaded();
+    return api.tileset ? allLoaded(api.tileset) : Promise.resolve();
+  }
+  api.settled = settled;
+
+  let lineCount = 0;
+  function loadedStatus() {
+    if (api.errors.length) return;  // the failure stays in view
+    const s = api.summary;
+    const what = api.mode === 'terrain'
+      ? 'Cesium terrain (quantized-mesh), '
+      : s ? `${s.tileCount} tiles, zooms ${s.zooms.min}–${s.zooms.max}, ` : '';
+    status(`${api.id}: ${what}${lineCount} break lines. Drag to orbit; right-drag or wheel to zoom.`);
+  }
+
+  async function switchGlobe(mode) {
+    if (mode === 'terrain' && !api.hasTerrain) throw new Error(`${api.id} has no Cesium terrain`);
+    wantTerrain = mode === 'terrain';
+    const next = new URL(location.href);
+    if (wantTerrain) next.searchParams.set('terrain', '1'); else next.searchParams.delete('terrain');
+    history.replaceState(null, '', next);
+    status(wantTerrain ? 'Loading the terrain…' : 'Loading the tiles…');
+    await setGlobe(mode);
+    if (api.tileset) applyDebug(api.tileset);
+    await settled();
+    loadedStatus();
+  }
+  api.setMode = switchGlobe;
 
   // --- tile labels: zoom, x/y and measured error of each tile drawn ---------
   const labels = scene.primitives.add(new Cesium.LabelCollection());
@@ -217,6 +343,9 @@
   async function load(id, summaries) {
     api.id = id;
     api.summary = summaries.find((s) => s.id === id) || null;
+    api.hasTerrain = Boolean(api.summary && api.summary.links && api.summary.links.terrain);
+    $('globe-choice').hidden = !api.hasTerrain;
+    const mode = api.hasTerrain && wantTerrain ? 'terrain' : 'tiles';
     status(`Loading ${id}…`);
     if (api.tileset) scene.primitives.remove(api.tileset);
     api.tileset = null;
@@ -233,13 +362,13 @@
     lightFrom(tileset.boundingSphere.center);
     scene.primitives.add(tileset);
     api.tileset = tileset;
+    await setGlobe(mode);
+    if (id !== api.id) return;
     const lines = loadLines(id).catch((e) => { status(`Break lines: ${e.message}`, true); return 0; });
     await flyTo(tileset, params.has('instant') ? 0 : 1.5);
-    await allLoaded(tileset);
-    const count = await lines;
-    const s = api.summary;
-    status(`${id}: ${s ? s.tileCount + ' tiles, zooms ' + s.zooms.min + '–' + s.zooms.max + ', ' : ''}` +
-      `${count} break lines. Drag to orbit; right-drag or wheel to zoom.`);
+    await settled();
+    lineCount = await lines;
+    loadedStatus();
   }
 
   function applyDebug(tileset) {
@@ -264,8 +393,11 @@
   function showProbe(p) {
     const crs = api.summary && api.summary.crs ? api.summary.crs : 'x, y';
     $('c-crs-name').textContent = crs;
-    if (!p) { for (const k of ['c-z', 'c-lonlat', 'c-xy', 'c-slope']) $(k).textContent = '–'; return; }
+    if (!p) { for (const k of ['c-z', 'c-lonlat', 'c-xy', 'c-slope', 'c-terrain']) $(k).textContent = '–'; return; }
     $('c-lonlat').textContent = `${p.lon.toFixed(6)}°, ${p.lat.toFixed(6)}°`;
+    $('c-terrain').textContent = p.terrainHeight === undefined ? '–'
+      : `${fmt(p.terrainHeight, 2)} m ellipsoidal (level ${p.terrainLevel})` +
+        (p.ellipsoidalHeight === undefined || p.ellipsoidalHeight === null ? '' : `, TIN ${fmt(p.ellipsoidalHeight, 2)} m`);
     if (p.z === null || p.z === undefined) {
       $('c-z').textContent = 'off the TIN'; $('c-xy').textContent = '–'; $('c-slope').textContent = '–';
       return;
@@ -281,16 +413,74 @@
     const where = pickLonLat(x, y);
     if (!where || !api.id) { showProbe(null); return null; }
     const result = { screen: [x, y], lon: where.lon, lat: where.lat, pickHeight: where.pickHeight, z: null };
-    if (api.summary && api.summary.elevation) {
-      const e = await elevationAt(where.lon, where.lat);
-      Object.assign(result, { x: e.x, y: e.y, z: e.z, slope: e.slope, aspect: e.aspect, ellipsoidalHeight: e.ellipsoidalHeight });
-    }
+    const [e, t] = await Promise.all([
+      api.summary && api.summary.elevation ? elevationAt(where.lon, where.lat) : null,
+      api.mode === 'terrain' ? terrainSample(where.lon, where.lat) : null,
+    ]);
+    if (e) Object.assign(result, { x: e.x, y: e.y, z: e.z, slope: e.slope, aspect: e.aspect, ellipsoidalHeight: e.ellipsoidalHeight });
+    if (t) Object.assign(result, { terrainHeight: t.height, terrainLevel: t.level });
     result.crs = api.summary ? api.summary.crs : '';
     if (serial === probeSerial) showProbe(result);
     api.lastProbe = result;
     return result;
   }
   api.probe = probe;
+
+  // --- the terrain tiles' own height ---------------------------------------
+  // The height of the terrain mesh at lon, lat (degrees), in metres above
+  // the ellipsoid, from the deepest level layer.json (and the tiles'
+  // metadata) make available there; rejects when a tile fails to load.
+  async function terrainSample(lon, lat) {
+    const provider = viewer.terrainProvider;
+    const at = Cesium.Cartographic.fromDegrees(lon, lat);
+    const level = provider.availability ? provider.availability.computeMaximumLevelAtPosition(at) : null;
+    const [sampled] = await Cesium.sampleTerrainMostDetailed(provider, [at], true);
+    return { height: sampled.height, level };
+  }
+
+  function needTerrain(what) {
+    if (api.mode !== 'terrain') throw new Error(`${what}: the globe is not tinsmith terrain (?terrain=1)`);
+  }
+
+  api.terrainHeightAt = async (lon, lat) => {
+    needTerrain('terrainHeightAt');
+    const [t, e] = await Promise.all([terrainSample(lon, lat), elevationAt(lon, lat)]);
+    return { lon, lat, terrainHeight: t.height, level: t.level, z: e.z, ellipsoidalHeight: e.ellipsoidalHeight ?? null };
+  };
+
+  // A point entity clamped to the ground (HeightReference.CLAMP_TO_GROUND)
+  // at lon, lat; resolves, once the view has settled, with the height of
+  // the position CesiumJS clamped it to (it follows the most detailed
+  // terrain tile drawn there), beside the globe's height there
+  // (Globe.getHeight) and the elevation route's answer. The clamped position
+  // is read through DataSourceDisplay.getBoundingSphere, which
+  // viewer.flyTo(entity) uses: marked private in CesiumJS, the only way to
+  // it; the version is pinned (package.json).
+  api.clampedEntity = async (lon, lat) => {
+    needTerrain('clampedEntity');
+    const entity = viewer.entities.add({
+      position: Cesium.Cartesian3.fromDegrees(lon, lat, 0),
+      point: {
+        pixelSize: 11, color: Cesium.Color.fromCssColorString(PROFILE_COLOUR), outlineColor: Cesium.Color.WHITE,
+        outlineWidth: 2, heightReference: Cesium.HeightReference.CLAMP_TO_GROUND,
+        disableDepthTestDistance: Number.POSITIVE_INFINITY,
+      },
+    });
+    await settled();
+    const sphere = new Cesium.BoundingSphere();
+    for (let frame = 0; ; ++frame) {
+      const state = viewer.dataSourceDisplay.getBoundingSphere(entity, false, sphere);
+      if (state === Cesium.BoundingSphereState.DONE) break;
+      if (state === Cesium.BoundingSphereState.FAILED || frame > 200) throw new Error(`clampedEntity: no clamped position at ${lon}, ${lat}`);
+      await new Promise((resolve) => { const remove = scene.postRender.addEventListener(() => { remove(); resolve(); }); scene.requestRender(); });
+    }
+    const clamped = Cesium.Cartographic.fromCartesian(sphere.center);
+    const e = await elevationAt(lon, lat);
+    return {
+      lon, lat, clampedHeight: clamped.height, globeHeight: scene.globe.getHeight(Cesium.Cartographic.fromDegrees(lon, lat)) ?? null,
+      z: e.z, ellipsoidalHeight: e.ellipsoidalHeight ?? null,
+    };
+  };
 
   // --- profile: drag a line, the profile route, a chart ---------------------
   const profileLine = scene.primitives.add(new Cesium.PolylineCollection());
@@ -414,6 +604,8 @@
   }, Cesium.ScreenSpaceEventType.LEFT_UP);
 
   // --- controls ------------------------------------------------------------
+  for (const id of ['globe-ellipsoid', 'globe-terrain'])
+    $(id).addEventListener('change', (e) => switchGlobe(e.target.value).catch((err) => status(err.message, true)));
   $('show-lines').addEventListener('change', showLines);
   $('show-contours').addEventListener('change', showLines);
   for (const id of ['show-wireframe', 'show-tiles']) $(id).addEventListener('change', () => api.tileset && applyDebug(api.tileset));

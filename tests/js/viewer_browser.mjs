@@ -27,46 +27,53 @@
 //     fetched from the server.
 // Screenshots go to OUT_DIR (viewer.png, viewer-profile.png,
 // viewer-tiles.png, three.png, prefix-viewer.png, prefix-three.png). Exit 0 on success, 1 on a failure.
+//
+// The harness (arguments, deadline, servers, pages, pixel measures) is
+// exported for terrain_browser.mjs; the checks run only when this file is
+// the script node was given.
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
+import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
 import { decodePng } from './png.mjs';
 
-const CHROMIUM = '/usr/bin/chromium';
-const VIEWPORT = { width: 1280, height: 800 };
-const MIN_TERRAIN_SHARE = 0.25;  // of the map's pixels; measured about 0.5-0.6 on Red Butte
+export const CHROMIUM = '/usr/bin/chromium';
+export const VIEWPORT = { width: 1280, height: 800 };
+export const MIN_TERRAIN_SHARE = 0.25;  // of the map's pixels; measured about 0.5-0.6 on Red Butte
 const MIN_CHART_SHARE = 0.05;
 const COLOUR_DISTANCE = 40;  // RGB distance under which a pixel is the sky's or the globe's colour
 const PICK_SLACK = 1.0;  // metres: depth-buffer precision of the pick at this range
 const PREFIX = '/terrain/demo';
 
 const [bin, store, outDir, ...rest] = process.argv.slice(2);
+const script = path.basename(process.argv[1] ?? 'viewer_browser.mjs', '.mjs');
 if (!bin || !store || !outDir) {
-  console.error('usage: node viewer_browser.mjs TINSMITH STORE OUT_DIR [--timeout SECONDS]');
+  console.error(`usage: node ${script}.mjs TINSMITH STORE OUT_DIR [--timeout SECONDS]`);
   process.exit(2);
 }
+export { bin, store, outDir };
 const timeoutSeconds = rest[0] === '--timeout' ? Number(rest[1]) : 170;
-const started = Date.now();
+export const started = Date.now();
 const deadline = started + timeoutSeconds * 1000;
-const left = () => Math.max(1000, deadline - Date.now());
-const root = path.resolve(path.dirname(new URL(import.meta.url).pathname), '..', '..');
+export const left = () => Math.max(1000, deadline - Date.now());
+export const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 fs.mkdirSync(outDir, { recursive: true });
 
-const problems = [];
+export const problems = [];
 let onFailure = () => {};
-const fail = (what) => { problems.push(what); console.log(`ERROR: viewer_browser: ${what}`); onFailure(); };
-const note = (what) => console.log(`viewer_browser: ${what}`);
+export const fail = (what) => { problems.push(what); console.log(`ERROR: ${script}: ${what}`); onFailure(); };
+export const note = (what) => console.log(`${script}: ${what}`);
 
 // A hard stop whatever hangs.
 const watchdog = setTimeout(() => {
-  console.log(`ERROR: viewer_browser: still running ${timeoutSeconds + 20} s after the start; giving up`);
+  console.log(`ERROR: ${script}: still running ${timeoutSeconds + 20} s after the start; giving up`);
   process.exit(1);
 }, (timeoutSeconds + 20) * 1000);
 watchdog.unref();
 
 /// `tinsmith serve` on 127.0.0.1, port 0; resolves with its origin once it says where it listens.
-function startServer(args) {
+export function startServer(args) {
   const child = spawn(bin, ['serve', store, '--host', '127.0.0.1', '--port', '0', '--reload', '0', ...args],
     { stdio: ['ignore', 'ignore', 'pipe'] });
   let text = '';
@@ -87,9 +94,28 @@ function startServer(args) {
   });
 }
 
+/// Headless Chromium with software WebGL.
+export function launchBrowser() {
+  if (!fs.existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} is missing: run tools/setup.sh`);
+  return chromium.launch({
+    executablePath: CHROMIUM,
+    args: ['--headless=new', '--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-dev-shm-usage'],
+    timeout: 60_000,
+  });
+}
+
+/// Closes the browser, stops the servers and exits 0, or 1 after any problem.
+export async function finish(browser, servers) {
+  if (browser) await browser.close().catch(() => {});
+  for (const s of servers) s.child.kill('SIGTERM');
+  clearTimeout(watchdog);
+  note(`${problems.length ? 'FAILED' : 'ok'} in ${((Date.now() - started) / 1000).toFixed(1)} s; screenshots in ${outDir}`);
+  process.exit(problems.length ? 1 : 0);
+}
+
 /// A page whose every console error, page error, failed request and
 /// response ≥ 400 is a problem; requests leaving the origin are blocked.
-async function openPage(browser, origin, label) {
+export async function openPage(browser, origin, label) {
   const page = await browser.newPage({ viewport: VIEWPORT, deviceScaleFactor: 1 });
   const requests = [];
   page.on('console', (msg) => { if (msg.type() === 'error') fail(`${label}: console error: ${msg.text()}`); });
@@ -108,9 +134,16 @@ async function openPage(browser, origin, label) {
   return { page, requests };
 }
 
-/// Share of the map's pixels (outside the panel) that are terrain-coloured.
+/// Share of the map's pixels (outside the panel) that are terrain-coloured,
+/// and, over the pixels of the page's terrain colour (colours.terrain) lit
+/// more or less — its chromaticity within SHADE_CHROMA — how their
+/// brightness (0–255) spreads: its standard deviation, near 0 for a flat
+/// colour, larger for shaded relief.
+const SHADE_CHROMA = 0.03;
 const near = (c, ref) => ref && Math.hypot(c[0] - ref[0], c[1] - ref[1], c[2] - ref[2]) < COLOUR_DISTANCE;
-async function terrainShare(page, file) {
+const chroma = ([r, g, b]) => { const sum = r + g + b || 1; return [r / sum, g / sum]; };
+const hexColour = (hex) => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16));
+export async function terrainPixels(page, file) {
   const colours = await page.evaluate(() => window.tinsmithViewer.colours);
   const shot = await page.screenshot({ path: file, timeout: 30_000 });
   const png = decodePng(shot);
@@ -118,7 +151,8 @@ async function terrainShare(page, file) {
     const r = document.getElementById('panel').getBoundingClientRect();
     return { x0: r.left, y0: r.top, x1: r.right, y1: r.bottom };
   });
-  let terrain = 0, counted = 0;
+  const sand = colours.terrain ? chroma(hexColour(colours.terrain)) : null;
+  let terrain = 0, counted = 0, shaded = 0, brightness = 0, brightnessSquared = 0;
   for (let y = 0; y < png.height; ++y)
     for (let x = 0; x < png.width; ++x) {
       if (x >= panel.x0 && x < panel.x1 && y >= panel.y0 && y < panel.y1) continue;
@@ -127,12 +161,23 @@ async function terrainShare(page, file) {
       ++counted;
       if (near([r, g, b], colours.sky) || near([r, g, b], colours.globe) || Math.max(r, g, b) < 16) continue;
       ++terrain;
+      const [cr, cg] = chroma([r, g, b]);
+      if (!sand || Math.hypot(cr - sand[0], cg - sand[1]) > SHADE_CHROMA) continue;
+      ++shaded;
+      const luma = 0.299 * r + 0.587 * g + 0.114 * b;
+      brightness += luma;
+      brightnessSquared += luma * luma;
     }
-  return terrain / counted;
+  const mean = shaded ? brightness / shaded : 0;
+  return {
+    share: terrain / counted, shadedShare: shaded / counted,
+    brightnessSpread: shaded ? Math.sqrt(Math.max(0, brightnessSquared / shaded - mean * mean)) : 0,
+  };
 }
+const terrainShare = async (page, file) => (await terrainPixels(page, file)).share;
 
 /// Waits for tinsmithViewer.ready; gives up at the first problem reported.
-async function waitReady(page, label) {
+export async function waitReady(page, label) {
   const failed = new Promise((_, reject) => { onFailure = () => reject(new Error(`${label}: not ready (see above)`)); });
   failed.catch(() => {});
   await Promise.race([failed, (async () => {
@@ -143,7 +188,7 @@ async function waitReady(page, label) {
   note(`${label}: ready after ${((Date.now() - started) / 1000).toFixed(1)} s`);
 }
 
-function checkShare(label, share) {
+export function checkShare(label, share) {
   note(`${label}: terrain-coloured ${(share * 100).toFixed(1)} % of the map (required ${(MIN_TERRAIN_SHARE * 100).toFixed(0)} %)`);
   if (!(share >= MIN_TERRAIN_SHARE)) fail(`${label}: terrain covers ${(share * 100).toFixed(1)} % of the map`);
 }
@@ -154,6 +199,13 @@ async function checkCesium(browser, origin, base, label, full) {
   await waitReady(page, label);
   checkShare(label, await terrainShare(page, path.join(outDir, `${full ? '' : 'prefix-'}viewer.png`)));
   const id = await page.evaluate(() => window.tinsmithViewer.id);
+  // 3D Tiles on the ellipsoid unless asked otherwise; the Globe choice
+  // offered exactly when the tileset has Cesium terrain.
+  const summary = (await (await fetch(`${origin}${base}/tilesets`)).json()).tilesets.find((s) => s.id === id);
+  const globe = await page.evaluate(() => ({ mode: window.tinsmithViewer.mode, offered: !document.getElementById('globe-choice').hidden }));
+  if (globe.mode !== 'tiles') fail(`${label}: the globe is '${globe.mode}' by default, not 3D Tiles on the ellipsoid`);
+  if (globe.offered !== Boolean(summary?.links?.terrain))
+    fail(`${label}: the Globe choice is ${globe.offered ? '' : 'not '}offered for a tileset ${summary?.links?.terrain ? 'with' : 'without'} terrain`);
   const p = await page.evaluate(([x, y]) => window.tinsmithViewer.probe(x, y), [VIEWPORT.width / 2 - 180, VIEWPORT.height / 2]);
   if (!p || p.z === null) { fail(`${label}: the probe found no height at the map's centre`); await page.close(); return; }
   const shown = await page.evaluate(() => document.getElementById('c-z').textContent);
@@ -232,34 +284,28 @@ async function checkThree(browser, origin, base, label, full) {
   await page.close();
 }
 
-const servers = [];
-let browser = null;
-try {
-  if (!fs.existsSync(CHROMIUM)) throw new Error(`${CHROMIUM} is missing: run tools/setup.sh`);
-  const plain = await startServer(['-q']);
-  servers.push(plain);
-  if (!plain.log().includes(path.join(root, 'server', 'viewer')))
-    fail(`tinsmith serve did not find the source tree's viewer by itself: ${plain.log().trim()}`);
-  const prefixed = await startServer(['-q', '--base-path', PREFIX, '--viewer', path.join(root, 'server', 'viewer')]);
-  servers.push(prefixed);
-  browser = await chromium.launch({
-    executablePath: CHROMIUM,
-    args: ['--headless=new', '--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-dev-shm-usage'],
-    timeout: 60_000,
-  });
-  await checkCesium(browser, plain.origin, '', 'cesium', true);
-  await checkThree(browser, plain.origin, '', 'three', true);
-  const redirect = await fetch(`${prefixed.origin}${PREFIX}`, { redirect: 'manual' });
-  if (redirect.status !== 301 || redirect.headers.get('location') !== `${PREFIX}/`)
-    fail(`${PREFIX} answered ${redirect.status} to ${redirect.headers.get('location')}, not 301 to ${PREFIX}/`);
-  await checkCesium(browser, prefixed.origin, PREFIX, 'cesium under a prefix', false);
-  await checkThree(browser, prefixed.origin, PREFIX, 'three under a prefix', false);
-} catch (e) {
-  fail(e.stack ?? String(e));
-} finally {
-  if (browser) await browser.close().catch(() => {});
-  for (const s of servers) s.child.kill('SIGTERM');
-  clearTimeout(watchdog);
+async function main() {
+  const servers = [];
+  let browser = null;
+  try {
+    const plain = await startServer(['-q']);
+    servers.push(plain);
+    if (!plain.log().includes(path.join(root, 'server', 'viewer')))
+      fail(`tinsmith serve did not find the source tree's viewer by itself: ${plain.log().trim()}`);
+    const prefixed = await startServer(['-q', '--base-path', PREFIX, '--viewer', path.join(root, 'server', 'viewer')]);
+    servers.push(prefixed);
+    browser = await launchBrowser();
+    await checkCesium(browser, plain.origin, '', 'cesium', true);
+    await checkThree(browser, plain.origin, '', 'three', true);
+    const redirect = await fetch(`${prefixed.origin}${PREFIX}`, { redirect: 'manual' });
+    if (redirect.status !== 301 || redirect.headers.get('location') !== `${PREFIX}/`)
+      fail(`${PREFIX} answered ${redirect.status} to ${redirect.headers.get('location')}, not 301 to ${PREFIX}/`);
+    await checkCesium(browser, prefixed.origin, PREFIX, 'cesium under a prefix', false);
+    await checkThree(browser, prefixed.origin, PREFIX, 'three under a prefix', false);
+  } catch (e) {
+    fail(e.stack ?? String(e));
+  }
+  await finish(browser, servers);
 }
-note(`${problems.length ? 'FAILED' : 'ok'} in ${((Date.now() - started) / 1000).toFixed(1)} s; screenshots in ${outDir}`);
-process.exit(problems.length ? 1 : 0);
+
+if (process.argv[1] && path.resolve(process.argv[1]) === fileURLToPath(import.meta.url)) await main();

@@ -34,11 +34,12 @@
 //     .3dtiles archive or a directory): tiles, bytes, gzip -6 bytes, bytes of
 //     the metadata extension (5 + its length), vertices, triangles, and the
 //     max of the records' errors when the tiles carry one. JSON lines.
-//   tile_error_bench terrain-grids SITE.tin STORE SPACING MAXCELLS OUT.grids [FILL]
+//   tile_error_bench terrain-grids SITE.tin STORE SPACING [MINCELLS:]MAXCELLS OUT.grids [FILL]
 //     For every terrain tile of STORE, the geographic TIN sampled at the
 //     nodes of a (2^k + 1)² longitude/latitude grid over the tile's rectangle
 //     (geographicTileBounds), 2^k the least power of two whose spacing in the
-//     working frame is at most SPACING, capped at MAXCELLS cells. Nodes
+//     working frame is at most SPACING, at least MINCELLS (default 1) and at
+//     most MAXCELLS cells. Nodes
 //     outside the TIN: FILL pullpush (the default) gives those within two
 //     nodes of an inside node the TIN's z at the nearest boundary point and
 //     fills the rest from them by pull-push (a pyramid of averages, bilinear
@@ -62,7 +63,8 @@
 //     error, its largest difference over the TIN reported apart, and so are
 //     the TIN vertices off the TIN's boundary that lie inside a fill triangle
 //     and in no surface triangle ("underFill": the fill reaching into the
-//     TIN by more than quantization can move the TIN's edge). Per level:
+//     TIN by more than quantization can move the TIN's edge), with the
+//     largest distance of one from the TIN's boundary. Per level:
 //     max error, where, the largest at a TIN vertex. JSON lines; with
 //     TILES.jsonl, one line per tile there too.
 //
@@ -243,6 +245,13 @@ class TinBoundary {
   }
 
   [[nodiscard]] const std::vector<std::array<std::uint32_t, 2>>& edges() const { return edges_; }
+
+  /// Distance from p to the boundary (all edges: for a few points).
+  [[nodiscard]] double distance(Point2 p) const {
+    double best = HUGE_VAL;
+    for (const auto& e : edges_) best = std::min(best, nearestOnEdge(e, p).first);
+    return std::sqrt(best);
+  }
 
   /// z of the boundary point nearest p, interpolated along its edge, over
   /// `candidates` (of a rectangle holding p).
@@ -720,9 +729,14 @@ int terrainGridsCommand(const std::string& tinPath, const std::string& storePath
   const TinBoundary boundary(tin);
   const Rect extent = boundsOf(tin.vertices);
   const double resolution = std::stod(spacing);
-  const int maxCells = std::stoi(maxCellsText);
-  if (!(resolution > 0) || maxCells < 1 || (maxCells & (maxCells - 1)) != 0)
-    fail("SPACING > 0 and MAXCELLS a power of two");
+  // "MAX" or "MIN:MAX" cells a side.
+  const auto colon = maxCellsText.find(':');
+  const int minCells = colon == std::string::npos ? 1 : std::stoi(maxCellsText.substr(0, colon));
+  const int maxCells =
+      std::stoi(colon == std::string::npos ? maxCellsText : maxCellsText.substr(colon + 1));
+  const auto power = [](int c) { return c >= 1 && (c & (c - 1)) == 0; };
+  if (!(resolution > 0) || !power(minCells) || !power(maxCells) || minCells > maxCells)
+    fail("SPACING > 0 and [MINCELLS:]MAXCELLS powers of two");
   const auto s = store::openStoreForReading(storePath);
   std::ofstream out(outPath, std::ios::binary);
   if (!out) fail("cannot write " + outPath);
@@ -732,7 +746,7 @@ int terrainGridsCommand(const std::string& tinPath, const std::string& storePath
     const tiles::GeoRect geo = tiles::geographicTileBounds(id);
     const Rect b{geo.west * kMetresPerDegree, geo.south * kMetresPerDegree,
                  geo.east * kMetresPerDegree, geo.north * kMetresPerDegree};
-    int cells = 1;
+    int cells = minCells;
     while (b.width() / cells > resolution && cells < maxCells) cells *= 2;
     levelCells[id.z] = std::max(levelCells[id.z], cells);
     const int n = cells + 1;
@@ -831,12 +845,14 @@ struct TerrainTileError {
   // TIN vertices off the TIN's boundary inside a fill triangle and in no
   // surface triangle (the fill reaching into the TIN), and one of them.
   std::size_t underFill = 0;
-  Point2 underFillAt;
+  Point2 underFillAt;  // the one farthest from the TIN's boundary
+  double underFillDepth = 0;  // its distance from the boundary (working frame, m)
 };
 
 TerrainTileError measureTerrainTile(const TileId& id, const std::string& bytes,
                                     const TinIndex& index,
-                                    const std::vector<std::uint8_t>& onTinBoundary) {
+                                    const std::vector<std::uint8_t>& onTinBoundary,
+                                    const TinBoundary& tinBoundary) {
   const DecodedTerrain d = decodeTerrain(bytes, id.name());
   const tiles::GeoRect g = tiles::geographicTileBounds(id);
   std::vector<Point3> p(d.u.size());
@@ -905,7 +921,12 @@ TerrainTileError measureTerrainTile(const TileId& id, const std::string& bytes,
   visit(fill, true, byFill);
   for (const std::uint32_t v : byFill) {
     if (bySurface.contains(v) || onTinBoundary[v]) continue;
-    if (e.underFill++ == 0) e.underFillAt = tv[v].xy();
+    ++e.underFill;
+    const double depth = tinBoundary.distance(tv[v].xy());
+    if (depth > e.underFillDepth) {
+      e.underFillDepth = depth;
+      e.underFillAt = tv[v].xy();
+    }
   }
   return e;
 }
@@ -917,7 +938,8 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
   const tiles::GeographicTin g = geographicTinOf(projectTin);
   const TinIndex index(g.tin);
   std::vector<std::uint8_t> onBoundary(g.tin.vertices.size(), 0);
-  for (const auto& e : TinBoundary(g.tin).edges()) onBoundary[e[0]] = onBoundary[e[1]] = 1;
+  const TinBoundary boundary(g.tin);
+  for (const auto& e : boundary.edges()) onBoundary[e[0]] = onBoundary[e[1]] = 1;
   const auto s = store::openStoreForReading(storePath);
   const std::vector<TileId> ids = terrainTiles(*s);
   std::vector<TerrainTileError> errors(ids.size());
@@ -927,7 +949,7 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
   auto work = [&] {
     try {
       for (std::size_t i; (i = next++) < ids.size();)
-        errors[i] = measureTerrainTile(ids[i], *s->get(terrainKey(ids[i])), index, onBoundary);
+        errors[i] = measureTerrainTile(ids[i], *s->get(terrainKey(ids[i])), index, onBoundary, boundary);
     } catch (...) {
       const std::lock_guard lock(failureLock);
       failure = std::current_exception();
@@ -949,15 +971,17 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
           "{\"tile\":\"%s\",\"triangles\":%zu,\"measured\":%zu,\"fill\":%zu,\"collapsed\":%zu,"
           "\"maxError\":%.6f,\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,"
           "\"maxAtDemPoints\":%.6f,\"fillOverTin\":%.6f,\"fillAt\":[%.9f,%.9f],"
-          "\"underFill\":%zu,\"underFillAt\":[%.9f,%.9f]}\n",
+          "\"underFill\":%zu,\"underFillAt\":[%.9f,%.9f],\"underFillDepth\":%.4f}\n",
           e.id.name().c_str(), e.triangles, e.measured, e.fill, e.collapsed, e.worst.maxAbs, at.x,
           at.y, e.worst.meshZ, e.worst.tinZ, e.atVertex, e.fillOverTin, fa.x, fa.y, e.underFill,
-          degrees(e.underFillAt).x, degrees(e.underFillAt).y);
+          degrees(e.underFillAt).x, degrees(e.underFillAt).y, e.underFillDepth);
     }
     std::fclose(f);
   }
   std::map<int, TerrainTileError> rows;  // the worst of each measure per level
   std::map<int, std::size_t> tileCount, triangleCount, fillCount, collapsedCount, underFillCount;
+  std::map<int, double> underFillDepth;
+  std::map<int, TileId> underFillWorst;
   std::map<int, TileId> fillWorst;
   for (const auto& e : errors) {
     TerrainTileError& r = rows[e.id.z];
@@ -966,6 +990,10 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
     fillCount[e.id.z] += e.fill;
     collapsedCount[e.id.z] += e.collapsed;
     underFillCount[e.id.z] += e.underFill;
+    if (e.underFillDepth > underFillDepth[e.id.z]) {
+      underFillDepth[e.id.z] = e.underFillDepth;
+      underFillWorst[e.id.z] = e.id;
+    }
     if (e.worst.maxAbs >= r.worst.maxAbs) {
       r.worst = e.worst;
       r.id = e.id;
@@ -987,11 +1015,11 @@ int terrainErrorCommand(const std::string& tinPath, const std::string& storePath
         "\"maxError\":%.6f,"
         "\"worst\":\"%s\",\"at\":[%.9f,%.9f],\"meshZ\":%.4f,\"tinZ\":%.4f,\"maxAtDemPoints\":%.6f,"
         "\"fillOverTin\":%.6f,\"fillWorst\":\"%s\",\"fillAt\":[%.9f,%.9f],\"underFill\":%zu,"
-        "\"cesiumError\":%.6f}\n",
+        "\"underFillDepth\":%.4f,\"underFillWorst\":\"%s\",\"cesiumError\":%.6f}\n",
         z, tileCount[z], triangleCount[z], fillCount[z], collapsedCount[z], r.worst.maxAbs,
         r.id.name().c_str(), at.x, at.y, r.worst.meshZ, r.worst.tinZ, r.atVertex, r.fillOverTin,
-        fillWorst[z].name().c_str(), fa.x, fa.y, underFillCount[z],
-        tiles::cesiumLevelMaximumGeometricError(z));
+        fillWorst[z].name().c_str(), fa.x, fa.y, underFillCount[z], underFillDepth[z],
+        underFillWorst[z].name().c_str(), tiles::cesiumLevelMaximumGeometricError(z));
   }
   std::printf("{\"seconds\":%.3f}\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
