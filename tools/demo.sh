@@ -59,7 +59,8 @@ gdal_translate -q -of PNG out/red-butte-fit-hillshade.tif out/red-butte-fit-hill
 echo "-- shaded relief of the fitted surface: out/red-butte-fit-hillshade.png"
 
 echo
-echo "== 3. the whole job: config/red-butte.toml → out/red-butte.3dtiles (+ out/red-butte.tin, as in 1)"
+echo "== 3. the whole job: config/red-butte.toml → out/red-butte.3dtiles (+ out/red-butte.tin, as in 1):"
+echo "   3D Tiles and Cesium terrain (quantized-mesh) in one store ([tiles] scheme = \"both\")"
 "$tinsmith" build config/red-butte.toml
 "$tinsmith" info out/red-butte.3dtiles
 
@@ -72,6 +73,7 @@ echo "== 4. server and viewer (Ctrl-C stops it)"
 echo
 echo "   Open http://127.0.0.1:$port/ in a browser: Red Butte Canyon in 3-D (CesiumJS),"
 echo "   the height, slope and coordinates under the cursor, profiles, the break lines."
+echo "   The globe as tinsmith's Cesium terrain: http://127.0.0.1:$port/?terrain=1"
 echo "   Lighter three.js page: http://127.0.0.1:$port/three   JSON: http://127.0.0.1:$port/tilesets"
 echo
 exec "$tinsmith" serve out/red-butte.3dtiles --port "$port" --quiet
