@@ -151,6 +151,24 @@ bool holdsNoTable(const std::filesystem::path& path) {
   return empty;
 }
 
+// A run killed while writing an archive leaves SQLite's sidecars beside it
+// (the staging archive's WAL, or a hot rollback journal). A read-only
+// connection may not recover them ("attempt to write a readonly database");
+// one that may write does on its first read, bringing the archive to its
+// last committed state, as any writer of it would first.
+void recoverInterruptedWrite(const std::filesystem::path& path) {
+  bool sidecar = false;
+  for (const char* suffix : {"-journal", "-wal"}) {
+    std::error_code ec;
+    sidecar = sidecar || std::filesystem::exists(path.string() + suffix, ec);
+  }
+  if (!sidecar) return;
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK)
+    sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr);
+  sqlite3_close_v2(db);
+}
+
 std::string foreignText(std::size_t count, const std::string& first) {
   return "it holds '" + first + "'" +
          (count > 1 ? " and " + std::to_string(count - 1) + " other file" + (count > 2 ? "s" : "") +
@@ -182,6 +200,7 @@ void requireReplaceable(const std::filesystem::path& path) {
   }
   if (!fs::is_regular_file(status) || storeKindFor(clean) != StoreKind::Archive)
     refuseReplacing(clean, "is a file, not a tile folder");
+  recoverInterruptedWrite(clean);
   if (holdsNoTable(clean)) return;
   std::vector<std::string> keys;
   try {

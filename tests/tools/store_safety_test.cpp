@@ -8,6 +8,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sqlite3.h>
 #include <sys/mount.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -339,6 +340,36 @@ TEST(StoreSafety, AKilledMergeOrBuildLeavesTheOldStoreWhole) {
   killAtAnyMoment(build + " --tolerance 0.2", store, oldStore, newStore,
                   {"site.3dtiles", "site.tin"});
   EXPECT_EQ(readFile(dir / "out" / "site.tin"), oldTin);
+}
+
+// A writer killed inside a transaction leaves a hot journal beside the
+// archive; the next run must still recognise the archive as its own (it
+// refused it, exit 5: "attempt to write a readonly database", when a kill
+// came at that moment).
+TEST(StoreSafety, AnArchiveWithAKilledWritersJournalIsStillReplaced) {
+  const auto dir = scratchDir("safety-hot-journal");
+  const auto tin = hillTin(dir);
+  const auto store = dir / "site.3dtiles";
+  ASSERT_EQ(runTinsmith(tileArgs(tin, 0.5) + " -o " + store.string()).exitCode, 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // the writer: a transaction spilled into the file, then killed
+    sqlite3* db = nullptr;
+    sqlite3_open_v2(store.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr);
+    sqlite3_exec(db,
+                 "PRAGMA journal_mode = DELETE; PRAGMA cache_size = 1; BEGIN;"
+                 "DELETE FROM media WHERE key = 'tileset.json';"
+                 "WITH RECURSIVE n(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM n WHERE i < 40)"
+                 " INSERT INTO media SELECT 'tiles/9/' || i || '/0.glb', zeroblob(100000) FROM n;",
+                 nullptr, nullptr, nullptr);
+    ::_exit(0);
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(fs::exists(store.string() + "-journal"));
+  const auto r = runTinsmith(tileArgs(tin, 0.2) + " -o " + store.string());
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(readable(store));
 }
 
 TEST(StoreSafety, AFileSizeLimitIsAnErrorNamingTheFileAndTheOldStoreStays) {
