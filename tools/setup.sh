@@ -30,6 +30,7 @@ packages=(
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libcgal-dev
   chromium                           # tests/js/cesium_smoke.mjs renders in it
+  slurmctld slurmd slurm-client munge  # the Slurm tests' one-node cluster (tests/slurm); nothing starts at install
 )
 # tests/js runs on node; Debian's only when the machine has none (an image's
 # own, newer node is kept).

@@ -15,22 +15,25 @@ double skirtDepth(const Tiler& tiler, const TileId& id, double error) {
   return std::max(2.0 * error, tiler.zoomTolerance(id.z));
 }
 
-void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root) {
-  if (!tiler.geometry().inside(root))
-    throw usageError("tile " + root.name() + " is outside the pyramid");
+std::optional<std::string> whyNotInPyramid(const Tiler& tiler, const ContentOptions& content,
+                                           const TileId& root) {
   for (TileId a = root; a.z > 0;) {
     a = a.parent();
     const TileSurface s = tiler.buildTile(a);
-    const auto refined = [&] {
-      const TileRecord r = encodeTile(s, skirtDepth(tiler, a, s.error), content).record;
-      return tiler.refines(a, r.error, r.reachableError);
-    };
-    if (s.empty() || !refined()) {
-      throw usageError(
-          "tile " + root.name() + " is not in the pyramid: its ancestor " + a.name() +
-              (s.empty() ? " holds no terrain" : " meets the tolerance and has no children"),
-          "choose a subtree under a refined tile (tinsmith info lists them)");
-    }
+    if (s.empty()) return "its ancestor " + a.name() + " holds no terrain";
+    const TileRecord r = encodeTile(s, skirtDepth(tiler, a, s.error), content).record;
+    if (!tiler.refines(a, r.error, r.reachableError))
+      return "its ancestor " + a.name() + " meets the tolerance and has no children";
+  }
+  return std::nullopt;
+}
+
+void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root) {
+  if (!tiler.geometry().inside(root))
+    throw usageError("tile " + root.name() + " is outside the pyramid");
+  if (const auto why = whyNotInPyramid(tiler, content, root)) {
+    throw usageError("tile " + root.name() + " is not in the pyramid: " + *why,
+                     "choose a subtree under a refined tile (tinsmith info lists them)");
   }
 }
 

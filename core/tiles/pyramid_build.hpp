@@ -37,6 +37,10 @@ double skirtDepth(const Tiler& tiler, const TileId& id, double error);
 /// `content`, not emitted, to see: a tile refines on its declared error). A
 /// caller checks this before it touches any output.
 void requireInPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root);
+/// Why `root`, inside the grid, is not in the pyramid (an ancestor holds no
+/// terrain or meets the tolerance), or nullopt when it is.
+std::optional<std::string> whyNotInPyramid(const Tiler& tiler, const ContentOptions& content,
+                                           const TileId& root);
 
 /// Builds the pyramid under `root` (the whole pyramid for 0/0/0), which
 /// must be a tile of the pyramid (requireInPyramid; only its grid is checked

@@ -375,7 +375,15 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     const Point3 centre{o.x + half, o.y + half, 0.0};
     geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
     // Everything that can refuse the run is checked before the output is touched.
-    tiles::requireInPyramid(*tiler, content, root);
+    if (options.subtreeMayBeEmpty && tiler->geometry().inside(root)) {
+      if (auto why = tiles::whyNotInPyramid(*tiler, content, root)) {
+        TileJobSummary empty;
+        empty.notInPyramid = "tile " + root.name() + " is not in the pyramid: " + *why;
+        return empty;
+      }
+    } else {
+      tiles::requireInPyramid(*tiler, content, root);
+    }
   }
   std::optional<tiles::GeographicTin> geographic;  // Cesium terrain's working frame
   if (writesTerrain(options.scheme)) geographic = tiles::toGeographicTin(tin, geo);

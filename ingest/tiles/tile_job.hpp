@@ -49,7 +49,12 @@ struct TileJobOptions {
   tiles::ContentFrame frame = tiles::ContentFrame::Ecef;
   std::string geoid;                     ///< "" (ellipsoidal) or "egm96"
   std::optional<tiles::TileId> subtree;  ///< only this tile and its descendants
-  std::optional<int> untilZoom;          ///< only tiles above this zoom
+  /// A subtree that is not in the pyramid (an ancestor holds no terrain or
+  /// meets the tolerance) is no error: nothing is written and the summary
+  /// says why (TileJobSummary::notInPyramid). For shard arrays whose
+  /// subtrees are not known ahead (tinsmith slurm).
+  bool subtreeMayBeEmpty = false;
+  std::optional<int> untilZoom;  ///< only tiles above this zoom
   /// Tiles at this zoom and below are built (their records make
   /// tileset.json) but not stored: the server's --on-demand builds them
   /// again from the store's TIN when asked (ingest/tiles/tile_rebuild.hpp).
@@ -114,6 +119,8 @@ struct TerrainSummary {
 };
 
 struct TileJobSummary {
+  /// Why a subtree allowed to be empty was not built; empty when it was.
+  std::string notInPyramid;
   std::optional<TerrainSummary> terrain;
   std::vector<ZoomSummary> zooms;
   std::vector<MissedTile> missed;  ///< in (z, y, x) order

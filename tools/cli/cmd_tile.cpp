@@ -8,7 +8,9 @@
 // A summary goes to stderr (or JSON to stdout with --json); a progress bar
 // when stderr is a terminal.
 #include <filesystem>
+#include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,8 +19,8 @@
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
-#include "tools/cli/shared_options.hpp"
 #include "tools/cli/progress_bar.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/tile_options.hpp"
 
 namespace tinsmith::cli {
@@ -32,6 +34,7 @@ struct TileCliOptions {
   std::string subtree;
   std::optional<int> untilZoom;
   std::optional<int> storeUntilZoom;
+  bool emptyOk = false;
 };
 
 struct MergeCliOptions {
@@ -47,11 +50,13 @@ void addTileCommand(CLI::App& app) {
   auto opt = std::make_shared<TileCliOptions>();
   auto* cmd = app.add_subcommand("tile", "Cut a TIN into level-of-detail 3D Tiles (Draco glTF)");
   cmd->add_option("tin", opt->tin, "The .tin file to tile")->required();
-  addOutputOption(*cmd, opt->output, "Tile store: a .3dtiles archive, or a directory")
-      ->required();
+  addOutputOption(*cmd, opt->output, "Tile store: a .3dtiles archive, or a directory")->required();
   addTileFlags(*cmd, opt->flags, false);
   cmd->add_option("--subtree", opt->subtree,
                   "Build only this tile and its descendants (Z/X/Y): a shard");
+  cmd->add_flag("--empty-ok", opt->emptyOk,
+                "With --subtree: a subtree that is not in the pyramid (an ancestor holds no "
+                "terrain or meets the tolerance) writes nothing and exits 0 (shard arrays)");
   cmd->add_option("--until-zoom", opt->untilZoom,
                   "Build only the tiles above this zoom: the shards' top");
   cmd->add_option("--store-until-zoom", opt->storeUntilZoom,
@@ -62,12 +67,24 @@ void addTileCommand(CLI::App& app) {
     o.storeUntilZoom = opt->storeUntilZoom;
     if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
     o.untilZoom = opt->untilZoom;
+    if (opt->emptyOk && !o.subtree) throw usageError("--empty-ok goes with --subtree");
+    o.subtreeMayBeEmpty = opt->emptyOk;
     o = withTileFlags(o, opt->flags);
     const TinData tin = ingest::readTinFile(opt->tin);
     const TileFlags& f = opt->flags;
     auto bar = terminalProgress(f.quiet || f.json);
     const auto summary = ingest::runTileJob(tin, opt->tin, opt->output, o, bar.get());
     bar.bar.reset();
+    if (!summary.notInPyramid.empty()) {
+      if (f.json)
+        std::cout
+            << nlohmann::json{{"output", nullptr}, {"notInPyramid", summary.notInPyramid}}.dump(2)
+            << "\n";
+      else if (!f.quiet)
+        std::cerr << summary.notInPyramid << ": nothing to build, " << opt->output
+                  << " not written\n";
+      return;
+    }
     reportTileJob(summary, opt->output, f.json, f.quiet);
     requireWithinTolerance(summary, f);
   });
@@ -77,8 +94,7 @@ void addTileCommand(CLI::App& app) {
   mcmd->add_option("stores", merge->inputs,
                    "Shard stores (from tinsmith tile --subtree / --until-zoom)")
       ->required();
-  addOutputOption(*mcmd, merge->output, "The joined store (.3dtiles or a directory)")
-      ->required();
+  addOutputOption(*mcmd, merge->output, "The joined store (.3dtiles or a directory)")->required();
   addQuietFlag(*mcmd, merge->quiet, "No summary");
   addJsonFlag(*mcmd, merge->json, "Print the summary as JSON on stdout");
   mcmd->callback([merge] {

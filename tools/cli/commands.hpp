@@ -16,5 +16,6 @@ void addInfoCommand(CLI::App& app);
 void addExportCommand(CLI::App& app);
 void addQueryCommand(CLI::App& app);
 void addValidateCommand(CLI::App& app);
+void addSlurmCommand(CLI::App& app);
 
 }  // namespace tinsmith::cli

@@ -1,7 +1,7 @@
 // tinsmith — terrain TIN builder and 3D Tiles server. Entry point: parses the
 // command line, runs one subcommand, maps errors to exit codes.
-#include <draco/core/draco_version.h>
 #include <GeographicLib/Config.h>
+#include <draco/core/draco_version.h>
 
 #include <csignal>
 #include <cstdio>
@@ -19,9 +19,9 @@
 namespace {
 
 std::string versionText() {
-  return std::string("tinsmith ") + tinsmith::kVersion + "\n" +
-         "  " + tinsmith::ingest::gdalVersionString() + ", GeographicLib " +
-         GEOGRAPHICLIB_VERSION_STRING + ", Draco " + draco::kDracoVersion;
+  return std::string("tinsmith ") + tinsmith::kVersion + "\n" + "  " +
+         tinsmith::ingest::gdalVersionString() + ", GeographicLib " + GEOGRAPHICLIB_VERSION_STRING +
+         ", Draco " + draco::kDracoVersion;
 }
 
 }  // namespace
@@ -34,9 +34,10 @@ int main(int argc, char** argv) {
   // reported, naming the file, instead of the process dying by signal.
   std::signal(SIGXFSZ, SIG_IGN);
 
-  CLI::App app{"tinsmith — constrained Delaunay terrain TINs, multilevel least-squares\n"
-               "level-of-detail tiles and a 3D Tiles 1.1 server.",
-               "tinsmith"};
+  CLI::App app{
+      "tinsmith — constrained Delaunay terrain TINs, multilevel least-squares\n"
+      "level-of-detail tiles and a 3D Tiles 1.1 server.",
+      "tinsmith"};
   app.set_version_flag("--version", versionText(), "Print the version and library versions");
   app.require_subcommand(1, 1);
   app.footer(
@@ -47,6 +48,7 @@ int main(int argc, char** argv) {
   addTinCommand(app);
   addFitCommand(app);
   addTileCommand(app);
+  addSlurmCommand(app);
   addServeCommand(app);
   addInfoCommand(app);
   addExportCommand(app);

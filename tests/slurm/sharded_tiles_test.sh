@@ -1,0 +1,313 @@
+#!/usr/bin/env bash
+# ctest Slurm.ShardedTilingMatchesOneRun (issue 24): `tinsmith slurm` on a
+# real one-node Slurm cluster (local_cluster.sh) gives the same store as one
+# `tinsmith tile` run, and a failed shard is recovered with --resume.
+#
+#   bash tests/slurm/sharded_tiles_test.sh TINSMITH WORKDIR      (as root)
+#
+# The cluster first (WORKDIR/cluster), then a small TIN, a 1200 m × 600 m
+# hill, so that half of the 16 subtrees at zoom 2 hold no terrain, tiled
+# once with `tinsmith tile` (one.3dtiles). Then:
+# - without --submit the command prints two sbatch commands that work as
+#   printed (run by bash with a stand-in sbatch) and submits nothing;
+# - `--shard-zoom 2 --submit --json`: an array of 17 tasks (the top, then the
+#   16 subtrees: a store or an .empty marker each) and a merge after them;
+#   the merged store holds the same bytes under every key as one.3dtiles;
+# - into a fresh workdir, the jobs submitted on hold, one shard's store path
+#   then taken by a folder holding a foreign file (tinsmith will not replace
+#   it) and the jobs released: that task fails, the merge is CANCELLED
+#   (DependencyNeverSatisfied) and writes nothing;
+# - the folder gone, `--resume --submit` resubmits that task alone and a new
+#   merge, whose store again matches one.3dtiles; once more, with nothing
+#   missing: a merge alone, with no dependency.
+# Everything stays in WORKDIR (the daemons' logs in WORKDIR/cluster/log);
+# the waits are bounded by 300 s in all. Ends with `N passed, M failed`;
+# exits 1 on any failure. tests/slurm/README.md says more.
+set -uo pipefail
+
+if [ $# -ne 2 ]; then
+  echo "usage: sharded_tiles_test.sh TINSMITH WORKDIR" >&2
+  exit 2
+fi
+tinsmith="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+here="$(cd "$(dirname "$0")" && pwd)"
+mkdir -p "$2"
+work="$(cd "$2" && pwd)"
+cd "$work" || exit 2
+source "$here/local_cluster.sh"
+
+budget=300   # seconds for the whole test, cluster included
+tile_opts=(--tolerance 0.2 --max-triangles 512)
+shard_zoom=2
+started=$(date +%s.%N)
+passed=0
+failed=0
+timings=()
+
+seconds_since() { awk -v a="$1" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }'; }
+ok() { passed=$((passed + 1)); echo "ok    $*"; }
+bad() { failed=$((failed + 1)); echo "FAIL  $*"; }
+# expect WHAT COMMAND...: one check
+expect() {
+  local what="$1"
+  shift
+  if "$@"; then ok "$what"; else bad "$what"; fi
+}
+# show FILE...: the end of files, indented, for a failure's reader
+show() {
+  local f
+  for f in "$@"; do
+    echo "      --- $f"
+    if [ -e "$f" ]; then tail -n 15 "$f" | sed 's/^/      /'; else echo "      (missing)"; fi
+  done
+}
+# left SECONDS: SECONDS, or what is left of the budget if less
+left() {
+  local rest
+  rest=$(awk -v a="$started" -v b="$(date +%s.%N)" -v n="$budget" 'BEGIN { printf "%d", n - (b - a) }')
+  [ "$rest" -gt 5 ] || rest=5
+  [ "$rest" -lt "$1" ] && echo "$rest" || echo "$1"
+}
+# phase NAME T0: records how long the phase took
+phase() { timings+=("$1 $(seconds_since "$2") s"); }
+
+finish() {
+  local rc=$?
+  trap - EXIT
+  local t0
+  t0=$(date +%s.%N)
+  slurm_stop
+  phase "cluster stop" "$t0"
+  [ "$rc" -eq 0 ] || [ "$failed" -gt 0 ] || bad "the test stopped early (exit $rc)"
+  echo "timings: ${timings[*]/%/;} total $(seconds_since "$started") s"
+  echo "$passed passed, $failed failed"
+  [ "$failed" -eq 0 ]
+  exit $?
+}
+trap finish EXIT
+trap 'exit 143' TERM INT
+# fatal WHAT: a failure the rest cannot go on from
+fatal() { bad "$*"; exit 1; }
+
+# json FILE EXPRESSION: a value from a JSON file, as a Python expression on d
+json() { python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); v = eval(sys.argv[2]); print(" ".join(map(str, v)) if isinstance(v, list) else v)' "$1" "$2"; }
+
+# same_keys A B: the two stores hold the same keys with the same bytes
+# (the media table of a .3dtiles archive, dumped by sqlite3 and compared)
+same_keys() {
+  sqlite3 "$1" "select key, hex(content) from media order by key" >"$1.dump" || return 1
+  sqlite3 "$2" "select key, hex(content) from media order by key" >"$2.dump" || return 1
+  cmp -s "$1.dump" "$2.dump" && return 0
+  echo "      keys only in one of them:"
+  comm -3 <(cut -d'|' -f1 "$1.dump") <(cut -d'|' -f1 "$2.dump") | head -n 10 | sed 's/^/        /'
+  echo "      keys whose bytes differ:"
+  comm -12 <(cut -d'|' -f1 "$1.dump") <(cut -d'|' -f1 "$2.dump") | while IFS= read -r key; do
+    [ "$(grep -m1 -F "$key|" "$1.dump")" = "$(grep -m1 -F "$key|" "$2.dump")" ] || echo "        $key"
+  done | head -n 10
+  return 1
+}
+
+# task_field JOB TASK FIELD: a field of one array task in scontrol's view
+task_field() {
+  scontrol -o show job "$1" 2>/dev/null | awk -v t="ArrayTaskId=$2" -v f="$3=" '
+    { hit = 0; for (i = 1; i <= NF; i++) if ($i == t) hit = 1 }
+    hit { for (i = 1; i <= NF; i++) if (index($i, f) == 1) print substr($i, length(f) + 1) }'
+}
+# job_field JOB FIELD: a field of a (non-array) job
+job_field() { scontrol -o show job "$1" 2>/dev/null | grep -o "\b$2=[^ ]*" | head -n 1 | cut -d= -f2-; }
+# failed_tasks JOB: the array tasks that ended FAILED, comma-separated
+failed_tasks() {
+  scontrol -o show job "$1" 2>/dev/null | grep 'JobState=FAILED' | grep -o 'ArrayTaskId=[0-9]*' | cut -d= -f2 | sort -n | paste -sd, -
+}
+
+# ---------------------------------------------------------------- the cluster
+# First, so that its first scheduling pass (about 3 s after slurmctld
+# starts) comes while the single run tiles; and before WORKDIR is emptied,
+# so that jobs a killed run left are stopped first (slurm_start finds them
+# by the pid files in WORKDIR/cluster).
+t0=$(date +%s.%N)
+slurm_start "$work/cluster" || fatal "the local Slurm cluster did not start"
+phase "cluster start" "$t0"
+ok "one-node cluster up (node $slurm_node, $(grep -o 'SlurmctldPort=[0-9]*' "$SLURM_CONF"))"
+find "$work" -mindepth 1 -maxdepth 1 ! -name cluster -exec rm -rf {} +
+
+# ---------------------------------------------------------------- the data
+t0=$(date +%s.%N)
+"$tinsmith" tin --points 'synthetic:grid?nx=121&ny=61&spacing=10&x0=430000&y0=4515000&surface=hill&z0=1600&scale=80&noise=0.5' \
+  --crs EPSG:26912 -o "$work/site.tin" -q >"$work/tin.log" 2>&1 || { show "$work/tin.log"; fatal "tinsmith tin"; }
+"$tinsmith" tile "$work/site.tin" -o "$work/one.3dtiles" "${tile_opts[@]}" --json >"$work/one.json" 2>"$work/one.err" \
+  || { show "$work/one.err"; fatal "tinsmith tile (the single run)"; }
+phase "tin + single tile run" "$t0"
+zooms=$(json "$work/one.json" 'len(d["zooms"])')
+expect "the single run's pyramid has at least 3 zooms ($zooms)" test "${zooms:-0}" -ge 3
+in_pyramid=$(json "$work/one.json" "[z['tiles'] for z in d['zooms'] if z['zoom'] == $shard_zoom][0]")
+subtrees=$((4 ** shard_zoom))
+expect "some zoom-$shard_zoom subtrees hold terrain and some do not ($in_pyramid of $subtrees)" \
+  test "${in_pyramid:-0}" -gt 0 -a "${in_pyramid:-0}" -lt "$subtrees"
+
+"$tinsmith" slurm --help >/dev/null 2>&1 || fatal "tinsmith has no slurm command ($tinsmith slurm --help fails)"
+
+# run_slurm WORKDIR OUTPUT ARGS...: tinsmith slurm on site.tin, stdout in
+# WORKDIR.out, stderr in WORKDIR.err
+run_slurm() {
+  local dir="$1" out="$2"
+  shift 2
+  "$tinsmith" slurm "$work/site.tin" -o "$out" --shard-zoom "$shard_zoom" --workdir "$dir" \
+    "${tile_opts[@]}" --threads 1 "$@" >"$dir.out" 2>"$dir.err"
+}
+
+# ---------------------------------------------------------------- without --submit
+rc=0
+run_slurm "$work/plan" "$work/plan.3dtiles" || rc=$?
+if [ "$rc" -eq 0 ]; then
+  printed=$(cat "$work/plan.out" "$work/plan.err" | grep 'sbatch ')
+  expect "without --submit: two sbatch commands printed" test "$(grep -c 'sbatch ' <<<"$printed")" -eq 2
+  # Run as printed, with a stand-in sbatch that answers 4242 for the
+  # array: the merge must wait for each of the array's tasks.
+  wanted="--dependency=afterok:$(seq -s: 0 "$subtrees" | sed 's/[0-9][0-9]*/4242_&/g') "
+  stand_in=$(bash -c 'sbatch() { case " $* " in *" --array="*) echo 4242 ;; *) echo "sbatch $*" ;; esac; }
+'"$printed" 2>&1)
+  if ! expect "without --submit: the printed commands, run as printed, make the merge wait for the $((subtrees + 1)) tasks" \
+    grep -qF -- "$wanted" <<<"$stand_in"; then
+    echo "      printed:"
+    sed 's/^/        /' <<<"$printed"
+    echo "      run with a stand-in sbatch (the array's id 4242):"
+    sed 's/^/        /' <<<"$stand_in"
+  fi
+  expect "without --submit: plan.json, shard.sh and merge.sh written" \
+    test -s "$work/plan/plan.json" -a -s "$work/plan/shard.sh" -a -s "$work/plan/merge.sh"
+  expect "without --submit: nothing submitted" test -z "$(squeue -h -o %i)"
+else
+  bad "tinsmith slurm without --submit (exit $rc)"
+  show "$work/plan.out" "$work/plan.err"
+fi
+
+# ---------------------------------------------------------------- 1. the sharded run
+run="$work/run"
+t0=$(date +%s.%N)
+rc=0
+run_slurm "$run" "$work/merged.3dtiles" --submit --json || rc=$?
+if [ "$rc" -ne 0 ]; then
+  show "$run.out" "$run.err"
+  fatal "tinsmith slurm --submit (exit $rc)"
+fi
+array=$(json "$run.out" 'd["array"]')
+merge=$(json "$run.out" 'd["merge"]')
+tasks=$(json "$run.out" 'd["tasks"]')
+expect "--submit --json: the array holds the top and the $subtrees subtrees (tasks: $tasks)" \
+  test "$tasks" = "$(seq -s ' ' 0 "$subtrees")"
+merge_state=$(slurm_wait_job "$merge" "$(left 240)")
+phase "sharded run (submit → merge done)" "$t0"
+array_state=$(slurm_wait_job "$array" "$(left 30)")
+expect "array job $array: every task COMPLETED ($array_state)" test "$array_state" = COMPLETED
+if ! expect "merge job $merge COMPLETED ($merge_state)" test "$merge_state" = COMPLETED; then
+  show "$run/logs/merge.log" "$run.err"
+fi
+stores=$(find "$run/shards" -maxdepth 1 -name '*.3dtiles' | wc -l)
+markers=$(find "$run/shards" -maxdepth 1 -name '*.empty' | wc -l)
+expect "shards: the top and $in_pyramid subtree stores, $((subtrees - in_pyramid)) .empty markers ($stores stores, $markers markers)" \
+  test "$stores" -eq $((in_pyramid + 1)) -a "$markers" -eq $((subtrees - in_pyramid)) -a -e "$run/shards/0.3dtiles"
+missing_logs=""
+for t in $(seq 0 "$subtrees"); do [ -e "$run/logs/shard-$t.log" ] || missing_logs+=" $t"; done
+expect "a log per task and one for the merge${missing_logs:+ (missing:$missing_logs)}" \
+  test -z "$missing_logs" -a -s "$run/logs/merge.log"
+if [ -e "$work/merged.3dtiles" ]; then
+  expect "merged store: the same bytes under every key as the single run" same_keys "$work/one.3dtiles" "$work/merged.3dtiles"
+  expect "merged store: the same file, byte for byte, as the single run" cmp -s "$work/one.3dtiles" "$work/merged.3dtiles"
+else
+  bad "no merged store at $work/merged.3dtiles"
+fi
+
+# the task whose store the second run finds taken: the first subtree in the pyramid
+victim=""
+for t in $(seq 1 "$subtrees"); do
+  [ -e "$run/shards/$t.3dtiles" ] && { victim=$t; break; }
+done
+[ -n "$victim" ] || fatal "no subtree store in $run/shards to take the place of"
+
+# ---------------------------------------------------------------- 2. a failed shard
+# A fresh workdir (tinsmith slurm takes no other without --resume), the jobs
+# submitted on hold (--sbatch-args, passed to both), then one subtree's
+# store path taken by a folder holding a foreign file, then the jobs
+# released: tinsmith tile will not replace that folder.
+again="$work/again"
+t0=$(date +%s.%N)
+rc=0
+run_slurm "$again" "$work/merged-again.3dtiles" --submit --json --sbatch-args=--hold || rc=$?
+if [ "$rc" -ne 0 ]; then
+  show "$again.out" "$again.err"
+  fatal "tinsmith slurm --submit --sbatch-args=--hold (exit $rc)"
+fi
+array=$(json "$again.out" 'd["array"]')
+merge=$(json "$again.out" 'd["merge"]')
+held=$(scontrol -o show job "$array" 2>/dev/null | grep -o 'Reason=[A-Za-z]*' | sort -u | paste -sd, -)
+expect "--sbatch-args=--hold reaches the array job $array ($held) and the merge job $merge ($(job_field "$merge" Reason))" \
+  test "$held" = Reason=JobHeldUser -a "$(job_field "$merge" Reason)" = JobHeldUser
+mkdir -p "$again/shards/$victim.3dtiles"
+echo "not a tile store" >"$again/shards/$victim.3dtiles/notes.txt"
+scontrol release "$array" && scontrol release "$merge" || fatal "scontrol release $array $merge"
+merge_state=$(slurm_wait_job "$merge" "$(left 240)")
+array_state=$(slurm_wait_job "$array" "$(left 30)")
+phase "failing run (release → merge cancelled)" "$t0"
+failed_list=$(failed_tasks "$array")
+expect "task $victim FAILED and no other ($failed_list; array: $array_state)" test "$failed_list" = "$victim"
+code=$(task_field "$array" "$victim" ExitCode)
+if ! expect "task $victim exited with 5, i/o ($code)" test "$code" = 5:0; then
+  show "$again/logs/shard-$victim.log"
+fi
+refusal=$(grep -m1 'ERROR' "$again/logs/shard-$victim.log" 2>/dev/null | cut -c1-160)
+expect "task $victim's log says why (${refusal:-no ERROR line})" test -n "$refusal"
+reason=$(job_field "$merge" Reason)
+expect "merge job $merge CANCELLED, DependencyNeverSatisfied ($merge_state, $reason)" \
+  test "$merge_state" = CANCELLED -a "$reason" = DependencyNeverSatisfied
+expect "the cancelled merge wrote no store" test ! -e "$work/merged-again.3dtiles"
+expect "the foreign file is untouched" test -f "$again/shards/$victim.3dtiles/notes.txt"
+
+# ---------------------------------------------------------------- 3. resume
+rm -rf "${again:?}/shards/$victim.3dtiles"
+t0=$(date +%s.%N)
+rc=0
+run_slurm "$again" "$work/merged-again.3dtiles" --resume --submit --json || rc=$?
+if [ "$rc" -ne 0 ]; then
+  show "$again.out" "$again.err"
+  fatal "tinsmith slurm --resume --submit (exit $rc)"
+fi
+array=$(json "$again.out" 'd["array"]')
+merge=$(json "$again.out" 'd["merge"]')
+tasks=$(json "$again.out" 'd["tasks"]')
+expect "--resume resubmitted task $victim alone (tasks: $tasks)" test "$tasks" = "$victim"
+merge_state=$(slurm_wait_job "$merge" "$(left 120)")
+array_state=$(slurm_wait_job "$array" "$(left 30)")
+phase "resume (submit → merge done)" "$t0"
+ran=$(scontrol -o show job "$array" 2>/dev/null | grep -o 'ArrayTaskId=[0-9,-]*' | cut -d= -f2 | paste -sd, -)
+expect "the resubmitted array job $array ran task $victim only (${ran:-not an array}: $array_state)" \
+  test "$ran" = "$victim" -a "$array_state" = COMPLETED
+if ! expect "new merge job $merge COMPLETED ($merge_state)" test "$merge_state" = COMPLETED; then
+  show "$again/logs/merge.log" "$again.err"
+fi
+if [ -e "$work/merged-again.3dtiles" ]; then
+  expect "resumed store: the same bytes under every key as the single run" same_keys "$work/one.3dtiles" "$work/merged-again.3dtiles"
+else
+  bad "no store at $work/merged-again.3dtiles after the resume"
+fi
+
+# ---------------------------------------------------------------- 4. nothing to resume
+t0=$(date +%s.%N)
+rc=0
+run_slurm "$again" "$work/merged-again.3dtiles" --resume --submit --json || rc=$?
+if [ "$rc" -ne 0 ]; then
+  show "$again.out" "$again.err"
+  fatal "tinsmith slurm --resume --submit with every shard done (exit $rc)"
+fi
+array=$(json "$again.out" 'd.get("array") or ""')
+merge=$(json "$again.out" 'd["merge"]')
+tasks=$(json "$again.out" 'd["tasks"]')
+dependency=$(job_field "$merge" Dependency)
+expect "--resume with every shard done: no tasks, no array, a merge with no dependency (tasks: '$tasks', array: '$array', $dependency)" \
+  test -z "$tasks" -a -z "$array" -a "$dependency" = "(null)"
+merge_state=$(slurm_wait_job "$merge" "$(left 60)")
+phase "resume with nothing missing" "$t0"
+expect "that merge job $merge COMPLETED ($merge_state)" test "$merge_state" = COMPLETED
+expect "and its store holds the same bytes under every key as the single run" \
+  same_keys "$work/one.3dtiles" "$work/merged-again.3dtiles"
+exit 0

@@ -1,0 +1,337 @@
+// `tinsmith slurm`: one tiling job as Slurm batch jobs on a shared filesystem,
+// no tinsmith daemon:
+//   tinsmith slurm SITE.tin -o SITE.3dtiles --shard-zoom Z --workdir DIR [tile options]
+//       [--submit] [--resume] [--sbatch-args 'ARGS'] [--json]
+// writes into DIR
+//   plan.json   what the job is (TIN, output, options, shard zoom) and every
+//               submission made of it;
+//   shard.sh    an sbatch array script: task 0 tiles the top of the pyramid
+//               (tinsmith tile --until-zoom Z), task k ≥ 1 the subtree
+//               Z/x/y with k − 1 = y · 2^Z + x (--subtree --empty-ok: a
+//               subtree not in the pyramid leaves shards/k.empty);
+//               shards/k.3dtiles, logs/shard-k.log;
+//   merge.sh    tinsmith merge of every shard into the output, then info
+//               (logs/merge.log);
+// and with --submit runs `sbatch --array` of the shards and `sbatch` of the
+// merge with afterok on each task. --resume resubmits only the tasks that
+// left neither a store nor an empty marker (a failed, cancelled or lost
+// shard), and a new merge after them. Shards are built exactly as `tinsmith
+// tile --subtree` builds them, so the merged store has the bytes of one run.
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/base/error.hpp"
+#include "ingest/tiles/tile_job.hpp"
+#include "tools/cli/commands.hpp"
+#include "tools/cli/shared_options.hpp"
+#include "tools/cli/tile_options.hpp"
+
+namespace tinsmith::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kPlanFormat = "tinsmith-slurm/1";
+constexpr int kMaxShardZoom = 6;  // 4096 subtrees: as many as an array usually may hold
+
+struct SlurmCliOptions {
+  std::string tin, output, workdir, sbatchArgs;
+  int shardZoom = 0;
+  TileFlags flags;
+  bool submit = false;
+};
+
+/// `text` quoted for a POSIX shell.
+std::string shellQuote(const std::string& text) {
+  std::string out = "'";
+  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+/// Writes `text` to `path` through a temporary sibling and a rename.
+void writeAtomically(const fs::path& path, const std::string& text, bool executable) {
+  const fs::path temp = path.string() + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out)
+      throw ioError("cannot write '" + temp.string() + "'", fileLocation(temp.string()),
+                    "check that the work folder is writable and has room");
+  }
+  if (executable)
+    fs::permissions(temp, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                    fs::perm_options::add);
+  fs::rename(temp, path);
+}
+
+/// The tile options every shard is run with, as `tinsmith tile` arguments
+/// (what the shards' stores record, so the merge sees one job).
+std::vector<std::string> tileArguments(const TileFlags& f) {
+  std::vector<std::string> a;
+  const auto num = [](double v) {  // the shortest text that reads back as v
+    char buffer[32];
+    const auto end = std::to_chars(buffer, buffer + sizeof buffer, v).ptr;
+    return std::string(buffer, end);
+  };
+  if (f.tolerance) a.insert(a.end(), {"--tolerance", num(*f.tolerance)});
+  if (f.maxTriangles) a.insert(a.end(), {"--max-triangles", std::to_string(*f.maxTriangles)});
+  if (f.maxZoom) a.insert(a.end(), {"--max-zoom", std::to_string(*f.maxZoom)});
+  if (f.lambda) a.insert(a.end(), {"--lambda", num(*f.lambda)});
+  if (f.compression) a.insert(a.end(), {"--compression", *f.compression});
+  if (f.frame) a.insert(a.end(), {"--frame", *f.frame});
+  if (f.geoid) a.insert(a.end(), {"--geoid", *f.geoid});
+  return a;
+}
+
+std::string shardScript(const std::string& tinsmith, const fs::path& tin, const fs::path& dir,
+                        const std::vector<std::string>& args, int shardZoom, int cpus) {
+  std::string quoted;
+  for (const auto& a : args) quoted += " " + shellQuote(a);
+  std::ostringstream s;
+  s << "#!/usr/bin/env bash\n"
+    << "# One shard of a tinsmith tiling job (written by tinsmith slurm; see plan.json).\n"
+    << "# Task 0: the tiles above zoom " << shardZoom << "; task k >= 1: the subtree " << shardZoom
+    << "/x/y, k - 1 = y * " << (1 << shardZoom) << " + x.\n"
+    << "#SBATCH --job-name=tinsmith-shard\n"
+    << "#SBATCH --cpus-per-task=" << cpus << "\n"
+    << "#SBATCH --output=" << (dir / "logs" / "shard-%a.log").string() << "\n"
+    << "#SBATCH --open-mode=append\n"  // a resubmitted task's log follows its failed one
+    << "set -euo pipefail\n"
+    << "task=${SLURM_ARRAY_TASK_ID:?run by sbatch --array}\n"
+    << "shards=" << shellQuote((dir / "shards").string()) << "\n"
+    << "tile=(" << shellQuote(tinsmith) << " tile " << shellQuote(tin.string()) << quoted
+    << " --threads \"${SLURM_CPUS_PER_TASK:-1}\")\n"
+    << "echo \"tinsmith shard $task on $(hostname) at $(date -u +%FT%TZ)\"\n"
+    << "if [ \"$task\" -eq 0 ]; then\n"
+    << "  \"${tile[@]}\" --until-zoom " << shardZoom << " -o \"$shards/0.3dtiles\"\n"
+    << "  exit 0\n"
+    << "fi\n"
+    << "n=" << (1 << shardZoom) << "\n"
+    << "x=$(( (task - 1) % n )); y=$(( (task - 1) / n ))\n"
+    << "\"${tile[@]}\" --subtree \"" << shardZoom
+    << "/$x/$y\" --empty-ok -o \"$shards/$task.3dtiles\"\n"
+    << "if [ ! -e \"$shards/$task.3dtiles\" ]; then\n"
+    << "  echo \"" << shardZoom << "/$x/$y\" > \"$shards/$task.empty.tmp\"\n"
+    << "  mv \"$shards/$task.empty.tmp\" \"$shards/$task.empty\"\n"
+    << "fi\n";
+  return s.str();
+}
+
+std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const fs::path& output,
+                        int tasks) {
+  std::ostringstream s;
+  s << "#!/usr/bin/env bash\n"
+    << "# The merge of a tinsmith tiling job's shards (written by tinsmith slurm).\n"
+    << "#SBATCH --job-name=tinsmith-merge\n"
+    << "#SBATCH --output=" << (dir / "logs" / "merge.log").string() << "\n"
+    << "#SBATCH --open-mode=append\n"
+    << "set -euo pipefail\n"
+    << "shards=" << shellQuote((dir / "shards").string()) << "\n"
+    << "stores=()\n"
+    << "for task in $(seq 0 " << tasks - 1 << "); do\n"
+    << "  if [ -e \"$shards/$task.3dtiles\" ]; then stores+=(\"$shards/$task.3dtiles\")\n"
+    << "  elif [ ! -e \"$shards/$task.empty\" ]; then\n"
+    << "    echo \"ERROR: shard $task has no store: run tinsmith slurm --resume --submit "
+       "with the same arguments\" >&2\n"
+    << "    exit 3\n"
+    << "  fi\n"
+    << "done\n"
+    << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string()) << "\n"
+    << shellQuote(tinsmith) << " info " << shellQuote(output.string()) << "\n";
+  return s.str();
+}
+
+/// Runs `command` (/bin/sh) and returns its stdout; throws ioError naming it
+/// and what it printed on a non-zero exit.
+std::string runForOutput(const std::string& command) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) throw ioError("cannot run: " + command, {}, "check that sbatch is on PATH");
+  std::string out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  if (status != 0)
+    throw ioError("`" + command + "` failed: " + out, {},
+                  "check that Slurm's clients reach the controller (SLURM_CONF, sinfo)");
+  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+  // sbatch --parsable prints "ID" or "ID;CLUSTER".
+  return out.substr(0, out.find(';'));
+}
+
+/// The tasks that have left neither a store nor an empty marker.
+std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
+  std::vector<int> out;
+  for (int k = 0; k < tasks; ++k) {
+    const fs::path shards = dir / "shards";
+    if (!fs::exists(shards / (std::to_string(k) + ".3dtiles")) &&
+        !fs::exists(shards / (std::to_string(k) + ".empty")))
+      out.push_back(k);
+  }
+  return out;
+}
+
+/// "0-16" or "3,5,9": sbatch --array's list.
+std::string arrayList(const std::vector<int>& tasks) {
+  bool contiguous = true;
+  for (std::size_t i = 1; i < tasks.size(); ++i) contiguous &= tasks[i] == tasks[i - 1] + 1;
+  if (contiguous && tasks.size() > 1)
+    return std::to_string(tasks.front()) + "-" + std::to_string(tasks.back());
+  std::string out;
+  for (const int t : tasks) out += (out.empty() ? "" : ",") + std::to_string(t);
+  return out;
+}
+
+void runSlurm(const SlurmCliOptions& o) {
+  const TileFlags& f = o.flags;
+  if (o.shardZoom < 1 || o.shardZoom > kMaxShardZoom)
+    throw usageError("--shard-zoom must be 1 to " + std::to_string(kMaxShardZoom) + " (got " +
+                         std::to_string(o.shardZoom) + ")",
+                     "zoom Z gives 4^Z subtrees and the top above them");
+  if (f.scheme && *f.scheme != "3d-tiles")
+    throw usageError("Cesium terrain (--scheme " + *f.scheme + ") is built whole, not in shards",
+                     "tile it with tinsmith tile, and shard the 3D Tiles here");
+  if (f.resume && !o.submit) throw usageError("--resume goes with --submit");
+  // The options every shard will run with, checked here once.
+  (void)withTileFlags(ingest::TileJobOptions{}, f);
+  const fs::path tin = fs::absolute(o.tin).lexically_normal();
+  if (!fs::is_regular_file(tin))
+    throw inputError("no TIN at '" + o.tin + "'", fileLocation(o.tin), "give a .tin file");
+  const fs::path output = fs::absolute(o.output).lexically_normal();
+  const fs::path dir = fs::absolute(o.workdir).lexically_normal();
+  const std::string tinsmith = fs::canonical("/proc/self/exe").string();
+  const int tasks = 1 + (1 << (2 * o.shardZoom));
+  const std::vector<std::string> args = tileArguments(f);
+
+  nlohmann::ordered_json plan;
+  plan["format"] = kPlanFormat;
+  plan["tin"] = tin.string();
+  plan["output"] = output.string();
+  plan["shardZoom"] = o.shardZoom;
+  plan["tasks"] = tasks;
+  plan["tileArguments"] = args;
+  const fs::path planPath = dir / "plan.json";
+  nlohmann::ordered_json previous;
+  if (fs::exists(planPath)) {
+    std::ifstream in(planPath);
+    previous = nlohmann::ordered_json::parse(in, nullptr, false);
+    nlohmann::ordered_json same = previous;
+    if (same.is_object()) same.erase("submissions");
+    if (same != plan)
+      throw usageError("'" + dir.string() + "' holds the plan of another job (plan.json)",
+                       "choose another --workdir, or give the arguments that job was planned with");
+    if (!f.resume && !unfinishedTasks(dir, tasks).empty() &&
+        unfinishedTasks(dir, tasks).size() < static_cast<std::size_t>(tasks))
+      throw usageError("'" + dir.string() + "' already holds shards of this job",
+                       "add --resume to submit only the shards that are missing");
+  } else if (fs::exists(dir) && !fs::is_empty(dir)) {
+    throw usageError("'" + dir.string() + "' is a folder that holds other files",
+                     "give an empty or new --workdir: tinsmith slurm keeps its plan, scripts, "
+                     "shards and logs there");
+  }
+  fs::create_directories(dir / "shards");
+  fs::create_directories(dir / "logs");
+  const int cpus = std::max(1, f.threads);
+  writeAtomically(dir / "shard.sh", shardScript(tinsmith, tin, dir, args, o.shardZoom, cpus), true);
+  writeAtomically(dir / "merge.sh", mergeScript(tinsmith, dir, output, tasks), true);
+
+  std::vector<int> todo;
+  if (f.resume) {
+    todo = unfinishedTasks(dir, tasks);
+  } else {
+    for (int k = 0; k < tasks; ++k) todo.push_back(k);
+  }
+  const std::string extra = o.sbatchArgs.empty() ? "" : " " + o.sbatchArgs;
+  const std::string arrayCommand = "sbatch --parsable --array=" + arrayList(todo) + extra + " " +
+                                   shellQuote((dir / "shard.sh").string());
+  const auto mergeCommand = [&](const std::string& arrayId) {
+    std::string dependency;
+    for (const int t : todo)
+      dependency += (dependency.empty() ? "afterok:" : ":") + arrayId + "_" + std::to_string(t);
+    return "sbatch --parsable" +
+           (arrayId.empty() ? std::string()
+                            : " --dependency=" + dependency + " --kill-on-invalid-dep=yes") +
+           extra + " " + shellQuote((dir / "merge.sh").string());
+  };
+
+  nlohmann::ordered_json submission;
+  submission["tasks"] = todo;
+  if (o.submit) {
+    const std::string arrayId = todo.empty() ? "" : runForOutput(arrayCommand);
+    const std::string mergeId = runForOutput(mergeCommand(arrayId));
+    submission["array"] = arrayId;
+    submission["merge"] = mergeId;
+  }
+  plan["submissions"] = previous.is_object() && previous.contains("submissions")
+                            ? previous["submissions"]
+                            : nlohmann::ordered_json::array();
+  if (o.submit) plan["submissions"].push_back(submission);
+  writeAtomically(planPath, plan.dump(2) + "\n", false);
+
+  if (f.json) {
+    nlohmann::ordered_json out = submission;
+    out["workdir"] = dir.string();
+    if (!o.submit) out["commands"] = {arrayCommand, mergeCommand("ARRAY_ID")};
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  if (f.quiet) return;
+  std::cerr << "wrote " << (dir / "shard.sh").string() << " (" << tasks
+            << " tasks: the top above zoom " << o.shardZoom << " and " << tasks - 1
+            << " subtrees) and merge.sh; logs in " << (dir / "logs").string() << "\n";
+  if (!o.submit) {
+    // The commands on stdout, to be saved and run: `tinsmith slurm … > submit.sh`.
+    std::cout << "A=$(" << arrayCommand << ")\n" << mergeCommand("${A}") << "\n";
+    std::cerr << "submit with the two commands above (or run tinsmith slurm again with --submit)\n";
+    return;
+  }
+  if (todo.empty())
+    std::cerr << "every shard is there: submitted the merge alone, job "
+              << submission["merge"].get<std::string>() << "\n";
+  else
+    std::cerr << "submitted the shards as array job " << submission["array"].get<std::string>()
+              << " (tasks " << arrayList(todo) << ") and the merge as job "
+              << submission["merge"].get<std::string>() << " after every one of them\n"
+              << "follow with: squeue; the merged store is " << output.string()
+              << "; a failed shard: tinsmith slurm … --resume --submit\n";
+}
+
+}  // namespace
+
+void addSlurmCommand(CLI::App& app) {
+  auto opt = std::make_shared<SlurmCliOptions>();
+  auto* cmd = app.add_subcommand(
+      "slurm", "Tile a TIN as Slurm jobs: an sbatch array of shards and a merge after them");
+  cmd->add_option("tin", opt->tin, "The .tin file to tile (on a filesystem the nodes share)")
+      ->required();
+  addOutputOption(*cmd, opt->output, "The merged tile store (.3dtiles or a directory)")->required();
+  cmd->add_option("--shard-zoom", opt->shardZoom,
+                  "The subtrees' zoom: 4^Z subtrees, and the tiles above them as one more task")
+      ->required();
+  cmd->add_option("--workdir", opt->workdir,
+                  "Where the plan, the scripts, the shards and the logs go (shared by the nodes)")
+      ->required();
+  cmd->add_flag("--submit", opt->submit, "Submit the jobs with sbatch (else print the commands)");
+  cmd->add_option("--sbatch-args", opt->sbatchArgs,
+                  "More sbatch arguments for both jobs, as one string (e.g. '-p big -A proj')");
+  addTileFlags(*cmd, opt->flags, false);
+  cmd->get_option("--resume")
+      ->description(
+          "With --submit: submit only the shards that left no store (failed, cancelled or lost) "
+          "and a merge after them");
+  cmd->get_option("--threads")
+      ->description("Cores each shard asks Slurm for (--cpus-per-task) and runs on (default 1)");
+  cmd->callback([opt] { runSlurm(*opt); });
+}
+
+}  // namespace tinsmith::cli
