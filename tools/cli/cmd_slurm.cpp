@@ -230,10 +230,10 @@ void runSlurm(const SlurmCliOptions& o) {
     if (same != plan)
       throw usageError("'" + dir.string() + "' holds the plan of another job (plan.json)",
                        "choose another --workdir, or give the arguments that job was planned with");
-    if (!f.resume && !unfinishedTasks(dir, tasks).empty() &&
-        unfinishedTasks(dir, tasks).size() < static_cast<std::size_t>(tasks))
+    if (!f.resume && unfinishedTasks(dir, tasks).size() < static_cast<std::size_t>(tasks))
       throw usageError("'" + dir.string() + "' already holds shards of this job",
-                       "add --resume to submit only the shards that are missing");
+                       "add --resume to submit only the shards that are missing (or the merge "
+                       "alone, when none is)");
   } else if (fs::exists(dir) && !fs::is_empty(dir)) {
     throw usageError("'" + dir.string() + "' is a folder that holds other files",
                      "give an empty or new --workdir: tinsmith slurm keeps its plan, scripts, "
