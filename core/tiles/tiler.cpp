@@ -14,11 +14,10 @@
 
 namespace tinsmith::tiles {
 
-/// What every tile of one zoom shares: the zoom's fit and the lines
-/// simplified to its tolerance (with their bounding boxes).
+/// What every tile of one zoom shares: the lines simplified to its
+/// tolerance (with their bounding boxes).
 struct Tiler::Zoom {
   double tolerance = 0;
-  std::unique_ptr<fit::MultilevelFit> fit;
   std::vector<TerrainLine> lines;
   std::vector<Rect> lineBoxes;
 };
@@ -50,9 +49,9 @@ constexpr double kSideSagShare = 0.1;
 /// barycentric grid at about that median's spacing, z on the triangle's
 /// plane; a DEM's even grid gets none). The samples are at most as many as
 /// the TIN's vertices: where the median asks for more, the spacing grows.
-/// `zoomFit` leaves out what the tile meshes hold exactly — vertices of break
+/// `zoomFit` (what the tile fits see) leaves out what the tile meshes hold exactly — vertices of break
 /// lines, and samples of the triangles at them —
-/// so a zoom's binary fit is not driven to tiny cells by the steps a break
+/// so a tile's binary fit is not driven to tiny cells by the steps a break
 /// line makes (a river lowered below its banks); the tiles' own fits use it all.
 struct FitData {
   std::vector<Point3> all;
@@ -125,16 +124,16 @@ FitData fitData(const TinData& tin) {
   return data;
 }
 
-fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, const PyramidGeometry& g,
-                                      double tolerance, int maxLevel) {
+fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, Point2 origin, double size,
+                                      double tolerance, int maxLevel, int threads) {
   fit::MultilevelOptions m;
   m.smoothing = fit::Smoothing::ThinPlate;
   m.lambdaFactor = o.lambdaFactor;
   m.criteria.errorAbsolute = tolerance;
   m.maxLevel = std::clamp(maxLevel, 1, fit::BinaryTriangulation::kMaxGridLevels - 1);
-  m.domainOrigin = g.origin();
-  m.domainSize = g.size();
-  m.threads = o.threads;
+  m.domainOrigin = origin;
+  m.domainSize = size;
+  m.threads = threads;
   return m;
 }
 
@@ -280,37 +279,40 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   FitData data = fitData(tin);
   data_ = std::move(data.all);
   zoomData_ = std::move(data.zoomFit);
-  dataGrid_ =
-      CellGrid(extent.x0, extent.y0, extent.x1, extent.y1,
-               CellGrid::cellFor(extent.width(), extent.height(), data_.size() / 4 + 1, 1e-9));
-  dataGrid_.build(data_.size(), [&](std::size_t i, auto&& emit) {
-    emit(dataGrid_.index(dataGrid_.cellX(data_[i].x), dataGrid_.cellY(data_[i].y)));
-  });
+  auto gridOf = [&](const std::vector<Point3>& points) {
+    CellGrid grid(extent.x0, extent.y0, extent.x1, extent.y1,
+                  CellGrid::cellFor(extent.width(), extent.height(), points.size() / 4 + 1, 1e-9));
+    grid.build(points.size(), [&](std::size_t i, auto&& emit) {
+      emit(grid.index(grid.cellX(points[i].x), grid.cellY(points[i].y)));
+    });
+    return grid;
+  };
+  dataGrid_ = gridOf(data_);
+  zoomGrid_ = gridOf(zoomData_);
   lines_ = extractTerrainLines(tin);
-
-  // The finest planned zoom: the first whose tiles hold the finest fit's
-  // triangles within a quarter of the budget each, on average over the
-  // square. Zooms below it keep the finest tolerance: they exist only where a
-  // tile of the planned finest zoom cannot meet it within levelsPerTile levels.
-  const int cap = options_.fixed ? std::min(options_.fixed->finestZoom + levelsPerTile_,
-                                            fit::BinaryTriangulation::kMaxGridLevels - 1)
-                                 : std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
-                                            fit::BinaryTriangulation::kMaxGridLevels - 1);
-  auto planning = std::make_unique<fit::MultilevelFit>(
-      fit::fitMultilevel(zoomData_, zoomFitOptions(options_, geometry_, options_.tolerance, cap)));
-  int zmax = 0;
-  if (options_.fixed) {
-    zmax = options_.fixed->finestZoom;
-  } else {
-    const double finestTriangles = static_cast<double>(planning->levels().back().triangles);
-    const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
-    while (zmax < options_.maxZoom.value_or(20) && finestTriangles > perTile * std::pow(4.0, zmax))
-      ++zmax;
-  }
-  finestZoom_ = zmax;
+  finestZoom_ = options_.fixed ? options_.fixed->finestZoom
+                               : options_.plannedFinestZoom.value_or(-1);
+  if (finestZoom_ < 0) finestZoom_ = planFinestZoom();
   maxZoom_ =
       std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
-  if (finestZoom_ + levelsPerTile_ == cap) plannedFit_ = std::move(planning);
+}
+
+int Tiler::planFinestZoom() const {
+  // The first zoom whose tiles hold the finest fit's triangles within a
+  // quarter of the budget each, on average over the square. Zooms below it
+  // keep the finest tolerance: they exist only where a tile of the planned
+  // finest zoom cannot meet it within levelsPerTile levels.
+  const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
+                           fit::BinaryTriangulation::kMaxGridLevels - 1);
+  const auto planning = fit::fitMultilevel(
+      zoomData_, zoomFitOptions(options_, geometry_.origin(), geometry_.size(), options_.tolerance,
+                                cap, options_.threads));
+  const double finestTriangles = static_cast<double>(planning.levels().back().triangles);
+  const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
+  int zmax = 0;
+  while (zmax < options_.maxZoom.value_or(20) && finestTriangles > perTile * std::pow(4.0, zmax))
+    ++zmax;
+  return zmax;
 }
 
 Tiler::~Tiler() = default;
@@ -328,12 +330,6 @@ const Tiler::Zoom& Tiler::zoom(int z) const {
 std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
   auto zd = std::make_unique<Zoom>();
   zd->tolerance = zoomTolerance(z);
-  if (z == finestZoom_ && plannedFit_) {
-    zd->fit = std::move(plannedFit_);  // only this zoom's once-call touches it
-  } else {
-    zd->fit = std::make_unique<fit::MultilevelFit>(fit::fitMultilevel(
-        zoomData_, zoomFitOptions(options_, geometry_, zd->tolerance, z + levelsPerTile_)));
-  }
   // A chord must stay on the TIN too: a shore simplified across a steep bank
   // would otherwise sit metres off the ground it crosses, at every zoom.
   std::vector<TinIndex::SectionPoint> section;
@@ -386,10 +382,11 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   if (!geometry_.inside(id)) throw usageError("tile " + id.name() + " is outside the pyramid");
   const Zoom& zd = zoom(id.z);
   const Rect rect = geometry_.bounds(id);
-  const TileInput input = tileInput(id, zd);
+  const std::optional<fit::MultilevelFit> fit = tileFit(id, zd.tolerance);
+  const TileInput input = tileInput(id, zd, fit ? &*fit : nullptr);
   TileSurface tile = triangulateTile(id, rect, input, zd.lines);
   if (tile.empty()) return tile;
-  fitTile(tile, *zd.fit);
+  fitTile(tile, fit ? &*fit : nullptr);
   // Where the fit misses the zoom's tolerance, the TIN's points, worst first.
   // They stay off the sides (which hold the TIN's section already and are
   // shared with the neighbour) by the side margin.
@@ -406,9 +403,59 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   return tile;
 }
 
-Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
-  const auto& fit = *zd.fit;
-  const auto& mesh = fit.mesh();
+std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolerance) const {
+  const Rect rect = geometry_.bounds(id);
+  std::vector<std::uint32_t> inTile;
+  zoomGrid_.forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
+    if (rect.contains(zoomData_[i].xy())) inTile.push_back(i);
+  });
+  if (inTile.size() < 3) return std::nullopt;
+  std::sort(inTile.begin(), inTile.end());  // the data's order, whatever the grid's
+  std::vector<Point3> points;
+  points.reserve(inTile.size());
+  for (const std::uint32_t i : inTile) points.push_back(zoomData_[i]);
+  // One thread: the tiles are built in parallel (and a fit's result does not
+  // depend on its thread count).
+  return fit::fitMultilevel(points,
+                            zoomFitOptions(options_, {rect.x0, rect.y0},
+                                           std::ldexp(geometry_.size(), -id.z), tolerance,
+                                           levelsPerTile_, 1));
+}
+
+double Tiler::fitZ(const fit::MultilevelFit* fit, Point2 p) const {
+  if (fit) {
+    const auto& mesh = fit->mesh();
+    const Point2 o = mesh.origin();
+    const double size = mesh.size();
+    return fit->evaluate({std::clamp(p.x, o.x, o.x + size), std::clamp(p.y, o.y, o.y + size)});
+  }
+  return index_.z(p).value_or(0.0);
+}
+
+double Tiler::offTinZ(Point2 p, const Rect& rect) const {
+  // The nearest TIN vertex's z (the lowest index among equally near ones):
+  // the same in every tile that holds p.
+  std::vector<std::uint32_t> found;
+  for (double r = rect.width() / 64; r <= 4 * rect.width(); r *= 2) {
+    index_.verticesIn({p.x - r, p.y - r, p.x + r, p.y + r}, found);
+    if (found.empty()) continue;
+    std::uint32_t best = found.front();
+    double bestD = std::numeric_limits<double>::infinity();
+    for (const std::uint32_t v : found) {
+      const Point3& q = tin_.vertices[v];
+      const double d = std::hypot(q.x - p.x, q.y - p.y);
+      if (d < bestD || (d == bestD && v < best)) {
+        bestD = d;
+        best = v;
+      }
+    }
+    return tin_.vertices[best].z;
+  }
+  return 0.0;
+}
+
+Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
+                                  const fit::MultilevelFit* fit) const {
   const Rect rect = geometry_.bounds(id);
   const double snap = rect.width() * 1e-9;
   TileInput input;
@@ -419,46 +466,25 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
     for (auto& piece : clipToRect(zd.lines[i], rect, snap)) input.lines.push_back(std::move(piece));
   }
 
-  const int gridLevels = mesh.gridLevels();
-  const auto zValues = fit.vertexZ();
-  auto binaryPoint = [&](std::uint64_t key) {
-    return Point3{geometry_.lineX(gridLevels, mesh.column(key)),
-                  geometry_.lineY(gridLevels, mesh.row(key)), zValues[mesh.vertexId(key)]};
-  };
-
-  // The zoom fit's vertices in the tile: the leaves of its binary
-  // triangulation that meet the tile (SubmeshRefine, 2.10, pruned to it).
-  const int shift = gridLevels - id.z;
-  std::vector<std::uint64_t> keys;
-  {
-    const double scale = static_cast<double>(1ULL << shift);
-    const Rect grid{static_cast<double>(id.x) * scale, static_cast<double>(id.y) * scale,
-                    static_cast<double>(id.x + 1ULL) * scale,
-                    static_cast<double>(id.y + 1ULL) * scale};
-    std::vector<fit::BinaryTriangle> stack;
-    for (const auto& r : mesh.rootTriangles()) stack.push_back(r);
-    while (!stack.empty()) {
-      const fit::BinaryTriangle t = stack.back();
-      stack.pop_back();
-      const std::array corners{mesh.gridPosition(t.l), mesh.gridPosition(t.a),
-                               mesh.gridPosition(t.r)};
-      if (!boundsOf(corners).overlaps(grid)) continue;
-      if (mesh.isSplit(t)) {
-        const std::uint64_t j = (t.l + t.r) / 2;
-        // (l, a, r) splits into (a, j, l) and (r, j, a).
-        stack.push_back({t.a, j, t.l, 0, t.depth + 1});
-        stack.push_back({t.r, j, t.a, 0, t.depth + 1});
-        continue;
-      }
-      for (int i = 0; i < 3; ++i) {
-        if (grid.contains(corners[i])) keys.push_back(i == 0 ? t.l : i == 1 ? t.a : t.r);
-      }
+  // The tile fit's vertices inside the tile, on the pyramid's grid lines
+  // (the same doubles as the tile's sides). Those on a side are left out:
+  // another tile's fit does not have them, and the side is the TIN's section.
+  if (fit) {
+    const auto& mesh = fit->mesh();
+    const int gridLevels = mesh.gridLevels();
+    const auto zValues = fit->vertexZ();
+    const std::uint64_t column0 = static_cast<std::uint64_t>(id.x) << gridLevels;
+    const std::uint64_t row0 = static_cast<std::uint64_t>(id.y) << gridLevels;
+    const std::uint64_t last = 1ULL << gridLevels;
+    for (const std::uint64_t key : mesh.activeKeys()) {
+      const std::uint64_t i = mesh.column(key), j = mesh.row(key);
+      if (i == 0 || j == 0 || i == last || j == last) continue;
+      input.interior.push_back({geometry_.lineX(id.z + gridLevels, column0 + i),
+                                geometry_.lineY(id.z + gridLevels, row0 + j),
+                                zValues[mesh.vertexId(key)]});
     }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   }
-  // Side points: the corners, binary vertices on a side, and the lines'
-  // crossings.
+  // Side points: the corners and the lines' crossings.
   std::array<std::vector<SidePoint>, 4> sides;  // south, east, north, west
   auto addToSides = [&](const Point3& p, bool onLine) {
     if (p.y == rect.y0) sides[0].push_back({p.x, p, onLine});
@@ -468,14 +494,6 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
   };
   for (const double y : {rect.y0, rect.y1}) {
     for (const double x : {rect.x0, rect.x1}) addToSides({x, y, 0.0}, false);
-  }
-  for (std::uint64_t key : keys) {
-    const Point3 p = binaryPoint(key);
-    if (p.x == rect.x0 || p.x == rect.x1 || p.y == rect.y0 || p.y == rect.y1) {
-      addToSides(p, false);
-    } else {
-      input.interior.push_back(p);
-    }
   }
   for (const auto& piece : input.lines) {
     for (const auto& p : piece.points) addToSides(p, true);
@@ -547,16 +565,11 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd) const {
       if (!must.empty() && must.back().along == sp.along) continue;
       must.push_back(sp);
       if (!sp.onLine) {
-        // The section, else the TIN at the point (a corner on the TIN's
-        // boundary is where a section may start just after it), else — off
-        // the TIN — the fit. A corner is on two sides of each of four
-        // tiles, whose sections reach it in different arithmetic: it takes
-        // the TIN at the point in all of them.
-        const bool corner =
-            (sp.p.x == rect.x0 || sp.p.x == rect.x1) && (sp.p.y == rect.y0 || sp.p.y == rect.y1);
-        auto z = corner ? index_.z(sp.p.xy()) : tinZ(sp.along);
-        if (!z) z = index_.z(sp.p.xy());
-        must.back().p.z = z ? *z : fit.evaluate(sp.p.xy());
+        // A corner: the TIN at the point (it is on two sides of each of
+        // four tiles, whose sections reach it in different arithmetic),
+        // else — off the TIN — the nearest TIN vertex's z.
+        const auto z = index_.z(sp.p.xy());
+        must.back().p.z = z ? *z : offTinZ(sp.p.xy(), rect);
       }
     }
     auto& out = sideLines[k];
@@ -624,7 +637,7 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
     lineFeature.push_back(cdt.addFeature(piece.ring ? FeatureKind::Boundary : piece.kind, "line"));
   }
   const FeatureId sideFeature = cdt.addFeature(FeatureKind::Other, "tile side");
-  const FeatureId binaryFeature = cdt.addFeature(FeatureKind::Raster, "zoom fit");
+  const FeatureId binaryFeature = cdt.addFeature(FeatureKind::Raster, "tile fit");
   cdt.insertConstraint(input.ring, sideFeature, true);
   for (std::size_t i = 0; i < input.lines.size(); ++i) {
     cdt.insertConstraint(input.lines[i].points, lineFeature[i], input.lines[i].closed);
@@ -727,7 +740,7 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
   return tile;
 }
 
-void Tiler::fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const {
+void Tiler::fitTile(TileSurface& tile, const fit::MultilevelFit* fit) const {
   // The constrained least-squares fit (8.9) over the tile's mesh.
   const Rect& rect = tile.bounds;
   TinData local;
@@ -765,9 +778,9 @@ void Tiler::fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const {
     samples.push_back({loc->triangle.value, loc->weights, p.z, 1.0});
   }
   tile.dataPoints = samples.size();
-  // Each free vertex also carries the zoom fit's value as a weak sample, so
+  // Each free vertex also carries the tile fit's value as a weak sample, so
   // a vertex with no data in its triangles (slivers beside a break line make
-  // λ_d small) stays near the zoom's surface instead of being undetermined.
+  // λ_d small) stays near the fit's surface instead of being undetermined.
   constexpr double kPriorWeight = 0.25;
   std::vector<Point2> xy;
   xy.reserve(local.vertices.size());
@@ -784,7 +797,7 @@ void Tiler::fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const {
       ls.fixed.push_back({v, tile.vertices[v].z});
     } else {
       ++freeCount;
-      tile.vertices[v].z = fit.evaluate(tile.vertices[v].xy());
+      tile.vertices[v].z = fitZ(fit, tile.vertices[v].xy());
       const auto loc = surface.locate(xy[v], hint);
       if (loc) {
         hint = loc->triangle;

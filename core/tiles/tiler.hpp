@@ -1,14 +1,14 @@
-// Level-of-detail tiles of a TIN (DESIGN.md "Tiles"). For each zoom z the
-// multilevel least-squares fit (Algorithm 8.1) of the TIN's data to that
-// zoom's tolerance; per tile a constrained triangulation of
+// Level-of-detail tiles of a TIN (DESIGN.md "Tiles"). Per tile the
+// multilevel least-squares fit (Algorithm 8.1) of the TIN's data inside the
+// tile's square to its zoom's tolerance (the tile fit), and a constrained
+// triangulation of
 //   - the tile's sides: the TIN's exact section along each side, simplified in
 //     the vertical (Douglas–Peucker) to kEdgeShare of the zoom's tolerance
-//     between the points a side must keep (corners, the fit's vertices on it,
-//     the lines' crossings), with the TIN's step across the side margin kept
+//     between the points a side must keep (corners, the lines' crossings), with the TIN's step across the side margin kept
 //     linear along it too (no new vertex comes closer to a side);
 //   - the break lines and domain-boundary rings, simplified in 3-D to the same
 //     share with every chord also kept within it of the TIN beneath;
-//   - the zoom fit's binary vertices inside the tile;
+//   - the tile fit's binary vertices inside the tile;
 // then the constrained least squares (8.9, umbrella smoothing) over that mesh
 // with the side, line and ring vertices held. The tile's error is measured
 // exactly against the TIN (surface_difference.hpp), and where a triangle
@@ -24,15 +24,18 @@
 // Tolerances: the finest planned zoom Z meets `tolerance`; zoom z's is
 // tolerance · 2^(Z − z), and zooms below Z keep `tolerance`. Z is the first
 // zoom whose tiles would hold the finest fit's triangles within a quarter of
-// `maxTriangles` each on average; a zoom's fit refines at most
+// `maxTriangles` each on average (the planning fit, one over the whole
+// square; a plan may give Z instead); a tile fit refines at most
 // `levelsPerTile` levels below the zoom. A tile gets children when its
 // measured error is above `tolerance` (and z < maxZoom).
 //
 // Every tile is a pure function of the TIN, the options and its id: tiles can
 // be built in any order, on any thread, in separate processes, and give the same
-// result. Crack-free within a zoom: the vertices on a tile's side are computed
+// result. A tile fit sees only the data in the tile's square, so a tile's
+// fit costs what its part of the TIN costs, not the whole TIN's.
+// Crack-free within a zoom: the vertices on a tile's side are computed
 // only from what both tiles sharing it see (the TIN's section along the side,
-// the grid, the zoom fit, the simplified lines, each crossing from its
+// the grid, the simplified lines, each crossing from its
 // segment's ends in a canonical order), held fixed in both, and no held TIN
 // point comes closer to a side than 1e-4 of the tile's width.
 #pragma once
@@ -60,11 +63,11 @@ struct TilerOptions {
   std::size_t maxTriangles = 32768;  ///< per tile, sets levelsPerTile
   /// No tile below this zoom; by default the planned finest zoom + 6.
   std::optional<int> maxZoom;
-  /// λ = factor · λ_d in every fit (thin-plate in the zoom fits, umbrella in
+  /// λ = factor · λ_d in every fit (thin-plate in the tile fits' binary triangulations, umbrella in
   /// the tile fits). Light: the tiles approximate a TIN (no noise), and the
   /// samples fill its large triangles.
   double lambdaFactor = 0.01;
-  int threads = 0;  ///< for the zoom fits (0 = all cores)
+  int threads = 0;  ///< for the planning fit (0 = all cores)
   /// A fixed pyramid instead of the TIN's bounding square and the planned
   /// finest zoom: the square, the finest zoom (which meets `tolerance`, each
   /// zoom above twice the one below) and the zooms every tile with terrain
@@ -76,6 +79,11 @@ struct TilerOptions {
     int refineBelow = 0;
   };
   std::optional<FixedPyramid> fixed;
+  /// The finest zoom a plan of this job already chose (a shard of tinsmith
+  /// slurm, whose plan ran the planning fit once): no planning fit is run.
+  /// It must be what the planning gives for this TIN and these options, or
+  /// the tiles are those of another pyramid.
+  std::optional<int> plannedFinestZoom;
 };
 
 /// One tile's surface, in the project CRS.
@@ -161,26 +169,35 @@ class Tiler {
   };
   const Zoom& zoom(int z) const;
   std::unique_ptr<Zoom> makeZoom(int z) const;
-  [[nodiscard]] TileInput tileInput(const TileId& id, const Zoom& zd) const;
+  [[nodiscard]] int planFinestZoom() const;
+  /// The tile's own fit: Algorithm 8.1 over the tile's square, levelsPerTile
+  /// levels, to the zoom's tolerance, of the fit data inside the square
+  /// (nullopt when fewer than 3): a function of the tile alone.
+  [[nodiscard]] std::optional<fit::MultilevelFit> tileFit(const TileId& id,
+                                                          double tolerance) const;
+  /// The fit's z at p (clamped into its square), or the TIN's without a fit.
+  [[nodiscard]] double fitZ(const fit::MultilevelFit* fit, Point2 p) const;
+  /// A z for a point off the TIN that every tile holding it agrees on.
+  [[nodiscard]] double offTinZ(Point2 p, const Rect& rect) const;
+  [[nodiscard]] TileInput tileInput(const TileId& id, const Zoom& zd,
+                                    const fit::MultilevelFit* fit) const;
   [[nodiscard]] TileSurface triangulateTile(const TileId& id, const Rect& rect,
                                             const TileInput& input,
                                             const std::vector<TerrainLine>& zoomLines) const;
-  void fitTile(TileSurface& tile, const fit::MultilevelFit& fit) const;
+  void fitTile(TileSurface& tile, const fit::MultilevelFit* fit) const;
 
   const TinData& tin_;
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
   std::vector<Point3> data_;          // TIN vertices and points sampled from its triangles
-  std::vector<Point3> zoomData_;      // the part of data_ the zoom fits refine for
+  std::vector<Point3> zoomData_;      // the part of data_ the tile fits refine for
   CellGrid dataGrid_{0, 0, 0, 0, 1};  // data_ by position
+  CellGrid zoomGrid_{0, 0, 0, 0, 1};  // zoomData_ by position
   std::vector<TerrainLine> lines_;
   TinIndex index_;
   int finestZoom_ = 0;
   int maxZoom_ = 0;
   int levelsPerTile_ = 5;
-  // The planning fit, kept when its options are those of the finest zoom's
-  // fit (then zoom(finestZoom_) takes it instead of fitting again).
-  mutable std::unique_ptr<fit::MultilevelFit> plannedFit_;
   mutable std::array<ZoomSlot, 31> zooms_;  // by zoom (PyramidGeometry::inside: z < 31)
   // The lines simplified to the finest zoom's tolerance, which every zoom
   // from finestZoom_ on has: simplified once (each zoom snaps them to its own
