@@ -137,6 +137,24 @@ fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, Point2 origin, doub
   return m;
 }
 
+/// Whether the points lie on one line, to `slack`: their RMS distance from
+/// their principal axis is at most slack.
+bool onOneLine(const std::vector<Point3>& points, double slack) {
+  double mx = 0, my = 0;
+  for (const auto& p : points) mx += p.x, my += p.y;
+  mx /= static_cast<double>(points.size());
+  my /= static_cast<double>(points.size());
+  double cxx = 0, cyy = 0, cxy = 0;
+  for (const auto& p : points) {
+    const double dx = p.x - mx, dy = p.y - my;
+    cxx += dx * dx, cyy += dy * dy, cxy += dx * dy;
+  }
+  const double n = static_cast<double>(points.size());
+  cxx /= n, cyy /= n, cxy /= n;
+  const double across = 0.5 * (cxx + cyy - std::hypot(cxx - cyy, 2 * cxy));  // least variance
+  return across <= slack * slack;
+}
+
 /// Even-odd test of p against closed rings.
 bool insideRings(Point2 p, const std::vector<TerrainLine>& lines) {
   bool inside = false;
@@ -414,6 +432,10 @@ std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolera
   std::vector<Point3> points;
   points.reserve(inTile.size());
   for (const std::uint32_t i : inTile) points.push_back(zoomData_[i]);
+  // Thin-plate smoothing leaves planes free: data on one line (a raster's
+  // row along the tile's side, straight or nearly) cannot fix the slope
+  // across it, and the system is singular.
+  if (onOneLine(points, 1e-4 * rect.width())) return std::nullopt;
   // One thread: the tiles are built in parallel (and a fit's result does not
   // depend on its thread count).
   return fit::fitMultilevel(points,
