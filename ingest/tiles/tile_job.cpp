@@ -331,8 +331,16 @@ void checkTileJobOptions(const TileJobOptions& o) {
     throw usageError("unknown geoid '" + o.geoid + "'",
                      "use geoid \"egm96\" or leave it out (ellipsoidal heights)");
   }
+  if (t.plannedFinestZoom && (*t.plannedFinestZoom < 0 || *t.plannedFinestZoom > 30))
+    throw usageError(
+        "--finest-zoom must be 0 to 30 (got " + std::to_string(*t.plannedFinestZoom) + ")",
+        "give the finestZoom of the job's plan.json, or leave it out");
   if (o.threads < 0) throw usageError("--threads must be 0 (all cores) or more");
   if (o.untilZoom && *o.untilZoom < 1) throw usageError("--until-zoom must be 1 or more");
+  if (o.uncheckedAncestors && !o.subtree)
+    throw usageError("--unchecked-ancestors goes with --subtree",
+                     "it is for shard arrays (tinsmith slurm), whose merge drops what is not in "
+                     "the pyramid");
   if (o.subtree && o.untilZoom)
     throw usageError("--subtree and --until-zoom make different shards: give one");
   if (o.storeUntilZoom && *o.storeUntilZoom < 1)
@@ -375,7 +383,10 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     const Point3 centre{o.x + half, o.y + half, 0.0};
     geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
     // Everything that can refuse the run is checked before the output is touched.
-    if (options.subtreeMayBeEmpty && tiler->geometry().inside(root)) {
+    if (options.uncheckedAncestors) {
+      if (!tiler->geometry().inside(root))
+        throw usageError("tile " + root.name() + " is outside the pyramid");
+    } else if (options.subtreeMayBeEmpty && tiler->geometry().inside(root)) {
       if (auto why = tiles::whyNotInPyramid(*tiler, content, root)) {
         TileJobSummary empty;
         empty.notInPyramid = "tile " + root.name() + " is not in the pyramid: " + *why;
@@ -541,43 +552,64 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
   std::vector<TileRecord> records;
   try {
     stage->put(kBuildKey, build);
-    for (const auto& in : shards) {
+    // Every tile of every shard, once (a tile two shards hold must be the
+    // same bytes in both), and which shard it is read from.
+    std::map<std::string, std::size_t> from;
+    std::vector<TileRecord> found;
+    for (std::size_t i = 0; i < shards.size(); ++i) {
+      const auto& in = shards[i];
       if (!stage->contains(kTinKey))
         if (auto tin = in->get(kTinKey)) stage->put(kTinKey, *tin);
       for (const auto& key : in->keys()) {
         if (key.rfind("tiles/", 0) != 0) continue;
         const auto bytes = in->get(key);
         if (!bytes) continue;
-        if (const auto there = stage->get(key)) {
-          if (*there != *bytes) throw usageError("tile " + key + " differs between the shards");
+        if (const auto there = from.find(key); there != from.end()) {
+          if (shards[there->second]->get(key) != bytes)
+            throw usageError("tile " + key + " differs between the shards");
           continue;
         }
-        records.push_back(recordOfTile(key, *bytes, in->path()));
-        stage->put(key, *bytes);
+        from.emplace(key, i);
+        found.push_back(recordOfTile(key, *bytes, in->path()));
       }
     }
-    sortRecords(records);
-    // Every child of a refined tile is in the shards, or in the part of one
-    // that holds no terrain there (a shard that answers for it found it empty).
+    sortRecords(found);
     const auto b = nlohmann::json::parse(build);
     const double tolerance = b["options"]["tolerance"].get<double>();
     const int maxZoom = b["options"]["maxZoom"].get<int>();
     const int finestZoom = b["pyramid"]["finestZoom"].get<int>();
+    const auto refines = [&](const TileRecord& r) {
+      return tiles::tileRefines(r.error, r.reachableError, r.id.z, tolerance, finestZoom, maxZoom);
+    };
+    const auto answered = [&](const TileId& id) {
+      return std::any_of(coverage.begin(), coverage.end(),
+                         [&](const ShardCoverage& s) { return s.covers(id); });
+    };
+    // The pyramid: a tile whose parent a shard answers for is in it only
+    // under a refined parent. A shard built without its ancestors
+    // (--unchecked-ancestors) may hold a subtree that is not; it is left out.
+    std::set<TileId> refined;
+    for (auto& r : found) {
+      if (r.id.z > 0 && answered(r.id.parent()) && !refined.contains(r.id.parent())) continue;
+      if (refines(r)) refined.insert(r.id);
+      records.push_back(std::move(r));
+    }
+    // Every child of a refined tile is in the shards, or in the part of one
+    // that holds no terrain there (a shard that answers for it found it empty).
     std::set<TileId> present;
     for (const auto& r : records) present.insert(r.id);
-    for (const auto& r : records) {
-      if (!tiles::tileRefines(r.error, r.reachableError, r.id.z, tolerance, finestZoom, maxZoom))
-        continue;
+    for (const TileId& id : refined) {
       for (int c = 0; c < 4; ++c) {
-        const TileId child = r.id.child(c);
-        if (present.contains(child)) continue;
-        const bool answered = std::any_of(coverage.begin(), coverage.end(),
-                                          [&](const ShardCoverage& s) { return s.covers(child); });
-        if (!answered)
-          throw usageError("tile " + r.id.name() + " is refined but its child " + child.name() +
+        const TileId child = id.child(c);
+        if (!present.contains(child) && !answered(child))
+          throw usageError("tile " + id.name() + " is refined but its child " + child.name() +
                                " is in none of the shards",
                            "add the shard of subtree " + child.name() + " (or one above it)");
       }
+    }
+    for (const auto& r : records) {
+      const std::string key = tiles::tileContentKey(r.id);
+      stage->put(key, *shards[from.at(key)]->get(key));
     }
     finish(stage, stagePath, out, records, build);
   } catch (...) {

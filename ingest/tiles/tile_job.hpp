@@ -54,6 +54,11 @@ struct TileJobOptions {
   /// says why (TileJobSummary::notInPyramid). For shard arrays whose
   /// subtrees are not known ahead (tinsmith slurm).
   bool subtreeMayBeEmpty = false;
+  /// With subtree: its ancestors are not built to check that it is in the
+  /// pyramid (they cover far more of the TIN than it does). The shard holds
+  /// the subtree whatever they would say (no tile when its root holds no
+  /// terrain), and merge leaves it out when an ancestor does not refine.
+  bool uncheckedAncestors = false;
   std::optional<int> untilZoom;  ///< only tiles above this zoom
   /// Tiles at this zoom and below are built (their records make
   /// tileset.json) but not stored: the server's --on-demand builds them

@@ -11,8 +11,9 @@
 # - without --submit the command prints two sbatch commands that work as
 #   printed (run by bash with a stand-in sbatch) and submits nothing;
 # - `--shard-zoom 2 --submit --json`: an array of 17 tasks (the top, then the
-#   16 subtrees: a store or an .empty marker each) and a merge after them;
-#   the merged store holds the same bytes under every key as one.3dtiles;
+#   16 subtrees, a store each, built without their ancestors) and a merge
+#   after them, which leaves out the subtrees not in the pyramid; the merged
+#   store holds the same bytes under every key as one.3dtiles;
 # - into a fresh workdir, the jobs submitted on hold, one shard's store path
 #   then taken by a folder holding a foreign file (tinsmith will not replace
 #   it) and the jobs released: that task fails, the merge is CANCELLED
@@ -204,9 +205,8 @@ if ! expect "merge job $merge COMPLETED ($merge_state)" test "$merge_state" = CO
   show "$run/logs/merge.log" "$run.err"
 fi
 stores=$(find "$run/shards" -maxdepth 1 -name '*.3dtiles' | wc -l)
-markers=$(find "$run/shards" -maxdepth 1 -name '*.empty' | wc -l)
-expect "shards: the top and $in_pyramid subtree stores, $((subtrees - in_pyramid)) .empty markers ($stores stores, $markers markers)" \
-  test "$stores" -eq $((in_pyramid + 1)) -a "$markers" -eq $((subtrees - in_pyramid)) -a -e "$run/shards/0.3dtiles"
+expect "shards: the top and $subtrees subtree stores, $in_pyramid of them in the pyramid ($stores stores)" \
+  test "$stores" -eq $((subtrees + 1)) -a -e "$run/shards/0.3dtiles"
 missing_logs=""
 for t in $(seq 0 "$subtrees"); do [ -e "$run/logs/shard-$t.log" ] || missing_logs+=" $t"; done
 expect "a log per task and one for the merge${missing_logs:+ (missing:$missing_logs)}" \

@@ -1,14 +1,19 @@
 // `tinsmith slurm` without a cluster: the scripts it writes run as Slurm
 // would run them (each array task with its SLURM_ARRAY_TASK_ID, then the
 // merge), and the merged store has the bytes of one `tinsmith tile` run —
-// also where subtrees hold no terrain (their tasks leave empty markers). Its
-// work folder is refused when it holds something else or another job's plan.
+// also where subtrees hold no terrain or lie under a tile that meets the
+// tolerance (shards built without their ancestors, which the merge leaves
+// out). Its work folder is refused when it holds something else or another
+// job's plan.
 // The same job on a real one-node Slurm cluster: tests/slurm.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "tests/support/run_command.hpp"
 
@@ -59,12 +64,19 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
             std::string::npos);
   EXPECT_NE(out.at("commands")[1].get<std::string>().find("afterok:ARRAY_ID_0:ARRAY_ID_1"),
             std::string::npos);
+  // Every subtree is built (without its ancestors); the merge leaves out the
+  // 8 that hold no terrain, as one run never builds them.
   runAsSlurmWould(work, 17);
   EXPECT_EQ(readFile(dir / "merged.3dtiles"), readFile(dir / "one.3dtiles"));
-  int empty = 0;
+  int stores = 0;
   for (const auto& e : fs::directory_iterator(work / "shards"))
-    empty += e.path().extension() == ".empty";
-  EXPECT_EQ(empty, 8);
+    stores += e.path().extension() == ".3dtiles";
+  EXPECT_EQ(stores, 17);
+  const auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
+  EXPECT_TRUE(plan.at("finestZoom").is_number_integer());
+  EXPECT_NE(readFile(work / "shard.sh")
+                .find("'--finest-zoom' '" + std::to_string(plan.at("finestZoom").get<int>()) + "'"),
+            std::string::npos);
 
   // The same folder for another job, or a folder of other files: refused.
   auto r = runTinsmith("slurm " + tin.string() + " --tolerance 0.5 --shard-zoom 2 --workdir " +
@@ -110,6 +122,63 @@ TEST(SlurmCli, ASubtreeOutsideThePyramidIsAnErrorUnlessEmptyIsOk) {
   EXPECT_EQ(runTinsmith("tile " + tin.string() + " --empty-ok -o " + (dir / "t.3dtiles").string())
                 .exitCode,
             2);  // --empty-ok goes with --subtree
+}
+
+TEST(SlurmCli, MergeLeavesOutSubtreesUnderATileThatDoesNotRefine) {
+  const fs::path dir = scratchDir("slurm-unchecked");
+  // 640 m square: a plane in the west half, a rippled hill in the east. The
+  // west zoom-1 tiles meet the tolerance and have no children, yet their
+  // zoom-2 subtrees hold terrain.
+  {
+    std::ofstream xyz(dir / "site.xyz");
+    xyz.precision(10);
+    for (int j = 0; j <= 64; ++j)
+      for (int i = 0; i <= 64; ++i) {
+        const double x = 10.0 * i, y = 10.0 * j;
+        const double east = std::max(0.0, x - 320.0);
+        xyz << 430000 + x << " " << 4515000 + y << " "
+            << 1600 + 0.01 * x + 0.002 * east * east * (1 + 0.3 * std::sin(y / 23)) << "\n";
+      }
+  }
+  const fs::path tin = dir / "site.tin";
+  ASSERT_EQ(runTinsmith("tin --points " + (dir / "site.xyz").string() + " --crs EPSG:26912 -q -o " +
+                        tin.string())
+                .exitCode,
+            0);
+  const std::string tile = "tile " + tin.string() + " --tolerance 0.2 --max-triangles 512 -q";
+  ASSERT_EQ(runTinsmith(tile + " -o " + (dir / "one.3dtiles").string()).exitCode, 0);
+  const auto one =
+      nlohmann::json::parse(runTinsmith("info --json " + (dir / "one.3dtiles").string()).out);
+  ASSERT_GE(one.at("finestZoom").get<int>(), 0);
+
+  std::vector<std::string> shards{(dir / "top.3dtiles").string()};
+  ASSERT_EQ(runTinsmith(tile + " --until-zoom 2 -o " + shards[0]).exitCode, 0);
+  std::size_t subtreeTiles = 0;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const std::string id = "2/" + std::to_string(x) + "/" + std::to_string(y);
+      shards.push_back((dir / ("s" + std::to_string(4 * y + x) + ".3dtiles")).string());
+      const auto r =
+          runTinsmith(tile + " --subtree " + id + " --unchecked-ancestors -o " + shards.back());
+      ASSERT_EQ(r.exitCode, 0) << id << ": " << r.err;
+      subtreeTiles += nlohmann::json::parse(runTinsmith("info --json " + shards.back()).out)
+                          .at("tiles")
+                          .get<std::size_t>();
+    }
+  std::size_t oneBelow = 0;  // the single run's tiles at zoom 2 and deeper
+  for (const auto& z : one.at("zooms"))
+    if (z.at("zoom").get<int>() >= 2) oneBelow += z.at("tiles").get<std::size_t>();
+  EXPECT_GT(subtreeTiles, oneBelow);  // the shards hold subtrees one run never built
+
+  std::string all;
+  for (const auto& s : shards) all += " " + s;
+  auto r = runTinsmith("merge" + all + " -q -o " + (dir / "merged.3dtiles").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(readFile(dir / "merged.3dtiles"), readFile(dir / "one.3dtiles"));
+
+  // --unchecked-ancestors is for subtrees.
+  EXPECT_EQ(
+      runTinsmith(tile + " --unchecked-ancestors -o " + (dir / "u.3dtiles").string()).exitCode, 2);
 }
 
 }  // namespace

@@ -3,20 +3,23 @@
 //   tinsmith slurm SITE.tin -o SITE.3dtiles --shard-zoom Z --workdir DIR [tile options]
 //       [--submit] [--resume] [--sbatch-args 'ARGS'] [--json]
 // writes into DIR
-//   plan.json   what the job is (TIN, output, options, shard zoom) and every
-//               submission made of it;
+//   plan.json   what the job is (TIN, output, options, shard zoom, the
+//               planned finest zoom) and every submission made of it;
 //   shard.sh    an sbatch array script: task 0 tiles the top of the pyramid
 //               (tinsmith tile --until-zoom Z), task k ≥ 1 the subtree
-//               Z/x/y with k − 1 = y · 2^Z + x (--subtree --empty-ok: a
-//               subtree not in the pyramid leaves shards/k.empty);
-//               shards/k.3dtiles, logs/shard-k.log;
+//               Z/x/y with k − 1 = y · 2^Z + x (--subtree
+//               --unchecked-ancestors: a subtree under a tile that does not
+//               refine, or without terrain, is written all the same, and the
+//               merge leaves it out); shards/k.3dtiles, logs/shard-k.log;
 //   merge.sh    tinsmith merge of every shard into the output, then info
 //               (logs/merge.log);
 // and with --submit runs `sbatch --array` of the shards and `sbatch` of the
 // merge with afterok on each task. --resume resubmits only the tasks that
-// left neither a store nor an empty marker (a failed, cancelled or lost
-// shard), and a new merge after them. Shards are built exactly as `tinsmith
-// tile --subtree` builds them, so the merged store has the bytes of one run.
+// left no store (a failed, cancelled or lost shard), and a new merge after
+// them. Shards are built exactly as `tinsmith tile --subtree` builds them, so
+// the merged store has the bytes of one run.
+// The planning fit (which chooses the finest zoom) runs once, here, and every
+// shard is given its result (--finest-zoom) instead of running it again.
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -29,7 +32,9 @@
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/tiles/tiler.hpp"
 #include "ingest/tiles/tile_job.hpp"
+#include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/cli/shared_options.hpp"
 #include "tools/cli/tile_options.hpp"
@@ -119,11 +124,7 @@ std::string shardScript(const std::string& tinsmith, const fs::path& tin, const 
     << "n=" << (1 << shardZoom) << "\n"
     << "x=$(( (task - 1) % n )); y=$(( (task - 1) / n ))\n"
     << "\"${tile[@]}\" --subtree \"" << shardZoom
-    << "/$x/$y\" --empty-ok -o \"$shards/$task.3dtiles\"\n"
-    << "if [ ! -e \"$shards/$task.3dtiles\" ]; then\n"
-    << "  echo \"" << shardZoom << "/$x/$y\" > \"$shards/$task.empty.tmp\"\n"
-    << "  mv \"$shards/$task.empty.tmp\" \"$shards/$task.empty\"\n"
-    << "fi\n";
+    << "/$x/$y\" --unchecked-ancestors -o \"$shards/$task.3dtiles\"\n";
   return s.str();
 }
 
@@ -139,12 +140,12 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     << "shards=" << shellQuote((dir / "shards").string()) << "\n"
     << "stores=()\n"
     << "for task in $(seq 0 " << tasks - 1 << "); do\n"
-    << "  if [ -e \"$shards/$task.3dtiles\" ]; then stores+=(\"$shards/$task.3dtiles\")\n"
-    << "  elif [ ! -e \"$shards/$task.empty\" ]; then\n"
+    << "  if [ ! -e \"$shards/$task.3dtiles\" ]; then\n"
     << "    echo \"ERROR: shard $task has no store: run tinsmith slurm --resume --submit "
        "with the same arguments\" >&2\n"
     << "    exit 3\n"
     << "  fi\n"
+    << "  stores+=(\"$shards/$task.3dtiles\")\n"
     << "done\n"
     << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string()) << "\n"
     << shellQuote(tinsmith) << " info " << shellQuote(output.string()) << "\n";
@@ -169,14 +170,12 @@ std::string runForOutput(const std::string& command) {
   return out.substr(0, out.find(';'));
 }
 
-/// The tasks that have left neither a store nor an empty marker.
+/// The tasks that have left no store.
 std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
   std::vector<int> out;
   for (int k = 0; k < tasks; ++k) {
     const fs::path shards = dir / "shards";
-    if (!fs::exists(shards / (std::to_string(k) + ".3dtiles")) &&
-        !fs::exists(shards / (std::to_string(k) + ".empty")))
-      out.push_back(k);
+    if (!fs::exists(shards / (std::to_string(k) + ".3dtiles"))) out.push_back(k);
   }
   return out;
 }
@@ -203,7 +202,7 @@ void runSlurm(const SlurmCliOptions& o) {
                      "tile it with tinsmith tile, and shard the 3D Tiles here");
   if (f.resume && !o.submit) throw usageError("--resume goes with --submit");
   // The options every shard will run with, checked here once.
-  (void)withTileFlags(ingest::TileJobOptions{}, f);
+  const ingest::TileJobOptions jobOptions = withTileFlags(ingest::TileJobOptions{}, f);
   const fs::path tin = fs::absolute(o.tin).lexically_normal();
   if (!fs::is_regular_file(tin))
     throw inputError("no TIN at '" + o.tin + "'", fileLocation(o.tin), "give a .tin file");
@@ -211,7 +210,7 @@ void runSlurm(const SlurmCliOptions& o) {
   const fs::path dir = fs::absolute(o.workdir).lexically_normal();
   const std::string tinsmith = fs::canonical("/proc/self/exe").string();
   const int tasks = 1 + (1 << (2 * o.shardZoom));
-  const std::vector<std::string> args = tileArguments(f);
+  std::vector<std::string> args = tileArguments(f);
 
   nlohmann::ordered_json plan;
   plan["format"] = kPlanFormat;
@@ -226,7 +225,10 @@ void runSlurm(const SlurmCliOptions& o) {
     std::ifstream in(planPath);
     previous = nlohmann::ordered_json::parse(in, nullptr, false);
     nlohmann::ordered_json same = previous;
-    if (same.is_object()) same.erase("submissions");
+    if (same.is_object()) {
+      same.erase("submissions");
+      same.erase("finestZoom");
+    }
     if (same != plan)
       throw usageError("'" + dir.string() + "' holds the plan of another job (plan.json)",
                        "choose another --workdir, or give the arguments that job was planned with");
@@ -239,6 +241,20 @@ void runSlurm(const SlurmCliOptions& o) {
                      "give an empty or new --workdir: tinsmith slurm keeps its plan, scripts, "
                      "shards and logs there");
   }
+  // The finest zoom: planned once for the whole job (a resumed job keeps
+  // its plan's, which its shards were built with).
+  int finestZoom = 0;
+  if (previous.is_object() && previous.contains("finestZoom")) {
+    finestZoom = previous["finestZoom"].get<int>();
+  } else {
+    if (!f.quiet && !f.json) std::cerr << "planning the pyramid of " << tin.string() << "\n";
+    tiles::TilerOptions tilerOptions = jobOptions.tiler;
+    tilerOptions.threads = jobOptions.threads;
+    const TinData data = ingest::readTinFile(tin);
+    finestZoom = tiles::Tiler(data, tilerOptions).finestZoom();
+  }
+  plan["finestZoom"] = finestZoom;
+  args.insert(args.end(), {"--finest-zoom", std::to_string(finestZoom)});
   fs::create_directories(dir / "shards");
   fs::create_directories(dir / "logs");
   const int cpus = std::max(1, f.threads);

@@ -34,7 +34,9 @@ struct TileCliOptions {
   std::string subtree;
   std::optional<int> untilZoom;
   std::optional<int> storeUntilZoom;
+  std::optional<int> finestZoom;
   bool emptyOk = false;
+  bool uncheckedAncestors = false;
 };
 
 struct MergeCliOptions {
@@ -57,18 +59,28 @@ void addTileCommand(CLI::App& app) {
   cmd->add_flag("--empty-ok", opt->emptyOk,
                 "With --subtree: a subtree that is not in the pyramid (an ancestor holds no "
                 "terrain or meets the tolerance) writes nothing and exits 0 (shard arrays)");
+  cmd->add_flag("--unchecked-ancestors", opt->uncheckedAncestors,
+                "With --subtree: do not build the subtree's ancestors to check that it is in the "
+                "pyramid; the shard is written in any case, and merge drops it when it is not "
+                "(shard arrays)");
   cmd->add_option("--until-zoom", opt->untilZoom,
                   "Build only the tiles above this zoom: the shards' top");
   cmd->add_option("--store-until-zoom", opt->storeUntilZoom,
                   "Plan every tile (tileset.json lists them all) but store only those above "
                   "this zoom; tinsmith serve --on-demand builds the rest from the store's TIN");
+  cmd->add_option("--finest-zoom", opt->finestZoom,
+                  "The finest zoom the job's plan chose (tinsmith slurm gives it to every shard): "
+                  "skips the planning fit; another value than the planning's builds another "
+                  "pyramid, which merge refuses to join with this job's shards");
   cmd->callback([opt] {
     ingest::TileJobOptions o;
+    o.tiler.plannedFinestZoom = opt->finestZoom;
     o.storeUntilZoom = opt->storeUntilZoom;
     if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
     o.untilZoom = opt->untilZoom;
     if (opt->emptyOk && !o.subtree) throw usageError("--empty-ok goes with --subtree");
     o.subtreeMayBeEmpty = opt->emptyOk;
+    o.uncheckedAncestors = opt->uncheckedAncestors;
     o = withTileFlags(o, opt->flags);
     const TinData tin = ingest::readTinFile(opt->tin);
     const TileFlags& f = opt->flags;

@@ -3,7 +3,8 @@
 # `tinsmith tile` run against the 1 + 4^Z shards `tinsmith slurm` plans, each
 # run as its array task would run (one thread), timed by /usr/bin/time —
 # per-shard peak memory and the shards' total CPU against the one run's —
-# then their merge, checked byte for byte against the one run.
+# then their merge, checked byte for byte against the one run. The plan
+# (`tinsmith slurm`, which runs the planning fit once) counts in the total.
 #
 #   bash tests/bench/slurm/shard_cost.sh TINSMITH TIN TOLERANCE SHARD_ZOOM [WORKDIR]
 # e.g. the Red Butte DEM-TIN of tests/bench/tiles/vs_martini.sh (KEEP=DIR keeps it)
@@ -17,8 +18,8 @@ cd "$work"
 rm -rf one.3dtiles merged.3dtiles w times.txt
 /usr/bin/time -f "%e %U %S %M" -o one.time "$tinsmith" tile "$tin" --tolerance "$tolerance" \
   --threads 1 -q -o one.3dtiles
-"$tinsmith" slurm "$tin" --tolerance "$tolerance" --shard-zoom "$zoom" --workdir w \
-  -o merged.3dtiles -q >/dev/null
+/usr/bin/time -f "%e %U %S %M" -o plan.time "$tinsmith" slurm "$tin" --tolerance "$tolerance" \
+  --shard-zoom "$zoom" --threads 1 --workdir w -o merged.3dtiles -q >/dev/null
 tasks=$(( 1 + (1 << (2 * zoom)) ))
 for k in $(seq 0 $((tasks - 1))); do
   SLURM_ARRAY_TASK_ID=$k /usr/bin/time -f "$k %e %U %S %M" -a -o times.txt \
@@ -28,13 +29,17 @@ done
 same=$(cmp -s merged.3dtiles one.3dtiles && echo "the same bytes" || echo "DIFFERENT bytes")
 read -r ow ou os om <one.time
 read -r mw mu ms mm <merge.time
+read -r pw pu ps pm <plan.time
 awk -v ow="$ow" -v oc="$(echo "$ou $os" | awk '{print $1 + $2}')" -v om="$om" \
-    -v mc="$(echo "$mu $ms" | awk '{print $1 + $2}')" -v mm="$mm" -v tasks="$tasks" -v same="$same" '
+    -v mc="$(echo "$mu $ms" | awk '{print $1 + $2}')" -v mm="$mm" -v tasks="$tasks" -v same="$same" \
+    -v pc="$(echo "$pu $ps" | awk '{print $1 + $2}')" -v pm="$pm" '
   { c = $3 + $4; cpu += c; if ($5 > peak) peak = $5; if (min == "" || $5 < min) min = $5 }
   END {
     printf "| run | CPU s | peak MB |\n|---|---|---|\n"
     printf "| one tinsmith tile | %.2f | %.0f |\n", oc, om / 1024
-    printf "| %d shards (sum of CPU; largest and smallest peak) | %.2f (%.1f×) | %.0f (%.2f×), smallest %.0f |\n", tasks, cpu, cpu / oc, peak / 1024, peak / om, min / 1024
+    printf "| plan (tinsmith slurm) | %.2f | %.0f |\n", pc, pm / 1024
+    printf "| %d shards (sum of CPU; largest and smallest peak) | %.2f | %.0f (%.2f×), smallest %.0f |\n", tasks, cpu, peak / 1024, peak / om, min / 1024
+    printf "| plan + shards | %.2f (%.2f×) | |\n", pc + cpu, (pc + cpu) / oc
     printf "| merge | %.2f | %.0f |\n", mc, mm / 1024
     printf "\nThe merged store and the one run: %s.\n", same
   }' times.txt
