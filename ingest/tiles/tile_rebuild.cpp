@@ -65,6 +65,8 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const
   o.tiler.maxTriangles = static_cast<std::size_t>(r.number("/options/maxTriangles"));
   o.tiler.maxZoom = static_cast<int>(r.number("/options/maxZoom"));
   o.tiler.lambdaFactor = r.number("/options/lambdaFactor");
+  // The finest zoom the store was planned with: no planning fit again.
+  o.tiler.plannedFinestZoom = static_cast<int>(r.number("/pyramid/finestZoom"));
   const auto compression = parseCompression(r.string("/options/compression"));
   const auto frame = parseContentFrame(r.string("/options/frame"));
   o.geoid = r.string("/options/geoid");
@@ -93,7 +95,6 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const
       tiler.geometry().origin().x == r.number("/pyramid/origin/0") &&
       tiler.geometry().origin().y == r.number("/pyramid/origin/1") &&
       tiler.geometry().size() == r.number("/pyramid/size") &&
-      tiler.finestZoom() == static_cast<int>(r.number("/pyramid/finestZoom")) &&
       tiler.levelsPerTile() == static_cast<int>(r.number("/pyramid/levelsPerTile")) &&
       tiler.maxZoom() == static_cast<int>(r.number("/options/maxZoom"));
   if (!samePyramid)
