@@ -84,12 +84,15 @@ std::string shardRecord(const TileJobOptions& o) {
 }
 
 /// The canonical order of a finished store's keys: the build record, the
-/// TIN and a shard's record, the tiles in `records` (already in rowMajorLess
-/// order), then the tileset files.
-std::vector<std::string> canonicalKeys(const std::vector<TileRecord>& records,
+/// TIN (when the stage holds it: a shard below the root does not) and a
+/// shard's record, the tiles in `records` (already in rowMajorLess order),
+/// then the tileset files.
+std::vector<std::string> canonicalKeys(const store::TileStore& stage,
+                                       const std::vector<TileRecord>& records,
                                        std::vector<std::string> tilesetKeys, bool shard = false,
                                        const std::vector<std::string>& terrainKeys = {}) {
-  std::vector<std::string> out{kBuildKey, kTinKey};
+  std::vector<std::string> out{kBuildKey};
+  if (stage.contains(kTinKey)) out.push_back(kTinKey);
   if (shard) out.push_back(kShardKey);
   for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
   std::sort(tilesetKeys.begin(), tilesetKeys.end());
@@ -237,7 +240,7 @@ void finish(std::unique_ptr<store::TileStore>& stage, const fs::path& stagePath,
   std::vector<TileRecord> stored;
   for (const auto& r : records)
     if (r.id.z < storeUntilZoom) stored.push_back(r);
-  publish(stage, stagePath, output, canonicalKeys(stored, tilesetKeys, false, terrainKeys));
+  publish(stage, stagePath, output, canonicalKeys(*stage, stored, tilesetKeys, false, terrainKeys));
 }
 
 /// --resume: a store this run may take tiles from (its staging store or the
@@ -416,7 +419,10 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
 
   auto stage = store::openStoreForWriting(stagePath, options.resume);
   stage->put(kBuildKey, build);
-  if (!stage->contains(kTinKey)) stage->put(kTinKey, tinBytes);
+  // The TIN goes with the pyramid's root (the whole run, or the top shard):
+  // a subtree shard would copy the whole TIN for its part of the tiles.
+  const bool holdsRoot = !options.subtree || options.subtree->z == 0;
+  if (holdsRoot && !stage->contains(kTinKey)) stage->put(kTinKey, tinBytes);
   if (!shard.empty()) {
     stage->put(kShardKey, shard);
   } else if (store::storeKindFor(out) == store::StoreKind::Directory) {
@@ -464,7 +470,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     finish(stage, stagePath, out, records, build, storeUntilZoom, terrainKeys);
   } else {
     // A shard: no tileset.json of its own; `tinsmith merge` writes it.
-    publish(stage, stagePath, out, canonicalKeys(records, {}, true));
+    publish(stage, stagePath, out, canonicalKeys(*stage, records, {}, true));
   }
   TileJobSummary summary = summarize(records, build);
   summary.terrain = std::move(terrain);

@@ -1,7 +1,9 @@
 // The tiling job: a TIN into a tile store (DESIGN.md "Tiles"). Runs the
 // pyramid walk (core/tiles) and writes what it makes:
 //   tinsmith/build.json   what was built from what (TIN checksum, options)
-//   tinsmith/terrain.tin  the TIN itself (the server answers elevations from it)
+//   tinsmith/terrain.tin  the TIN itself (the server answers elevations from it;
+//                         not in a shard of a subtree below the root, whose
+//                         merge takes it from the top shard)
 //   tiles/{z}/{x}/{y}.glb one per tile; asset.extras carries the tile's record
 //   tileset.json (+ tilesets/…) written last, from the records; its
 //                         extras.tinsmith holds the CRS, the tolerance and,

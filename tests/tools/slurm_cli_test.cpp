@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ingest/store/tile_store.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -72,6 +73,12 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   for (const auto& e : fs::directory_iterator(work / "shards"))
     stores += e.path().extension() == ".3dtiles";
   EXPECT_EQ(stores, 17);
+  // The TIN is in the top shard alone, which the merge takes it from.
+  for (int k = 0; k < 17; ++k) {
+    const auto shard =
+        store::openStoreForReading(work / "shards" / (std::to_string(k) + ".3dtiles"));
+    EXPECT_EQ(shard->contains("tinsmith/terrain.tin"), k == 0) << "shard " << k;
+  }
   const auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
   EXPECT_TRUE(plan.at("finestZoom").is_number_integer());
   EXPECT_NE(readFile(work / "shard.sh")
