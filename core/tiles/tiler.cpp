@@ -49,13 +49,14 @@ constexpr double kSideSagShare = 0.1;
 /// barycentric grid at about that median's spacing, z on the triangle's
 /// plane; a DEM's even grid gets none). The samples are at most as many as
 /// the TIN's vertices: where the median asks for more, the spacing grows.
-/// `zoomFit` (what the tile fits see) leaves out what the tile meshes hold exactly — vertices of break
+/// `tileFit` leaves out what the tile meshes hold exactly — vertices of break
 /// lines, and samples of the triangles at them —
 /// so a tile's binary fit is not driven to tiny cells by the steps a break
-/// line makes (a river lowered below its banks); the tiles' own fits use it all.
+/// line makes (a river lowered below its banks); the least squares over each
+/// tile mesh (fitTile) uses it all.
 struct FitData {
   std::vector<Point3> all;
-  std::vector<Point3> zoomFit;
+  std::vector<Point3> tileFit;
 };
 
 FitData fitData(const TinData& tin) {
@@ -67,7 +68,7 @@ FitData fitData(const TinData& tin) {
       held[e.a] = held[e.b] = 1;
   }
   for (std::size_t v = 0; v < tin.vertices.size(); ++v)
-    if (!held[v]) data.zoomFit.push_back(tin.vertices[v]);
+    if (!held[v]) data.tileFit.push_back(tin.vertices[v]);
   const auto longestEdge = [&](const auto& t) {
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
@@ -115,16 +116,16 @@ FitData fitData(const TinData& tin) {
         const Point3 p{w * a.x + u * b.x + v * c.x, w * a.y + u * b.y + v * c.y,
                        w * a.z + u * b.z + v * c.z};
         data.all.push_back(p);
-        if (!nearHeld) data.zoomFit.push_back(p);
+        if (!nearHeld) data.tileFit.push_back(p);
       }
     }
   }
   // A TIN that is all break lines still needs something to fit.
-  if (data.zoomFit.size() < 3) data.zoomFit = data.all;
+  if (data.tileFit.size() < 3) data.tileFit = data.all;
   return data;
 }
 
-fit::MultilevelOptions zoomFitOptions(const TilerOptions& o, Point2 origin, double size,
+fit::MultilevelOptions binaryFitOptions(const TilerOptions& o, Point2 origin, double size,
                                       double tolerance, int maxLevel, int threads) {
   fit::MultilevelOptions m;
   m.smoothing = fit::Smoothing::ThinPlate;
@@ -296,7 +297,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   levelsPerTile_ = std::max(d, 1);
   FitData data = fitData(tin);
   data_ = std::move(data.all);
-  zoomData_ = std::move(data.zoomFit);
+  tileFitData_ = std::move(data.tileFit);
   auto gridOf = [&](const std::vector<Point3>& points) {
     CellGrid grid(extent.x0, extent.y0, extent.x1, extent.y1,
                   CellGrid::cellFor(extent.width(), extent.height(), points.size() / 4 + 1, 1e-9));
@@ -306,7 +307,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
     return grid;
   };
   dataGrid_ = gridOf(data_);
-  zoomGrid_ = gridOf(zoomData_);
+  tileFitGrid_ = gridOf(tileFitData_);
   lines_ = extractTerrainLines(tin);
   finestZoom_ = options_.fixed ? options_.fixed->finestZoom
                                : options_.plannedFinestZoom.value_or(-1);
@@ -323,7 +324,7 @@ int Tiler::planFinestZoom() const {
   const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
                            fit::BinaryTriangulation::kMaxGridLevels - 1);
   const auto planning = fit::fitMultilevel(
-      zoomData_, zoomFitOptions(options_, geometry_.origin(), geometry_.size(), options_.tolerance,
+      tileFitData_, binaryFitOptions(options_, geometry_.origin(), geometry_.size(), options_.tolerance,
                                 cap, options_.threads));
   const double finestTriangles = static_cast<double>(planning.levels().back().triangles);
   const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
@@ -424,14 +425,14 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
 std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolerance) const {
   const Rect rect = geometry_.bounds(id);
   std::vector<std::uint32_t> inTile;
-  zoomGrid_.forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
-    if (rect.contains(zoomData_[i].xy())) inTile.push_back(i);
+  tileFitGrid_.forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
+    if (rect.contains(tileFitData_[i].xy())) inTile.push_back(i);
   });
   if (inTile.size() < 3) return std::nullopt;
   std::sort(inTile.begin(), inTile.end());  // the data's order, whatever the grid's
   std::vector<Point3> points;
   points.reserve(inTile.size());
-  for (const std::uint32_t i : inTile) points.push_back(zoomData_[i]);
+  for (const std::uint32_t i : inTile) points.push_back(tileFitData_[i]);
   // Thin-plate smoothing leaves planes free: data on one line (a raster's
   // row along the tile's side, straight or nearly) cannot fix the slope
   // across it, and the system is singular.
@@ -439,7 +440,7 @@ std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolera
   // One thread: the tiles are built in parallel (and a fit's result does not
   // depend on its thread count).
   return fit::fitMultilevel(points,
-                            zoomFitOptions(options_, {rect.x0, rect.y0},
+                            binaryFitOptions(options_, {rect.x0, rect.y0},
                                            std::ldexp(geometry_.size(), -id.z), tolerance,
                                            levelsPerTile_, 1));
 }

@@ -190,9 +190,9 @@ class Tiler {
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
   std::vector<Point3> data_;          // TIN vertices and points sampled from its triangles
-  std::vector<Point3> zoomData_;      // the part of data_ the tile fits refine for
+  std::vector<Point3> tileFitData_;      // the part of data_ the tile fits refine for
   CellGrid dataGrid_{0, 0, 0, 0, 1};  // data_ by position
-  CellGrid zoomGrid_{0, 0, 0, 0, 1};  // zoomData_ by position
+  CellGrid tileFitGrid_{0, 0, 0, 0, 1};  // tileFitData_ by position
   std::vector<TerrainLine> lines_;
   TinIndex index_;
   int finestZoom_ = 0;
