@@ -57,18 +57,14 @@ constexpr double kSideSagShare = 0.1;
 struct FitData {
   std::vector<Point3> all;
   std::vector<Point3> tileFit;
+  double spacing = 0;          // TilerPlan::fitSpacing
+  bool tileFitAll = false;     // TilerPlan::tileFitAllData
 };
 
-FitData fitData(const TinData& tin) {
-  FitData data;
-  data.all = tin.vertices;
-  std::vector<char> held(tin.vertices.size(), 0);
-  for (const auto& e : tin.constrainedEdges) {
-    if (e.feature < tin.features.size() && isBreakLineKind(tin.features[e.feature].kind))
-      held[e.a] = held[e.b] = 1;
-  }
-  for (std::size_t v = 0; v < tin.vertices.size(); ++v)
-    if (!held[v]) data.tileFit.push_back(tin.vertices[v]);
+/// The spacing at which fitData samples a TIN's sparse triangles: the median
+/// longest edge, grown until the samples are at most as many as the TIN's
+/// vertices (0 for a TIN without triangles).
+double fitSpacing(const TinData& tin) {
   const auto longestEdge = [&](const auto& t) {
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
@@ -82,12 +78,12 @@ FitData fitData(const TinData& tin) {
        k += std::max<std::size_t>(1, tin.triangles.size() / 20000)) {
     lengths.push_back(longestEdge(tin.triangles[k]));
   }
-  if (lengths.empty()) return data;
+  if (lengths.empty()) return 0;
   std::nth_element(lengths.begin(),
                    lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2),
                    lengths.end());
   double spacing = lengths[lengths.size() / 2];
-  if (!(spacing > 0)) return data;
+  if (!(spacing > 0)) return 0;
   // The budget: at most as many samples as the TIN has vertices. Contours
   // far apart on a plain below close ones on a cliff (a median edge of a few
   // metres, triangles of hundreds) asked for 17 M samples from 127 k
@@ -99,11 +95,36 @@ FitData fitData(const TinData& tin) {
                                                              tin.vertices[t[2]]));
   const double budget = static_cast<double>(tin.vertices.size());
   if (sparseArea / (spacing * spacing) > budget) spacing = std::sqrt(sparseArea / budget);
+  return spacing;
+}
+
+/// The fit data of the part of the TIN in `within` (with a plan; else all):
+/// the vertices inside it and the samples of the triangles whose boxes meet
+/// it, in the order the whole TIN gives them, so that the data inside any
+/// square in `within` are the same points in the same order.
+FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
+  FitData data;
+  std::vector<char> held(tin.vertices.size(), 0);
+  for (const auto& e : tin.constrainedEdges) {
+    if (e.feature < tin.features.size() && isBreakLineKind(tin.features[e.feature].kind))
+      held[e.a] = held[e.b] = 1;
+  }
+  for (std::size_t v = 0; v < tin.vertices.size(); ++v) {
+    if (!within.contains(tin.vertices[v].xy())) continue;
+    data.all.push_back(tin.vertices[v]);
+    if (!held[v]) data.tileFit.push_back(tin.vertices[v]);
+  }
+  data.spacing = plan ? plan->fitSpacing : fitSpacing(tin);
+  const double spacing = data.spacing;
   for (const auto& t : tin.triangles) {
+    if (!(spacing > 0)) break;
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
     const Point3& c = tin.vertices[t[2]];
-    if (longestEdge(t) <= 2 * spacing) continue;
+    if (std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
+                  std::hypot(a.x - c.x, a.y - c.y)}) <= 2 * spacing)
+      continue;
+    if (!within.overlaps(boundsOf(std::array<Point3, 3>{a, b, c}))) continue;
     const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
     // About one sample per spacing² of area (a barycentric grid of n steps
     // has n²/2 points): a long sliver on the hull gets a few, not thousands.
@@ -121,7 +142,8 @@ FitData fitData(const TinData& tin) {
     }
   }
   // A TIN that is all break lines still needs something to fit.
-  if (data.tileFit.size() < 3) data.tileFit = data.all;
+  data.tileFitAll = plan ? plan->tileFitAllData : data.tileFit.size() < 3;
+  if (data.tileFitAll) data.tileFit = data.all;
   return data;
 }
 
@@ -276,13 +298,18 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
     throw usageError("max_triangles must be at least 64 (got " +
                      std::to_string(options_.maxTriangles) + ")");
   }
-  if (tin.triangles.empty() || tin.vertices.size() < 3) {
+  // (Part of a TIN, for a region, may hold no triangle: the region's tiles are empty.)
+  if ((tin.triangles.empty() && !options_.region) || tin.vertices.size() < 3) {
     throw inputError("the TIN has no triangles to tile", {}, "build it with tinsmith tin first");
   }
+  const TilerPlan* plan = options_.plan.get();
+  if (plan && options_.fixed) throw internalError("Tiler: a plan is for a pyramid of the TIN's own");
+  if (options_.region && !plan) throw internalError("Tiler: a region needs the plan of the whole TIN");
   const Rect extent = boundsOf(tin.vertices);
-  geometry_ = options_.fixed ? options_.fixed->geometry
-                             : PyramidGeometry({extent.x0, extent.y0},
-                                               std::max(extent.width(), extent.height()));
+  geometry_ = plan             ? plan->geometry
+              : options_.fixed ? options_.fixed->geometry
+                               : PyramidGeometry({extent.x0, extent.y0},
+                                                 std::max(extent.width(), extent.height()));
   if (options_.fixed) {
     const Rect square = geometry_.bounds({});
     if (!(square.x0 <= extent.x0 && extent.x1 <= square.x1 && square.y0 <= extent.y0 &&
@@ -295,12 +322,18 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   int d = 0;
   while (2.0 * std::pow(4.0, d + 2) <= static_cast<double>(options_.maxTriangles) / 2) ++d;
   levelsPerTile_ = std::max(d, 1);
-  FitData data = fitData(tin);
+  if (options_.region) within_ = tilerReadRegion(*options_.region);
+  FitData data = fitData(tin, plan, within_);
   data_ = std::move(data.all);
   tileFitData_ = std::move(data.tileFit);
+  fitSpacing_ = data.spacing;
+  tileFitAllData_ = data.tileFitAll;
+  // The grids only speed up finding the data in a square (what is found is
+  // put in the data's order): over the data's own box.
   auto gridOf = [&](const std::vector<Point3>& points) {
-    CellGrid grid(extent.x0, extent.y0, extent.x1, extent.y1,
-                  CellGrid::cellFor(extent.width(), extent.height(), points.size() / 4 + 1, 1e-9));
+    const Rect box = points.empty() ? extent : boundsOf(points);
+    CellGrid grid(box.x0, box.y0, box.x1, box.y1,
+                  CellGrid::cellFor(box.width(), box.height(), points.size() / 4 + 1, 1e-9));
     grid.build(points.size(), [&](std::size_t i, auto&& emit) {
       emit(grid.index(grid.cellX(points[i].x), grid.cellY(points[i].y)));
     });
@@ -308,12 +341,31 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   };
   dataGrid_ = gridOf(data_);
   tileFitGrid_ = gridOf(tileFitData_);
-  lines_ = extractTerrainLines(tin);
-  finestZoom_ = options_.fixed ? options_.fixed->finestZoom
-                               : options_.plannedFinestZoom.value_or(-1);
+  if (!plan) lines_ = extractTerrainLines(tin);
+  finestZoom_ = plan             ? plan->finestZoom
+                : options_.fixed ? options_.fixed->finestZoom
+                                 : options_.plannedFinestZoom.value_or(-1);
   if (finestZoom_ < 0) finestZoom_ = planFinestZoom();
   maxZoom_ =
       std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
+  if (plan && plan->zoomLines.size() != static_cast<std::size_t>(finestZoom_) + 1)
+    throw internalError("Tiler: the plan's lines are not one set a zoom to the finest");
+}
+
+Rect tilerReadRegion(const Rect& region) {
+  const double grow = std::max(1.0, 1e-5 * std::max(region.width(), region.height()));
+  return {region.x0 - grow, region.y0 - grow, region.x1 + grow, region.y1 + grow};
+}
+
+TilerPlan Tiler::plan() const {
+  if (options_.plan) return *options_.plan;
+  TilerPlan p;
+  p.geometry = geometry_;
+  p.finestZoom = finestZoom_;
+  p.fitSpacing = fitSpacing_;
+  p.tileFitAllData = tileFitAllData_;
+  for (int z = 0; z <= finestZoom_; ++z) p.zoomLines.push_back(simplifiedLines(z));
+  return p;
 }
 
 int Tiler::planFinestZoom() const {
@@ -349,6 +401,46 @@ const Tiler::Zoom& Tiler::zoom(int z) const {
 std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
   auto zd = std::make_unique<Zoom>();
   zd->tolerance = zoomTolerance(z);
+  // A line vertex within rounding of one of the zoom's tile sides goes onto
+  // it exactly: a raster's boundary runs along the same rows and columns as
+  // the tile sides (both are whole cells from its corner), and a vertex an
+  // ulp off a side made a sliver with it in one tile and a different crossing
+  // in its neighbour. Both tiles see the snapped vertex on their side.
+  const double near = 1e-9 * geometry_.size();
+  const std::vector<TerrainLine>* simplified = nullptr;
+  std::vector<TerrainLine> coarser;  // this zoom's own, above the finest
+  if (options_.plan) {
+    simplified = &options_.plan->zoomLines[static_cast<std::size_t>(std::min(z, finestZoom_))];
+  } else if (z >= finestZoom_) {  // zoomTolerance(z) is the finest tolerance
+    std::call_once(finestLinesOnce_, [&] { finestLines_ = simplifiedLines(z); });
+    simplified = &finestLines_;
+  } else {
+    coarser = simplifiedLines(z);
+    simplified = &coarser;
+  }
+  // A Tiler of a region leaves out the break lines that miss it; every ring
+  // stays, as a tile's inside test counts the crossings of them all.
+  for (const auto& line : *simplified) {
+    if (!line.ring && !within_.overlaps(boundsOf(line.points))) continue;
+    TerrainLine snapped = line;
+    auto& pts = snapped.points;
+    for (auto& p : pts) {
+      const Point2 q = geometry_.snapToLines(z, p.xy(), near);
+      p.x = q.x;
+      p.y = q.y;
+    }
+    pts.erase(
+        std::unique(pts.begin(), pts.end(),
+                    [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; }),
+        pts.end());
+    if (pts.size() < (snapped.closed ? 3U : 2U)) continue;
+    zd->lineBoxes.push_back(boundsOf(snapped.points));
+    zd->lines.push_back(std::move(snapped));
+  }
+  return zd;
+}
+
+std::vector<TerrainLine> Tiler::simplifiedLines(int z) const {
   // A chord must stay on the TIN too: a shore simplified across a steep bank
   // would otherwise sit metres off the ground it crosses, at every zoom.
   std::vector<TinIndex::SectionPoint> section;
@@ -360,41 +452,10 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
     }
     return worst;
   };
-  // A line vertex within rounding of one of the zoom's tile sides goes onto
-  // it exactly: a raster's boundary runs along the same rows and columns as
-  // the tile sides (both are whole cells from its corner), and a vertex an
-  // ulp off a side made a sliver with it in one tile and a different crossing
-  // in its neighbour. Both tiles see the snapped vertex on their side.
-  const double near = 1e-9 * geometry_.size();
-  auto simplifyLines = [&] {
-    std::vector<TerrainLine> out;
-    out.reserve(lines_.size());
-    for (const auto& line : lines_)
-      out.push_back(simplify(line, kEdgeShare * zd->tolerance, offTin));
-    return out;
-  };
-  std::vector<TerrainLine> coarser;  // this zoom's own, above the finest
-  if (z >= finestZoom_)              // zoomTolerance(z) is the finest tolerance
-    std::call_once(finestLinesOnce_, [&] { finestLines_ = simplifyLines(); });
-  else
-    coarser = simplifyLines();
-  for (const auto& line : z >= finestZoom_ ? finestLines_ : coarser) {
-    TerrainLine simplified = line;
-    auto& pts = simplified.points;
-    for (auto& p : pts) {
-      const Point2 q = geometry_.snapToLines(z, p.xy(), near);
-      p.x = q.x;
-      p.y = q.y;
-    }
-    pts.erase(
-        std::unique(pts.begin(), pts.end(),
-                    [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; }),
-        pts.end());
-    if (pts.size() < (simplified.closed ? 3U : 2U)) continue;
-    zd->lineBoxes.push_back(boundsOf(simplified.points));
-    zd->lines.push_back(std::move(simplified));
-  }
-  return zd;
+  std::vector<TerrainLine> out;
+  out.reserve(lines_.size());
+  for (const auto& line : lines_) out.push_back(simplify(line, kEdgeShare * zoomTolerance(z), offTin));
+  return out;
 }
 
 TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {

@@ -58,6 +58,31 @@
 
 namespace tinsmith::tiles {
 
+/// What the whole TIN decides for every tile, found once by a Tiler over the
+/// whole TIN (Tiler::plan) and handed to Tilers that see only part of it (a
+/// shard's square, TilerOptions::region), whose tiles are then bit for bit
+/// those the whole TIN gives.
+struct TilerPlan {
+  PyramidGeometry geometry{{0, 0}, 1};
+  int finestZoom = 0;
+  /// The spacing at which the fit data sample the TIN's sparse triangles (0:
+  /// none), from the median edge and the sample budget over the whole TIN.
+  double fitSpacing = 0;
+  /// The tile fits take all the data, break lines too (a TIN that is all
+  /// break lines leaves them nothing else).
+  bool tileFitAllData = false;
+  /// The break lines and domain rings simplified for zoom k, k = 0 …
+  /// finestZoom (the last serves every finer zoom), before each zoom snaps
+  /// them to its tile sides. Simplifying keeps every chord on the TIN, which
+  /// takes the TIN along the whole line.
+  std::vector<std::vector<TerrainLine>> zoomLines;
+};
+
+/// The square a Tiler with a region must read the TIN in: `region` grown by
+/// far more than a tile side's margin lines (which sections sample just
+/// outside a tile) and any rounding of the tile squares.
+Rect tilerReadRegion(const Rect& region);
+
 struct TilerOptions {
   double tolerance = 1.0;            ///< metres; what the finest zoom meets
   std::size_t maxTriangles = 32768;  ///< per tile, sets levelsPerTile
@@ -84,6 +109,16 @@ struct TilerOptions {
   /// It must be what the planning gives for this TIN and these options, or
   /// the tiles are those of another pyramid.
   std::optional<int> plannedFinestZoom;
+  /// The plan of this job's whole TIN (Tiler::plan, made with these
+  /// options): its pyramid, finest zoom, fit sampling and simplified lines
+  /// are taken instead of found here. Not with `fixed`.
+  std::shared_ptr<const TilerPlan> plan;
+  /// With a plan: every tile asked for lies in this square (a shard's
+  /// subtree). The TIN must then hold every vertex, but need hold only the
+  /// triangles whose boxes meet tilerReadRegion(region), and the constrained
+  /// edges at their vertices (ingest::readTinFilePart): the fit data, the
+  /// index and the lines are those of the square, not of the whole TIN.
+  std::optional<Rect> region;
 };
 
 /// One tile's surface, in the project CRS.
@@ -158,6 +193,10 @@ class Tiler {
   /// besides kEncodingShare, for an encoding whose rounding the caller
   /// cannot choose (quantized-mesh's 0..32767 over the tile).
   [[nodiscard]] TileSurface buildTile(const TileId& id, double encodingAllowance = 0.0) const;
+  /// What tiles of this pyramid need of the whole TIN, for Tilers that see
+  /// only part of it (TilerOptions::plan and region). Simplifies the lines
+  /// for every zoom to the finest: call it once.
+  [[nodiscard]] TilerPlan plan() const;
 
  private:
   struct Zoom;
@@ -169,6 +208,8 @@ class Tiler {
   };
   const Zoom& zoom(int z) const;
   std::unique_ptr<Zoom> makeZoom(int z) const;
+  /// The lines simplified to zoom z's tolerance (not snapped to its sides).
+  [[nodiscard]] std::vector<TerrainLine> simplifiedLines(int z) const;
   [[nodiscard]] int planFinestZoom() const;
   /// The tile's own fit: Algorithm 8.1 over the tile's square, levelsPerTile
   /// levels, to the zoom's tolerance, of the fit data inside the square
@@ -193,7 +234,11 @@ class Tiler {
   std::vector<Point3> tileFitData_;      // the part of data_ the tile fits refine for
   CellGrid dataGrid_{0, 0, 0, 0, 1};  // data_ by position
   CellGrid tileFitGrid_{0, 0, 0, 0, 1};  // tileFitData_ by position
-  std::vector<TerrainLine> lines_;
+  std::vector<TerrainLine> lines_;    // empty with a plan, which has them simplified
+  // The plane, or with a region the part of it the TIN was read in.
+  Rect within_{-HUGE_VAL, -HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  double fitSpacing_ = 0;            // TilerPlan::fitSpacing
+  bool tileFitAllData_ = false;      // TilerPlan::tileFitAllData
   TinIndex index_;
   int finestZoom_ = 0;
   int maxZoom_ = 0;

@@ -34,16 +34,16 @@ static_assert(std::string_view(kBuildKey) == store::kStoreMarkerKey);
 
 /// What the tiles are a function of (and nothing else: no subtree, no
 /// threads, no time), so shards and resumed runs can be checked against it.
-std::string buildRecord(const TinData& tin, const std::string& tinBytes, const std::string& tinName,
-                        const TileJobOptions& o, const tiles::Tiler* tiler,
-                        const tiles::ContentOptions& content) {
+std::string buildRecord(const TinIdentity& identity, const std::string& crs,
+                        const std::string& tinName, const TileJobOptions& o,
+                        const tiles::Tiler* tiler, const tiles::ContentOptions& content) {
   nlohmann::ordered_json j;
   j["format"] = "tinsmith-tiles/1";
   j["tin"] = {{"name", fs::path(tinName).filename().string()},
-              {"crc32", crc32(tinBytes)},
-              {"vertices", tin.vertices.size()},
-              {"triangles", tin.triangles.size()},
-              {"crs", tin.crs}};
+              {"crc32", identity.crc32},
+              {"vertices", identity.vertices},
+              {"triangles", identity.triangles},
+              {"crs", crs}};
   j["options"] = {{"tolerance", o.tiler.tolerance},
                   {"maxTriangles", o.tiler.maxTriangles},
                   {"maxZoom", tiler ? tiler->maxZoom() : 0},
@@ -371,12 +371,36 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   const bool tiles3d = writesTiles3D(options.scheme);
   tiles::TilerOptions tilerOptions = options.tiler;
   tilerOptions.threads = options.threads;
+  // The TIN as the build record names it: the file's bytes (written with
+  // the root), or the plan's whole TIN, of which `tin` is a part.
+  const TileId root = options.subtree.value_or(TileId{});
+  const bool holdsRoot = root.z == 0;
+  std::string tinBytes;
+  TinIdentity identity;
+  if (options.partOf) {
+    if (!options.plan || !options.uncheckedAncestors || holdsRoot)
+      throw usageError("part of a TIN is tiled only as a subtree below the root, with the job's "
+                       "plan and --unchecked-ancestors");
+    identity = *options.partOf;
+  } else {
+    tinBytes = encodeTin(tin);
+    identity = {crc32(tinBytes), tin.vertices.size(), tin.triangles.size()};
+  }
+  if (options.plan) {
+    if (identity != options.plan->tin)
+      throw inputError("the tiling plan was made for another TIN (CRC-32 " +
+                           std::to_string(options.plan->tin.crc32) + ", this one's is " +
+                           std::to_string(identity.crc32) + ")",
+                       fileLocation(tinName), "plan the job again for this TIN");
+    requirePlannedOptions(*options.plan, options.tiler, "of this job");
+    tilerOptions.plan = std::shared_ptr<const tiles::TilerPlan>(options.plan, &options.plan->tiler);
+    if (options.partOf) tilerOptions.region = options.plan->tiler.geometry.bounds(root);
+  }
   std::optional<tiles::Tiler> tiler;
   tiles::ContentOptions content;
   content.compression = options.compression;
   content.frame = options.frame;
   content.geo = &geo;
-  const TileId root = options.subtree.value_or(TileId{});
   if (tiles3d) {
     reportProgress(progress, "tiles.plan", "", 0, 0);
     tiler.emplace(tin, tilerOptions);
@@ -401,9 +425,8 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   }
   std::optional<tiles::GeographicTin> geographic;  // Cesium terrain's working frame
   if (writesTerrain(options.scheme)) geographic = tiles::toGeographicTin(tin, geo);
-  const std::string tinBytes = encodeTin(tin);
   const std::string build =
-      buildRecord(tin, tinBytes, tinName, options, tiler ? &*tiler : nullptr, content);
+      buildRecord(identity, tin.crs, tinName, options, tiler ? &*tiler : nullptr, content);
   const std::string shard = shardRecord(options);
   const fs::path out = storePathFor(output);
   const fs::path stagePath = stagingPath(out);
@@ -421,7 +444,6 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   stage->put(kBuildKey, build);
   // The TIN goes with the pyramid's root (the whole run, or the top shard):
   // a subtree shard would copy the whole TIN for its part of the tiles.
-  const bool holdsRoot = !options.subtree || options.subtree->z == 0;
   if (holdsRoot && !stage->contains(kTinKey)) stage->put(kTinKey, tinBytes);
   if (!shard.empty()) {
     stage->put(kShardKey, shard);

@@ -24,6 +24,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -35,6 +36,7 @@
 #include "core/tiles/tiler.hpp"
 #include "core/tin/tin_data.hpp"
 #include "ingest/base/progress.hpp"
+#include "ingest/tiles/tiling_plan.hpp"
 
 namespace tinsmith::ingest {
 
@@ -68,6 +70,15 @@ struct TileJobOptions {
   std::optional<int> storeUntilZoom;
   bool resume = false;
   int threads = 0;
+  /// The plan of this job's whole TIN (tinsmith slurm's tiler.plan): the
+  /// tiler takes it instead of planning, and the TIN must be the one it was
+  /// made of (with the options it was made with).
+  std::shared_ptr<const TilingPlan> plan;
+  /// `tin` is only the part around the subtree (readTinFilePart of
+  /// tiles::tilerReadRegion of its square) of the TIN this names (TinPart's
+  /// fileCrc and counts): for a subtree below the root whose ancestors are
+  /// unchecked, with the plan of that TIN.
+  std::optional<TinIdentity> partOf;
 };
 
 /// The names `tinsmith tile` and the config's [tiles] use: "draco" | "none",

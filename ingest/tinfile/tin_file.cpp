@@ -10,6 +10,11 @@
 #include <tuple>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "core/base/error.hpp"
 #include "core/base/parallel.hpp"
 #include "ingest/base/atomic_file.hpp"
@@ -215,6 +220,7 @@ class PayloadReader {
     return static_cast<std::size_t>(n);
   }
   [[nodiscard]] std::size_t remaining() const { return static_cast<std::size_t>(end_ - p_); }
+  [[nodiscard]] const std::uint8_t* position() const { return p_; }
   [[noreturn]] void corrupt(const std::string& what) const {
     throw inputError("corrupt .tin file: " + what, fileLocation(name_),
                      "the file is damaged; write it again with `tinsmith tin`");
@@ -362,8 +368,13 @@ void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned 
   writeFile(path, MeshSource(mesh), threads);
 }
 
-TinData decodeTin(std::string_view bytes, const std::string& name) {
-  const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
+namespace {
+
+/// Checks the header of a .tin file's bytes (all of them): the payload's span
+/// after it.
+std::span<const std::uint8_t> checkedPayload(std::span<const std::uint8_t> bytes,
+                                             const std::string& name) {
+  const std::uint8_t* data = bytes.data();
   if (bytes.size() < kMagic.size() || std::memcmp(data, kMagic.data(), kMagic.size()) != 0)
     throw inputError("not a .tin file (wrong magic bytes)", fileLocation(name),
                      "give a file written by `tinsmith tin`");
@@ -393,10 +404,21 @@ TinData decodeTin(std::string_view bytes, const std::string& name) {
     throw inputError("corrupt .tin file: " + std::to_string(have - payload) +
                          " unexpected bytes after the payload",
                      fileLocation(name), "the file is damaged; write it again with `tinsmith tin`");
-  const std::span<const std::uint8_t> body(data + kTinHeaderSize, payload);
-  if (crc32(body) != getLe<std::uint32_t>(data + 24))
-    throw inputError("corrupt .tin file: the payload checksum does not match", fileLocation(name),
-                     "the file is damaged; write it again with `tinsmith tin`");
+  return {data + kTinHeaderSize, payload};
+}
+
+[[noreturn]] void payloadChecksumMismatch(const std::string& name) {
+  throw inputError("corrupt .tin file: the payload checksum does not match", fileLocation(name),
+                   "the file is damaged; write it again with `tinsmith tin`");
+}
+
+}  // namespace
+
+TinData decodeTin(std::string_view bytes, const std::string& name) {
+  const std::span<const std::uint8_t> body =
+      checkedPayload({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, name);
+  if (crc32(body) != getLe<std::uint32_t>(body.data() - kTinHeaderSize + 24))
+    payloadChecksumMismatch(name);
 
   PayloadReader r(body.data(), body.size(), name);
   TinData tin;
@@ -426,23 +448,154 @@ TinData decodeTin(std::string_view bytes, const std::string& name) {
   return tin;
 }
 
-TinData readTinFile(const std::filesystem::path& path) {
-  const std::string name = path.string();
+namespace {
+
+/// Throws inputError naming the file unless it is a file this process can open.
+void requireReadableFile(const std::filesystem::path& path, const std::string& name) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     throw inputError("the .tin file does not exist", fileLocation(name), "check the path");
   if (std::filesystem::is_directory(path, ec))
     throw inputError("is a directory, not a .tin file", fileLocation(name));
+}
+
+/// A file mapped read-only, unmapped with this.
+class MappedFile {
+ public:
+  MappedFile(const std::filesystem::path& path, const std::string& name) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0)
+      throw inputError("cannot open the .tin file for reading", fileLocation(name),
+                       "check permissions");
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0) {
+      ::close(fd_);
+      throw inputError("cannot read the .tin file", fileLocation(name), "check permissions");
+    }
+    size_ = static_cast<std::size_t>(st.st_size);
+    if (size_ > 0) {
+      void* m = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+      if (m == MAP_FAILED) {
+        ::close(fd_);
+        throw inputError("cannot map the .tin file into memory", fileLocation(name));
+      }
+      data_ = static_cast<const std::uint8_t*>(m);
+      ::madvise(m, size_, MADV_SEQUENTIAL);
+    }
+  }
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+  ~MappedFile() {
+    if (data_) ::munmap(const_cast<std::uint8_t*>(data_), size_);
+    ::close(fd_);
+  }
+  [[nodiscard]] std::span<const std::uint8_t> bytes() const { return {data_, size_}; }
+  /// Gives back the pages wholly before `upTo`, which have been read: they
+  /// stop counting in the process's memory (a second read maps them again).
+  void release(const std::uint8_t* upTo) const {
+    const auto page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+    const std::size_t n = static_cast<std::size_t>(upTo - data_) / page * page;
+    if (n > 0) ::madvise(const_cast<std::uint8_t*>(data_), n, MADV_DONTNEED);
+  }
+
+ private:
+  int fd_ = -1;
+  const std::uint8_t* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+}  // namespace
+
+TinData readTinFile(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  requireReadableFile(path, name);
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw inputError("cannot open the .tin file for reading", fileLocation(name),
                      "check permissions");
+  std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) throw inputError("cannot read the .tin file: " + ec.message(), fileLocation(name));
   std::string bytes(size, '\0');
   if (!in.read(bytes.data(), static_cast<std::streamsize>(size)))
     throw inputError("cannot read the .tin file", fileLocation(name), "check permissions");
   return decodeTin(bytes, name);
+}
+
+TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region) {
+  const std::string name = path.string();
+  requireReadableFile(path, name);
+  const MappedFile file(path, name);
+  const std::span<const std::uint8_t> body = checkedPayload(file.bytes(), name);
+  const std::uint8_t* header = file.bytes().data();
+  // The checksums follow the reader a window at a time, and what they have
+  // passed is given back: the file is never all in memory.
+  std::uint32_t payloadCrc = 0;
+  std::uint32_t fileCrc = crc32({header, kTinHeaderSize});
+  const std::uint8_t* checked = body.data();
+  const auto checkUpTo = [&](const std::uint8_t* to) {
+    const std::span<const std::uint8_t> chunk(checked, static_cast<std::size_t>(to - checked));
+    payloadCrc = crc32(chunk, payloadCrc);
+    fileCrc = crc32(chunk, fileCrc);
+    checked = to;
+    file.release(to);
+  };
+  constexpr std::ptrdiff_t kWindow = std::ptrdiff_t{8} << 20;
+  PayloadReader r(body.data(), body.size(), name);
+  const auto keepUp = [&] {
+    if (r.position() - checked >= kWindow) checkUpTo(r.position());
+  };
+
+  TinPart part;
+  TinData& tin = part.tin;
+  tin.crs = r.getString("CRS text");
+  tin.vertices.resize(r.getCount(24, "vertex"));
+  for (std::size_t i = 0; i < tin.vertices.size(); ++i) {
+    auto& v = tin.vertices[i];
+    v.x = r.get<double>("vertices");
+    v.y = r.get<double>("vertices");
+    v.z = r.get<double>("vertices");
+    if ((i & 0xFFFF) == 0) keepUp();
+  }
+  const std::size_t nv = tin.vertices.size();
+  part.triangles = r.getCount(12, "triangle");
+  std::vector<char> used(nv, 0);
+  for (std::size_t k = 0; k < part.triangles; ++k) {
+    std::array<std::uint32_t, 3> t{};
+    for (auto& i : t) i = r.get<std::uint32_t>("triangles");
+    if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
+      r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
+                std::to_string(nv) + " vertices");
+    const std::array<Point3, 3> corners{tin.vertices[t[0]], tin.vertices[t[1]],
+                                        tin.vertices[t[2]]};
+    if (tiles::boundsOf(corners).overlaps(region)) {
+      tin.triangles.push_back(t);
+      used[t[0]] = used[t[1]] = used[t[2]] = 1;
+    }
+    if ((k & 0xFFFF) == 0) keepUp();
+  }
+  tin.features.resize(r.getCount(5, "feature"));
+  for (auto& f : tin.features) {
+    f.kind = static_cast<FeatureKind>(r.get<std::uint8_t>("features"));
+    f.source = r.getString("features");
+  }
+  const std::size_t ne = r.getCount(12, "constrained edge");
+  for (std::size_t k = 0; k < ne; ++k) {
+    TinData::ConstrainedEdge e;
+    e.a = r.get<std::uint32_t>("constrained edges");
+    e.b = r.get<std::uint32_t>("constrained edges");
+    e.feature = r.get<std::uint32_t>("constrained edges");
+    if (e.a >= nv || e.b >= nv)
+      r.corrupt("constrained edge " + std::to_string(k) + " refers to a vertex out of range");
+    if (used[e.a] || used[e.b]) tin.constrainedEdges.push_back(e);
+    if ((k & 0xFFFF) == 0) keepUp();
+  }
+  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+  checkUpTo(body.data() + body.size());
+  if (payloadCrc != getLe<std::uint32_t>(header + 24)) payloadChecksumMismatch(name);
+  part.fileCrc = fileCrc;
+  checkTinContract(tin, name, false);
+  return part;
 }
 
 }  // namespace tinsmith::ingest

@@ -28,6 +28,7 @@
 #include <string_view>
 
 #include "core/mesh/mesh.hpp"
+#include "core/tiles/pyramid.hpp"
 #include "core/tin/tin_data.hpp"
 
 namespace tinsmith::ingest {
@@ -51,6 +52,20 @@ void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned 
 /// unreadable file, a wrong magic (not a .tin file), a newer format version, a
 /// truncated file, a checksum mismatch, and any index out of range.
 TinData readTinFile(const std::filesystem::path& path);
+
+/// Part of a `.tin` file, for the tiles of one square (a shard's subtree,
+/// tiles::TilerOptions::region): every vertex (its index unchanged), every
+/// feature, the triangles whose boxes meet `region` (in the file's order),
+/// and the constrained edges at their vertices.
+struct TinPart {
+  TinData tin;
+  std::uint32_t fileCrc = 0;  ///< CRC-32 of the whole file: crc32(encodeTin(whole TIN))
+  std::size_t triangles = 0;  ///< in the whole file
+};
+/// Reads the part, checking the file as readTinFile does (the checksum
+/// after the parse), with the file mapped and given back as it is read:
+/// the memory it takes is the part's.
+TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region);
 
 /// The exact bytes writeTinFile would write (for tests and tools).
 std::string encodeTin(const TinData& tin);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/tiling_plan.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -80,10 +81,12 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
     EXPECT_EQ(shard->contains("tinsmith/terrain.tin"), k == 0) << "shard " << k;
   }
   const auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
-  EXPECT_TRUE(plan.at("finestZoom").is_number_integer());
-  EXPECT_NE(readFile(work / "shard.sh")
-                .find("'--finest-zoom' '" + std::to_string(plan.at("finestZoom").get<int>()) + "'"),
-            std::string::npos);
+  // Every shard takes the job's tiling plan (its finest zoom is plan.json's).
+  EXPECT_EQ(ingest::readTilingPlan(work / "tiler.plan").tiler.finestZoom,
+            plan.at("finestZoom").get<int>());
+  const std::string script = readFile(work / "shard.sh");
+  EXPECT_NE(script.find("'--plan' '"), std::string::npos);
+  EXPECT_NE(script.find("/tiler.plan'"), std::string::npos);
 
   // The same folder for another job, or a folder of other files: refused.
   auto r = runTinsmith("slurm " + tin.string() + " --tolerance 0.5 --shard-zoom 2 --workdir " +

@@ -5,6 +5,9 @@
 // writes into DIR
 //   plan.json   what the job is (TIN, output, options, shard zoom, the
 //               planned finest zoom) and every submission made of it;
+//   tiler.plan  what every shard takes from the whole TIN (ingest/tiles/
+//               tiling_plan.hpp): the pyramid, the finest zoom, the fit
+//               sampling, the lines simplified for each zoom;
 //   shard.sh    an sbatch array script: task 0 tiles the top of the pyramid
 //               (tinsmith tile --until-zoom Z), task k ≥ 1 the subtree
 //               Z/x/y with k − 1 = y · 2^Z + x (--subtree
@@ -18,8 +21,9 @@
 // left no store (a failed, cancelled or lost shard), and a new merge after
 // them. Shards are built exactly as `tinsmith tile --subtree` builds them, so
 // the merged store has the bytes of one run.
-// The planning fit (which chooses the finest zoom) runs once, here, and every
-// shard is given its result (--finest-zoom) instead of running it again.
+// The planning (the planning fit, which chooses the finest zoom, and the
+// lines' simplification) runs once, here; every shard is given the plan
+// (--plan), and a subtree shard reads only its square of the TIN.
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -34,6 +38,7 @@
 #include "core/base/error.hpp"
 #include "core/tiles/tiler.hpp"
 #include "ingest/tiles/tile_job.hpp"
+#include "ingest/tiles/tiling_plan.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/cli/shared_options.hpp"
@@ -241,20 +246,33 @@ void runSlurm(const SlurmCliOptions& o) {
                      "give an empty or new --workdir: tinsmith slurm keeps its plan, scripts, "
                      "shards and logs there");
   }
-  // The finest zoom: planned once for the whole job (a resumed job keeps
-  // its plan's, which its shards were built with).
+  // The plan of the whole TIN, made once for the job (a resumed job keeps
+  // its plan, which its shards were built with): the pyramid, the finest
+  // zoom, the fit sampling and the simplified lines. Every shard takes it,
+  // and a subtree shard reads only its square of the TIN.
+  const fs::path tilerPlanPath = dir / "tiler.plan";
   int finestZoom = 0;
-  if (previous.is_object() && previous.contains("finestZoom")) {
-    finestZoom = previous["finestZoom"].get<int>();
+  if (previous.is_object() && previous.contains("finestZoom") && fs::exists(tilerPlanPath)) {
+    finestZoom = ingest::readTilingPlan(tilerPlanPath).tiler.finestZoom;
   } else {
     if (!f.quiet && !f.json) std::cerr << "planning the pyramid of " << tin.string() << "\n";
     tiles::TilerOptions tilerOptions = jobOptions.tiler;
     tilerOptions.threads = jobOptions.threads;
     const TinData data = ingest::readTinFile(tin);
-    finestZoom = tiles::Tiler(data, tilerOptions).finestZoom();
+    ingest::TilingPlan tilingPlan;
+    tilingPlan.tin = {ingest::crc32(ingest::encodeTin(data)), data.vertices.size(),
+                      data.triangles.size()};
+    tilingPlan.options.tolerance = tilerOptions.tolerance;
+    tilingPlan.options.maxTriangles = tilerOptions.maxTriangles;
+    tilingPlan.options.maxZoom = tilerOptions.maxZoom;
+    tilingPlan.options.lambdaFactor = tilerOptions.lambdaFactor;
+    tilingPlan.tiler = tiles::Tiler(data, tilerOptions).plan();
+    finestZoom = tilingPlan.tiler.finestZoom;
+    fs::create_directories(dir);
+    ingest::writeTilingPlan(tilerPlanPath, tilingPlan);
   }
   plan["finestZoom"] = finestZoom;
-  args.insert(args.end(), {"--finest-zoom", std::to_string(finestZoom)});
+  args.insert(args.end(), {"--plan", tilerPlanPath.string()});
   fs::create_directories(dir / "shards");
   fs::create_directories(dir / "logs");
   const int cpus = std::max(1, f.threads);

@@ -1,6 +1,7 @@
 // `tinsmith tile`: cut a TIN into level-of-detail 3D Tiles (Draco glTF).
 //   tinsmith tile SITE.tin -o SITE.3dtiles [--tolerance M] [--threads N] [--resume]
 //   tinsmith tile SITE.tin -o PART.3dtiles --subtree Z/X/Y     (one shard)
+//       [--plan tiler.plan --unchecked-ancestors]   (reads only its square of the TIN)
 //   tinsmith tile SITE.tin -o TOP.3dtiles --until-zoom Z       (the tiles above the shards)
 //   tinsmith merge TOP.3dtiles PART*.3dtiles -o SITE.3dtiles
 //   tinsmith tile SITE.tin -o SITE.3dtiles --store-until-zoom Z (deeper tiles
@@ -37,6 +38,7 @@ struct TileCliOptions {
   std::optional<int> finestZoom;
   bool emptyOk = false;
   bool uncheckedAncestors = false;
+  std::string plan;
 };
 
 struct MergeCliOptions {
@@ -72,6 +74,10 @@ void addTileCommand(CLI::App& app) {
                   "The finest zoom the job's plan chose (tinsmith slurm gives it to every shard): "
                   "skips the planning fit; another value than the planning's builds another "
                   "pyramid, which merge refuses to join with this job's shards");
+  cmd->add_option("--plan", opt->plan,
+                  "The job's tiling plan (tiler.plan in tinsmith slurm's --workdir): the pyramid, "
+                  "the finest zoom and the simplified lines are taken from it, and with --subtree "
+                  "--unchecked-ancestors only the subtree's part of the TIN is read");
   cmd->callback([opt] {
     ingest::TileJobOptions o;
     o.tiler.plannedFinestZoom = opt->finestZoom;
@@ -82,7 +88,21 @@ void addTileCommand(CLI::App& app) {
     o.subtreeMayBeEmpty = opt->emptyOk;
     o.uncheckedAncestors = opt->uncheckedAncestors;
     o = withTileFlags(o, opt->flags);
-    const TinData tin = ingest::readTinFile(opt->tin);
+    if (!opt->plan.empty())
+      o.plan = std::make_shared<const ingest::TilingPlan>(ingest::readTilingPlan(opt->plan));
+    // A shard below the root reads only its square of the TIN.
+    TinData tin;
+    if (o.plan && o.subtree && o.subtree->z > 0 && o.uncheckedAncestors) {
+      const auto& geometry = o.plan->tiler.geometry;
+      if (!geometry.inside(*o.subtree))
+        throw usageError("tile " + o.subtree->name() + " is outside the pyramid");
+      ingest::TinPart part =
+          ingest::readTinFilePart(opt->tin, tiles::tilerReadRegion(geometry.bounds(*o.subtree)));
+      o.partOf = ingest::TinIdentity{part.fileCrc, part.tin.vertices.size(), part.triangles};
+      tin = std::move(part.tin);
+    } else {
+      tin = ingest::readTinFile(opt->tin);
+    }
     const TileFlags& f = opt->flags;
     auto bar = terminalProgress(f.quiet || f.json);
     const auto summary = ingest::runTileJob(tin, opt->tin, opt->output, o, bar.get());

@@ -1,0 +1,187 @@
+#include "ingest/tiles/tiling_plan.hpp"
+
+#include <array>
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "core/base/error.hpp"
+#include "ingest/base/atomic_file.hpp"
+#include "ingest/tinfile/tin_file.hpp"
+
+namespace tinsmith::ingest {
+
+namespace {
+
+constexpr std::string_view kMagic{"\x89TSPLAN\n", 8};
+
+class Writer {
+ public:
+  template <class T>
+  void put(T value) {
+    using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
+                                 std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
+    const U bits = std::bit_cast<U>(value);
+    for (std::size_t i = 0; i < sizeof(T); ++i) out.push_back(static_cast<char>(bits >> (8 * i)));
+  }
+  std::string out;
+};
+
+class Reader {
+ public:
+  Reader(std::string_view bytes, const std::string& name) : bytes_(bytes), name_(name) {}
+  template <class T>
+  T get() {
+    using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
+                                 std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
+    if (bytes_.size() - at_ < sizeof(T)) bad("it ends early");
+    U bits = 0;
+    for (std::size_t i = 0; i < sizeof(T); ++i)
+      bits |= static_cast<U>(static_cast<U>(static_cast<std::uint8_t>(bytes_[at_ + i])) << (8 * i));
+    at_ += sizeof(T);
+    return std::bit_cast<T>(bits);
+  }
+  /// A count of records of `size` bytes each that the rest can hold.
+  std::size_t count(std::size_t size) {
+    const auto n = get<std::uint64_t>();
+    if (n > (bytes_.size() - at_) / size) bad("a count is larger than the file");
+    return static_cast<std::size_t>(n);
+  }
+  [[nodiscard]] std::size_t at() const { return at_; }
+  [[noreturn]] void bad(const std::string& what) const {
+    throw inputError("not a tiling plan tinsmith can read: " + what, fileLocation(name_),
+                     "plan the job again (tinsmith slurm in a new --workdir)");
+  }
+
+ private:
+  std::string_view bytes_;
+  const std::string& name_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::string encodeTilingPlan(const TilingPlan& plan) {
+  Writer w;
+  w.out.append(kMagic);
+  w.put(kTilingPlanVersion);
+  w.put(plan.tin.crc32);
+  w.put(plan.tin.vertices);
+  w.put(plan.tin.triangles);
+  const tiles::TilerOptions& o = plan.options;
+  w.put(o.tolerance);
+  w.put(static_cast<std::uint64_t>(o.maxTriangles));
+  w.put(static_cast<std::int32_t>(o.maxZoom.value_or(-1)));
+  w.put(o.lambdaFactor);
+  const tiles::TilerPlan& t = plan.tiler;
+  w.put(t.geometry.origin().x);
+  w.put(t.geometry.origin().y);
+  w.put(t.geometry.size());
+  w.put(static_cast<std::int32_t>(t.finestZoom));
+  w.put(t.fitSpacing);
+  w.put(static_cast<std::uint8_t>(t.tileFitAllData));
+  w.put(static_cast<std::uint32_t>(t.zoomLines.size()));
+  for (const auto& lines : t.zoomLines) {
+    w.put(static_cast<std::uint64_t>(lines.size()));
+    for (const auto& line : lines) {
+      w.put(static_cast<std::uint8_t>(line.kind));
+      w.put(static_cast<std::uint8_t>(line.ring));
+      w.put(static_cast<std::uint8_t>(line.closed));
+      w.put(static_cast<std::uint64_t>(line.points.size()));
+      for (const auto& p : line.points) {
+        w.put(p.x);
+        w.put(p.y);
+        w.put(p.z);
+      }
+    }
+  }
+  w.put(crc32(w.out));
+  return std::move(w.out);
+}
+
+TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
+  Reader r(bytes, name);
+  if (bytes.substr(0, kMagic.size()) != kMagic) r.bad("wrong magic bytes");
+  if (bytes.size() < kMagic.size() + 8) r.bad("it ends early");
+  const std::string_view body = bytes.substr(0, bytes.size() - 4);
+  Reader tail(bytes.substr(bytes.size() - 4), name);
+  if (tail.get<std::uint32_t>() != crc32(body)) r.bad("the checksum does not match");
+  for (std::size_t i = 0; i < kMagic.size(); ++i) (void)r.get<std::uint8_t>();
+  if (const auto version = r.get<std::uint32_t>(); version != kTilingPlanVersion)
+    r.bad("format version " + std::to_string(version) + ", this tinsmith reads " +
+          std::to_string(kTilingPlanVersion));
+  TilingPlan plan;
+  plan.tin.crc32 = r.get<std::uint32_t>();
+  plan.tin.vertices = r.get<std::uint64_t>();
+  plan.tin.triangles = r.get<std::uint64_t>();
+  tiles::TilerOptions& o = plan.options;
+  o.tolerance = r.get<double>();
+  o.maxTriangles = r.get<std::uint64_t>();
+  if (const auto z = r.get<std::int32_t>(); z >= 0) o.maxZoom = z;
+  o.lambdaFactor = r.get<double>();
+  tiles::TilerPlan& t = plan.tiler;
+  const double x = r.get<double>(), y = r.get<double>(), size = r.get<double>();
+  t.geometry = tiles::PyramidGeometry({x, y}, size);
+  t.finestZoom = r.get<std::int32_t>();
+  t.fitSpacing = r.get<double>();
+  t.tileFitAllData = r.get<std::uint8_t>() != 0;
+  const auto zooms = r.get<std::uint32_t>();
+  if (t.finestZoom < 0 || t.finestZoom > 30 || zooms != static_cast<std::uint32_t>(t.finestZoom) + 1)
+    r.bad("the finest zoom and the zooms of lines do not agree");
+  t.zoomLines.resize(zooms);
+  for (auto& lines : t.zoomLines) {
+    lines.resize(r.count(11));
+    for (auto& line : lines) {
+      line.kind = static_cast<FeatureKind>(r.get<std::uint8_t>());
+      line.ring = r.get<std::uint8_t>() != 0;
+      line.closed = r.get<std::uint8_t>() != 0;
+      line.points.resize(r.count(24));
+      for (auto& p : line.points) {
+        p.x = r.get<double>();
+        p.y = r.get<double>();
+        p.z = r.get<double>();
+      }
+    }
+  }
+  if (r.at() != body.size()) r.bad("bytes left over");
+  return plan;
+}
+
+void writeTilingPlan(const std::filesystem::path& path, const TilingPlan& plan) {
+  AtomicFile file(path);
+  file.write(encodeTilingPlan(plan));
+  file.commit();
+}
+
+TilingPlan readTilingPlan(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw inputError("cannot read the tiling plan", fileLocation(path.string()),
+                     "give the tiler.plan in the job's --workdir (tinsmith slurm writes it)");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return decodeTilingPlan(bytes.str(), path.string());
+}
+
+void requirePlannedOptions(const TilingPlan& plan, const tiles::TilerOptions& options,
+                           const std::string& planName) {
+  const tiles::TilerOptions& p = plan.options;
+  auto differs = [&](const std::string& what, const std::string& planned,
+                     const std::string& given) {
+    throw usageError("the plan " + planName + " was made with " + what + " " + planned +
+                         ", not " + given,
+                     "give the options of the job's plan.json (tileArguments), or plan again");
+  };
+  if (p.tolerance != options.tolerance)
+    differs("tolerance", std::to_string(p.tolerance), std::to_string(options.tolerance));
+  if (p.maxTriangles != options.maxTriangles)
+    differs("max triangles", std::to_string(p.maxTriangles), std::to_string(options.maxTriangles));
+  if (p.maxZoom != options.maxZoom)
+    differs("max zoom", p.maxZoom ? std::to_string(*p.maxZoom) : "none",
+            options.maxZoom ? std::to_string(*options.maxZoom) : "none");
+  if (p.lambdaFactor != options.lambdaFactor)
+    differs("lambda", std::to_string(p.lambdaFactor), std::to_string(options.lambdaFactor));
+}
+
+}  // namespace tinsmith::ingest

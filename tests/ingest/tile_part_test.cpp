@@ -1,0 +1,160 @@
+// A shard's tiles from its part of the TIN: a Tiler given the whole TIN's
+// plan (through the plan file) and only the part of the .tin around its
+// square (readTinFilePart) builds the tiles the whole TIN gives, bit for bit
+// — on a TIN with a river, a hole whose edge crosses tile sides and corners
+// off the TIN, and sparse triangles that the fit data sample.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "core/base/error.hpp"
+#include "core/cdt/cdt.hpp"
+#include "core/tiles/tiler.hpp"
+#include "ingest/tiles/tiling_plan.hpp"
+#include "ingest/tinfile/tin_file.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+namespace fs = std::filesystem;
+
+double ground(double x, double y) {
+  return 200 + 40 * std::sin(x / 170) * std::cos(y / 230) + 0.02 * x;
+}
+
+/// 2 km × 1.6 km at UTM-sized coordinates: jittered points 40 m apart, none
+/// in a 600 m gap (its triangles are sampled), a river across, and the
+/// triangles of a disc dropped (a hole whose edge crosses tile sides).
+TinData holedTin() {
+  Cdt cdt;
+  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+  const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> jitter(-9, 9);
+  const double x0 = 620000, y0 = 4710000;
+  std::vector<Point3> points;
+  for (int j = 0; j <= 40; ++j) {
+    for (int i = 0; i <= 50; ++i) {
+      const double x = i * 40.0 + (i > 0 && i < 50 ? jitter(rng) : 0);
+      const double y = j * 40.0 + (j > 0 && j < 40 ? jitter(rng) : 0);
+      if (x > 1200 && x < 1800 && y > 200 && y < 800 && i % 15 != 0) continue;
+      points.push_back({x0 + x, y0 + y, ground(x, y)});
+    }
+  }
+  cdt.insertPoints(points, spots);
+  std::vector<Point3> line;
+  for (int k = 0; k <= 60; ++k) {
+    const double x = 15 + k * 33.0, y = 1500 - k * 21.0 + 25 * std::sin(k / 3.0);
+    line.push_back({x0 + x, y0 + y, ground(x, y) - 3 - 0.05 * k});
+  }
+  cdt.insertConstraint(line, river);
+  cdt.finalize();
+  TinData tin = cdt.toTinData();
+  std::vector<std::array<std::uint32_t, 3>> kept;
+  for (const auto& t : tin.triangles) {
+    double cx = 0, cy = 0;
+    for (auto v : t) cx += tin.vertices[v].x / 3 - x0 / 3, cy += tin.vertices[v].y / 3 - y0 / 3;
+    if (std::hypot(cx - 500, cy - 500) > 230) kept.push_back(t);
+  }
+  tin.triangles = kept;
+  return tin;
+}
+
+void expectSameTile(const tiles::TileSurface& a, const tiles::TileSurface& b) {
+  SCOPED_TRACE(a.id.name());
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.flags, b.flags);
+  EXPECT_EQ(a.heldEdges, b.heldEdges);
+  EXPECT_EQ(a.error, b.error);
+  EXPECT_EQ(a.triangleErrors, b.triangleErrors);
+}
+
+TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
+  const fs::path dir = fs::path(testing::TempDir()) / "tile_part";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const TinData whole = holedTin();
+  writeTinFile(dir / "site.tin", whole);
+
+  tiles::TilerOptions options;
+  options.tolerance = 0.1;
+  options.maxTriangles = 512;
+  options.threads = 1;
+  const tiles::Tiler wholeTiler(whole, options);
+  ASSERT_GE(wholeTiler.finestZoom(), 2);
+  TilingPlan plan;
+  plan.tin = {crc32(encodeTin(whole)), whole.vertices.size(), whole.triangles.size()};
+  plan.options = options;
+  plan.tiler = wholeTiler.plan();
+  writeTilingPlan(dir / "tiler.plan", plan);
+  const auto read = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
+  EXPECT_EQ(read->tiler.zoomLines.size(), static_cast<std::size_t>(wholeTiler.finestZoom()) + 1);
+  EXPECT_NO_THROW(requirePlannedOptions(*read, options, "tiler.plan"));
+  tiles::TilerOptions other = options;
+  other.tolerance = 1;
+  EXPECT_THROW(requirePlannedOptions(*read, other, "tiler.plan"), Error);
+
+  const tiles::TinIndex wholeIndex(whole);
+  std::size_t compared = 0, offTinCorners = 0;  // corners of tiles with terrain
+  for (std::uint32_t y = 0; y < 2; ++y) {
+    for (std::uint32_t x = 0; x < 2; ++x) {
+      const tiles::TileId subtree{1, x, y};
+      const tiles::Rect square = read->tiler.geometry.bounds(subtree);
+      const TinPart part = readTinFilePart(dir / "site.tin", tiles::tilerReadRegion(square));
+      EXPECT_EQ(part.fileCrc, plan.tin.crc32);
+      EXPECT_EQ(part.triangles, whole.triangles.size());
+      EXPECT_EQ(part.tin.vertices, whole.vertices);
+      EXPECT_LT(part.tin.triangles.size(), whole.triangles.size());
+      tiles::TilerOptions partOptions = options;
+      partOptions.plan = std::shared_ptr<const tiles::TilerPlan>(read, &read->tiler);
+      partOptions.region = square;
+      const tiles::Tiler partTiler(part.tin, partOptions);
+      EXPECT_EQ(partTiler.geometry().size(), wholeTiler.geometry().size());
+      EXPECT_EQ(partTiler.finestZoom(), wholeTiler.finestZoom());
+      for (int z = 1; z <= wholeTiler.finestZoom() + 1; ++z) {
+        const int dz = z - 1;
+        for (std::uint32_t j = 0; j < (1U << dz); ++j) {
+          for (std::uint32_t i = 0; i < (1U << dz); ++i) {
+            const tiles::TileId id{z, (x << dz) + i, (y << dz) + j};
+            const tiles::TileSurface a = wholeTiler.buildTile(id);
+            expectSameTile(a, partTiler.buildTile(id));
+            ++compared;
+            const tiles::Rect r = read->tiler.geometry.bounds(id);
+            if (a.empty()) continue;
+            for (const Point2 corner : {Point2{r.x0, r.y0}, Point2{r.x1, r.y0},
+                                        Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
+              if (!wholeIndex.z(corner)) ++offTinCorners;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 20u);
+  EXPECT_GT(offTinCorners, 0u);  // the hole's tiles were among them
+}
+
+TEST(TilePart, ADamagedFileIsRefusedWhenReadInPart) {
+  const fs::path dir = fs::path(testing::TempDir()) / "tile_part_damaged";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const TinData whole = holedTin();
+  std::string bytes = encodeTin(whole);
+  bytes[bytes.size() - 100] ^= 0x10;  // in the last section, after every triangle
+  std::ofstream(dir / "damaged.tin", std::ios::binary) << bytes;
+  const tiles::Rect everything{-1e9, -1e9, 1e9, 1e9};
+  EXPECT_THROW((void)readTinFilePart(dir / "damaged.tin", everything), Error);
+  EXPECT_THROW((void)readTinFilePart(dir / "missing.tin", everything), Error);
+  TilingPlan empty;
+  empty.tiler.zoomLines.resize(1);  // finest zoom 0: one set of lines
+  std::string plan = encodeTilingPlan(empty);
+  EXPECT_NO_THROW((void)decodeTilingPlan(plan, "plan"));
+  plan[20] ^= 1;
+  EXPECT_THROW((void)decodeTilingPlan(plan, "plan"), Error);
+}
+
+}  // namespace
+}  // namespace tinsmith::ingest
