@@ -32,7 +32,11 @@
 // Every tile is a pure function of the TIN, the options and its id: tiles can
 // be built in any order, on any thread, in separate processes, and give the same
 // result. A tile fit sees only the data in the tile's square, so a tile's
-// fit costs what its part of the TIN costs, not the whole TIN's.
+// fit costs what its part of the TIN costs, not the whole TIN's. What the
+// whole TIN decides (the pyramid, the finest zoom, the fit data's sampling,
+// the lines simplified for each zoom) is a TilerPlan: a Tiler given the plan
+// and a region needs only the TIN's triangles around the region (and every
+// vertex) to build the region's tiles bit for bit.
 // Crack-free within a zoom: the vertices on a tile's side are computed
 // only from what both tiles sharing it see (the TIN's section along the side,
 // the grid, the simplified lines, each crossing from its

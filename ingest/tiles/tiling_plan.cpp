@@ -127,13 +127,16 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   t.fitSpacing = r.get<double>();
   t.tileFitAllData = r.get<std::uint8_t>() != 0;
   const auto zooms = r.get<std::uint32_t>();
-  if (t.finestZoom < 0 || t.finestZoom > 30 || zooms != static_cast<std::uint32_t>(t.finestZoom) + 1)
+  if (t.finestZoom < 0 || t.finestZoom > 30 ||
+      zooms != static_cast<std::uint32_t>(t.finestZoom) + 1)
     r.bad("the finest zoom and the zooms of lines do not agree");
   t.zoomLines.resize(zooms);
   for (auto& lines : t.zoomLines) {
     lines.resize(r.count(11));
     for (auto& line : lines) {
-      line.kind = static_cast<FeatureKind>(r.get<std::uint8_t>());
+      const auto kind = r.get<std::uint8_t>();
+      if (kind > static_cast<std::uint8_t>(FeatureKind::BreakLine)) r.bad("a line of unknown kind");
+      line.kind = static_cast<FeatureKind>(kind);
       line.ring = r.get<std::uint8_t>() != 0;
       line.closed = r.get<std::uint8_t>() != 0;
       line.points.resize(r.count(24));
@@ -169,9 +172,9 @@ void requirePlannedOptions(const TilingPlan& plan, const tiles::TilerOptions& op
   const tiles::TilerOptions& p = plan.options;
   auto differs = [&](const std::string& what, const std::string& planned,
                      const std::string& given) {
-    throw usageError("the plan " + planName + " was made with " + what + " " + planned +
-                         ", not " + given,
-                     "give the options of the job's plan.json (tileArguments), or plan again");
+    throw usageError(
+        "the plan " + planName + " was made with " + what + " " + planned + ", not " + given,
+        "give the options of the job's plan.json (tileArguments), or plan again");
   };
   if (p.tolerance != options.tolerance)
     differs("tolerance", std::to_string(p.tolerance), std::to_string(options.tolerance));

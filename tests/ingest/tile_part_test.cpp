@@ -125,8 +125,8 @@ TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
             ++compared;
             const tiles::Rect r = read->tiler.geometry.bounds(id);
             if (a.empty()) continue;
-            for (const Point2 corner : {Point2{r.x0, r.y0}, Point2{r.x1, r.y0},
-                                        Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
+            for (const Point2 corner :
+                 {Point2{r.x0, r.y0}, Point2{r.x1, r.y0}, Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
               if (!wholeIndex.z(corner)) ++offTinCorners;
           }
         }
