@@ -61,22 +61,24 @@ struct FitData {
   bool tileFitAll = false;     // TilerPlan::tileFitAllData
 };
 
+/// The longest of a triangle's edges in x, y.
+double longestEdge(const Point3& a, const Point3& b, const Point3& c) {
+  return std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
+                   std::hypot(a.x - c.x, a.y - c.y)});
+}
+
 /// The spacing at which fitData samples a TIN's sparse triangles: the median
 /// longest edge, grown until the samples are at most as many as the TIN's
 /// vertices (0 for a TIN without triangles).
 double fitSpacing(const TinData& tin) {
-  const auto longestEdge = [&](const auto& t) {
-    const Point3& a = tin.vertices[t[0]];
-    const Point3& b = tin.vertices[t[1]];
-    const Point3& c = tin.vertices[t[2]];
-    return std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
-                     std::hypot(a.x - c.x, a.y - c.y)});
+  const auto longestEdgeOf = [&](const auto& t) {
+    return longestEdge(tin.vertices[t[0]], tin.vertices[t[1]], tin.vertices[t[2]]);
   };
   std::vector<double> lengths;
   lengths.reserve(tin.triangles.size());
   for (std::size_t k = 0; k < tin.triangles.size();
        k += std::max<std::size_t>(1, tin.triangles.size() / 20000)) {
-    lengths.push_back(longestEdge(tin.triangles[k]));
+    lengths.push_back(longestEdgeOf(tin.triangles[k]));
   }
   if (lengths.empty()) return 0;
   std::nth_element(lengths.begin(),
@@ -90,7 +92,7 @@ double fitSpacing(const TinData& tin) {
   // vertices (2.9 GB, 160 s); the spacing grows until the estimate fits.
   double sparseArea = 0;
   for (const auto& t : tin.triangles)
-    if (longestEdge(t) > 2 * spacing)
+    if (longestEdgeOf(t) > 2 * spacing)
       sparseArea += 0.5 * std::abs(geometry::orient2dInexact(tin.vertices[t[0]], tin.vertices[t[1]],
                                                              tin.vertices[t[2]]));
   const double budget = static_cast<double>(tin.vertices.size());
@@ -121,9 +123,7 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
     const Point3& a = tin.vertices[t[0]];
     const Point3& b = tin.vertices[t[1]];
     const Point3& c = tin.vertices[t[2]];
-    if (std::max({std::hypot(b.x - a.x, b.y - a.y), std::hypot(c.x - b.x, c.y - b.y),
-                  std::hypot(a.x - c.x, a.y - c.y)}) <= 2 * spacing)
-      continue;
+    if (longestEdge(a, b, c) <= 2 * spacing) continue;
     if (!within.overlaps(boundsOf(std::array<Point3, 3>{a, b, c}))) continue;
     const bool nearHeld = held[t[0]] || held[t[1]] || held[t[2]];
     // About one sample per spacing² of area (a barycentric grid of n steps
@@ -421,7 +421,7 @@ std::unique_ptr<Tiler::Zoom> Tiler::makeZoom(int z) const {
   // A Tiler of a region leaves out the break lines that miss it; every ring
   // stays, as a tile's inside test counts the crossings of them all.
   for (const auto& line : *simplified) {
-    if (!line.ring && !within_.overlaps(boundsOf(line.points))) continue;
+    if (options_.region && !line.ring && !within_.overlaps(boundsOf(line.points))) continue;
     TerrainLine snapped = line;
     auto& pts = snapped.points;
     for (auto& p : pts) {

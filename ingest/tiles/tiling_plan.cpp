@@ -62,6 +62,17 @@ class Reader {
 
 }  // namespace
 
+TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options) {
+  TilingPlan plan;
+  plan.tin = {crc32(encodeTin(tin)), tin.vertices.size(), tin.triangles.size()};
+  plan.options.tolerance = options.tolerance;
+  plan.options.maxTriangles = options.maxTriangles;
+  plan.options.maxZoom = options.maxZoom;
+  plan.options.lambdaFactor = options.lambdaFactor;
+  plan.tiler = tiles::Tiler(tin, options).plan();
+  return plan;
+}
+
 std::string encodeTilingPlan(const TilingPlan& plan) {
   Writer w;
   w.out.append(kMagic);

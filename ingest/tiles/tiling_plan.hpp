@@ -21,6 +21,7 @@
 #include <string_view>
 
 #include "core/tiles/tiler.hpp"
+#include "core/tin/tin_data.hpp"
 
 namespace tinsmith::ingest {
 
@@ -40,6 +41,10 @@ struct TilingPlan {
   tiles::TilerOptions options;
   tiles::TilerPlan tiler;
 };
+
+/// The plan of `tin` (the whole of it) for tiles with these options: runs
+/// the planning (tiles::Tiler::plan).
+TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options);
 
 std::string encodeTilingPlan(const TilingPlan& plan);
 /// Throws inputError naming `name` for bytes that are not a whole plan of

@@ -412,6 +412,64 @@ std::span<const std::uint8_t> checkedPayload(std::span<const std::uint8_t> bytes
                    "the file is damaged; write it again with `tinsmith tin`");
 }
 
+/// Reads a payload's sections into `tin`: all of it, or with `region` every
+/// vertex and feature, the triangles whose boxes meet it and the constrained
+/// edges at their vertices. `pace()` runs every 65 536 records of the large
+/// sections. Returns the file's triangle count.
+template <class Pace>
+std::size_t readSections(PayloadReader& r, TinData& tin, const tiles::Rect* region, Pace&& pace) {
+  tin.crs = r.getString("CRS text");
+  tin.vertices.resize(r.getCount(24, "vertex"));
+  for (std::size_t i = 0; i < tin.vertices.size(); ++i) {
+    auto& v = tin.vertices[i];
+    v.x = r.get<double>("vertices");
+    v.y = r.get<double>("vertices");
+    v.z = r.get<double>("vertices");
+    if ((i & 0xFFFF) == 0) pace();
+  }
+  const std::size_t nv = tin.vertices.size();
+  const std::size_t triangles = r.getCount(12, "triangle");
+  std::vector<char> used(region ? nv : 0, 0);
+  if (!region) tin.triangles.reserve(triangles);
+  for (std::size_t k = 0; k < triangles; ++k) {
+    std::array<std::uint32_t, 3> t{};
+    for (auto& i : t) i = r.get<std::uint32_t>("triangles");
+    if ((k & 0xFFFF) == 0) pace();
+    if (!region) {
+      tin.triangles.push_back(t);  // checkTinContract checks the indices
+      continue;
+    }
+    if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
+      r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
+                std::to_string(nv) + " vertices");
+    const std::array<Point3, 3> corners{tin.vertices[t[0]], tin.vertices[t[1]],
+                                        tin.vertices[t[2]]};
+    if (tiles::boundsOf(corners).overlaps(*region)) {
+      tin.triangles.push_back(t);
+      used[t[0]] = used[t[1]] = used[t[2]] = 1;
+    }
+  }
+  tin.features.resize(r.getCount(5, "feature"));
+  for (auto& f : tin.features) {
+    f.kind = static_cast<FeatureKind>(r.get<std::uint8_t>("features"));
+    f.source = r.getString("features");
+  }
+  const std::size_t edges = r.getCount(12, "constrained edge");
+  if (!region) tin.constrainedEdges.reserve(edges);
+  for (std::size_t k = 0; k < edges; ++k) {
+    TinData::ConstrainedEdge e;
+    e.a = r.get<std::uint32_t>("constrained edges");
+    e.b = r.get<std::uint32_t>("constrained edges");
+    e.feature = r.get<std::uint32_t>("constrained edges");
+    if ((k & 0xFFFF) == 0) pace();
+    if (region && (e.a >= nv || e.b >= nv))
+      r.corrupt("constrained edge " + std::to_string(k) + " refers to a vertex out of range");
+    if (!region || used[e.a] || used[e.b]) tin.constrainedEdges.push_back(e);
+  }
+  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+  return triangles;
+}
+
 }  // namespace
 
 TinData decodeTin(std::string_view bytes, const std::string& name) {
@@ -422,28 +480,7 @@ TinData decodeTin(std::string_view bytes, const std::string& name) {
 
   PayloadReader r(body.data(), body.size(), name);
   TinData tin;
-  tin.crs = r.getString("CRS text");
-  tin.vertices.resize(r.getCount(24, "vertex"));
-  for (auto& v : tin.vertices) {
-    v.x = r.get<double>("vertices");
-    v.y = r.get<double>("vertices");
-    v.z = r.get<double>("vertices");
-  }
-  tin.triangles.resize(r.getCount(12, "triangle"));
-  for (auto& t : tin.triangles)
-    for (auto& i : t) i = r.get<std::uint32_t>("triangles");
-  tin.features.resize(r.getCount(5, "feature"));
-  for (auto& f : tin.features) {
-    f.kind = static_cast<FeatureKind>(r.get<std::uint8_t>("features"));
-    f.source = r.getString("features");
-  }
-  tin.constrainedEdges.resize(r.getCount(12, "constrained edge"));
-  for (auto& e : tin.constrainedEdges) {
-    e.a = r.get<std::uint32_t>("constrained edges");
-    e.b = r.get<std::uint32_t>("constrained edges");
-    e.feature = r.get<std::uint32_t>("constrained edges");
-  }
-  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+  readSections(r, tin, nullptr, [] {});
   checkTinContract(tin, name, false);
   return tin;
 }
@@ -547,54 +584,11 @@ TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& re
   };
 
   TinPart part;
-  TinData& tin = part.tin;
-  tin.crs = r.getString("CRS text");
-  tin.vertices.resize(r.getCount(24, "vertex"));
-  for (std::size_t i = 0; i < tin.vertices.size(); ++i) {
-    auto& v = tin.vertices[i];
-    v.x = r.get<double>("vertices");
-    v.y = r.get<double>("vertices");
-    v.z = r.get<double>("vertices");
-    if ((i & 0xFFFF) == 0) keepUp();
-  }
-  const std::size_t nv = tin.vertices.size();
-  part.triangles = r.getCount(12, "triangle");
-  std::vector<char> used(nv, 0);
-  for (std::size_t k = 0; k < part.triangles; ++k) {
-    std::array<std::uint32_t, 3> t{};
-    for (auto& i : t) i = r.get<std::uint32_t>("triangles");
-    if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
-      r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
-                std::to_string(nv) + " vertices");
-    const std::array<Point3, 3> corners{tin.vertices[t[0]], tin.vertices[t[1]],
-                                        tin.vertices[t[2]]};
-    if (tiles::boundsOf(corners).overlaps(region)) {
-      tin.triangles.push_back(t);
-      used[t[0]] = used[t[1]] = used[t[2]] = 1;
-    }
-    if ((k & 0xFFFF) == 0) keepUp();
-  }
-  tin.features.resize(r.getCount(5, "feature"));
-  for (auto& f : tin.features) {
-    f.kind = static_cast<FeatureKind>(r.get<std::uint8_t>("features"));
-    f.source = r.getString("features");
-  }
-  const std::size_t ne = r.getCount(12, "constrained edge");
-  for (std::size_t k = 0; k < ne; ++k) {
-    TinData::ConstrainedEdge e;
-    e.a = r.get<std::uint32_t>("constrained edges");
-    e.b = r.get<std::uint32_t>("constrained edges");
-    e.feature = r.get<std::uint32_t>("constrained edges");
-    if (e.a >= nv || e.b >= nv)
-      r.corrupt("constrained edge " + std::to_string(k) + " refers to a vertex out of range");
-    if (used[e.a] || used[e.b]) tin.constrainedEdges.push_back(e);
-    if ((k & 0xFFFF) == 0) keepUp();
-  }
-  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+  part.triangles = readSections(r, part.tin, &region, keepUp);
   checkUpTo(body.data() + body.size());
   if (payloadCrc != getLe<std::uint32_t>(header + 24)) payloadChecksumMismatch(name);
   part.fileCrc = fileCrc;
-  checkTinContract(tin, name, false);
+  checkTinContract(part.tin, name, false);
   return part;
 }
 

@@ -86,10 +86,7 @@ TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
   options.threads = 1;
   const tiles::Tiler wholeTiler(whole, options);
   ASSERT_GE(wholeTiler.finestZoom(), 2);
-  TilingPlan plan;
-  plan.tin = {crc32(encodeTin(whole)), whole.vertices.size(), whole.triangles.size()};
-  plan.options = options;
-  plan.tiler = wholeTiler.plan();
+  const TilingPlan plan = makeTilingPlan(whole, options);
   writeTilingPlan(dir / "tiler.plan", plan);
   const auto read = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
   EXPECT_EQ(read->tiler.zoomLines.size(), static_cast<std::size_t>(wholeTiler.finestZoom()) + 1);

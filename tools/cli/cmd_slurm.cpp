@@ -258,15 +258,8 @@ void runSlurm(const SlurmCliOptions& o) {
     if (!f.quiet && !f.json) std::cerr << "planning the pyramid of " << tin.string() << "\n";
     tiles::TilerOptions tilerOptions = jobOptions.tiler;
     tilerOptions.threads = jobOptions.threads;
-    const TinData data = ingest::readTinFile(tin);
-    ingest::TilingPlan tilingPlan;
-    tilingPlan.tin = {ingest::crc32(ingest::encodeTin(data)), data.vertices.size(),
-                      data.triangles.size()};
-    tilingPlan.options.tolerance = tilerOptions.tolerance;
-    tilingPlan.options.maxTriangles = tilerOptions.maxTriangles;
-    tilingPlan.options.maxZoom = tilerOptions.maxZoom;
-    tilingPlan.options.lambdaFactor = tilerOptions.lambdaFactor;
-    tilingPlan.tiler = tiles::Tiler(data, tilerOptions).plan();
+    const ingest::TilingPlan tilingPlan =
+        ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions);
     finestZoom = tilingPlan.tiler.finestZoom;
     fs::create_directories(dir);
     ingest::writeTilingPlan(tilerPlanPath, tilingPlan);

@@ -93,11 +93,8 @@ void addTileCommand(CLI::App& app) {
     // A shard below the root reads only its square of the TIN.
     TinData tin;
     if (o.plan && o.subtree && o.subtree->z > 0 && o.uncheckedAncestors) {
-      const auto& geometry = o.plan->tiler.geometry;
-      if (!geometry.inside(*o.subtree))
-        throw usageError("tile " + o.subtree->name() + " is outside the pyramid");
-      ingest::TinPart part =
-          ingest::readTinFilePart(opt->tin, tiles::tilerReadRegion(geometry.bounds(*o.subtree)));
+      ingest::TinPart part = ingest::readTinFilePart(
+          opt->tin, tiles::tilerReadRegion(o.plan->tiler.geometry.bounds(*o.subtree)));
       o.partOf = ingest::TinIdentity{part.fileCrc, part.tin.vertices.size(), part.triangles};
       tin = std::move(part.tin);
     } else {
