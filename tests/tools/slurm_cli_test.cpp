@@ -134,6 +134,38 @@ TEST(SlurmCli, ASubtreeOutsideThePyramidIsAnErrorUnlessEmptyIsOk) {
             2);  // --empty-ok goes with --subtree
 }
 
+TEST(SlurmCli, APlanningCutShortIsPlannedAgainByTheRerun) {
+  const fs::path dir = scratchDir("slurm-killed");
+  // 360 k vertices: the planning takes a second or more, time for the kill.
+  const fs::path tin = dir / "big.tin";
+  ASSERT_EQ(runTinsmith("tin --points 'synthetic:grid?nx=600&ny=600&spacing=2&x0=430000&y0=4515000"
+                        "&surface=hill&z0=1600&scale=80&noise=0.5' --crs EPSG:26912 -q -o " +
+                        tin.string())
+                .exitCode,
+            0);
+  const fs::path work = dir / "work";
+  const std::string slurm = std::string(TINSMITH_BINARY) + " slurm " + tin.string() +
+                            " --tolerance 0.2 --shard-zoom 1 --threads 1 -q --workdir " +
+                            work.string() + " -o " + (dir / "merged.3dtiles").string();
+  // Killed (SIGKILL: nothing of its own runs) once plan.json is there; the
+  // wait for it is bounded (20 s).
+  const auto killed = runCommand(slurm + " & pid=$!; for i in $(seq 2000); do [ -e " +
+                                 (work / "plan.json").string() +
+                                 " ] && break; sleep 0.01; done; kill -9 $pid; wait $pid");
+  EXPECT_EQ(killed.exitCode, 128 + 9) << "not killed while planning: " << killed.err;
+  ASSERT_TRUE(fs::exists(work / "plan.json"));
+  EXPECT_FALSE(nlohmann::json::parse(readFile(work / "plan.json")).contains("finestZoom"));
+  EXPECT_FALSE(fs::exists(work / "shard.sh"));
+  // The same job again: planned in the same folder, not refused.
+  const auto again = runCommand(slurm);
+  ASSERT_EQ(again.exitCode, 0) << again.err;
+  const auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
+  ASSERT_TRUE(plan.contains("finestZoom"));
+  EXPECT_EQ(ingest::readTilingPlan(work / "tiler.plan").tiler.finestZoom,
+            plan.at("finestZoom").get<int>());
+  EXPECT_TRUE(fs::exists(work / "shard.sh"));
+}
+
 TEST(SlurmCli, MergeLeavesOutSubtreesUnderATileThatDoesNotRefine) {
   const fs::path dir = scratchDir("slurm-unchecked");
   // 640 m square: a plane in the west half, a rippled hill in the east. The

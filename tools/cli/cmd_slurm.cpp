@@ -255,13 +255,19 @@ void runSlurm(const SlurmCliOptions& o) {
   if (previous.is_object() && previous.contains("finestZoom") && fs::exists(tilerPlanPath)) {
     finestZoom = ingest::readTilingPlan(tilerPlanPath).tiler.finestZoom;
   } else {
+    // plan.json first, without the finest zoom: a planning cut short (^C, a
+    // killed login shell) leaves a folder that this job's rerun plans again.
+    nlohmann::ordered_json unplanned = plan;
+    if (previous.is_object() && previous.contains("submissions"))
+      unplanned["submissions"] = previous["submissions"];
+    fs::create_directories(dir);
+    writeAtomically(planPath, unplanned.dump(2) + "\n", false);
     if (!f.quiet && !f.json) std::cerr << "planning the pyramid of " << tin.string() << "\n";
     tiles::TilerOptions tilerOptions = jobOptions.tiler;
     tilerOptions.threads = jobOptions.threads;
     const ingest::TilingPlan tilingPlan =
         ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions);
     finestZoom = tilingPlan.tiler.finestZoom;
-    fs::create_directories(dir);
     ingest::writeTilingPlan(tilerPlanPath, tilingPlan);
   }
   plan["finestZoom"] = finestZoom;
