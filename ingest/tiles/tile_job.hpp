@@ -147,6 +147,11 @@ struct TileJobSummary {
   int levelsPerTile = 0;
   std::size_t dataPoints = 0;
   double seconds = 0;
+  /// The whole process's CPU time and peak resident memory, as the command
+  /// that ran the job measured them (a shard's log and report tell its
+  /// cost); 0 when not measured (a store described by tinsmith info).
+  double cpuSeconds = 0;
+  std::size_t peakMemoryBytes = 0;
 };
 
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into

@@ -128,6 +128,17 @@ if [ -e "$work/merged.3dtiles" ]; then
 else
   bad "no merged store at $work/merged.3dtiles"
 fi
+# The merge's log ends with what each shard cost (tinsmith tile's "process:"
+# line in each shard's log), measured here on the cluster.
+costs=$(sed -n '/^the shards, from the last run in each log:/,$p' "$run/logs/merge.log")
+listed=$(grep -c '^  shard [0-9]*: CPU ' <<<"$costs")
+top_mb=$(awk '$2 == "0:" && $3 == "CPU" { print $8 }' <<<"$costs")
+subtree_mb=$(awk '$1 == "shard" && $2 != "0:" && $3 == "CPU" && $8 + 0 > m { m = $8 + 0 } END { print m + 0 }' <<<"$costs")
+one_mb=$(json "$work/one.json" 'round(d["peakMemoryBytes"] / 1e6)')
+expect "the merge's log tells what each of the 17 shards cost ($listed; peak memory: top $top_mb MB, largest subtree $subtree_mb MB, single run $one_mb MB)" \
+  test "$listed" -eq 17
+expect "the largest subtree shard took at most half the single run's memory" \
+  test "$((2 * ${subtree_mb:-0}))" -le "${one_mb:-0}" -a "${subtree_mb:-0}" -gt 0
 missing_logs=""
 for t in $(seq 0 "$subtrees"); do [ -s "$run/logs/shard-$t.log" ] || missing_logs+=" $t"; done
 expect "a log per task and one for the merge${missing_logs:+ (missing:$missing_logs)}" \

@@ -27,15 +27,16 @@ namespace fs = std::filesystem;
 /// Runs every task of `workdir`'s shard.sh, then its merge.sh, as Slurm would.
 void runAsSlurmWould(const fs::path& workdir, int tasks) {
   for (int k = 0; k < tasks; ++k) {
+    // In braces: runCommand's own stderr redirect, added at the end, is not the log's.
     const auto r = runCommand(
-        "SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + (workdir / "shard.sh").string() +
-        " >" + (workdir / "logs" / ("shard-" + std::to_string(k) + ".log")).string() + " 2>&1");
+        "{ SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + (workdir / "shard.sh").string() +
+        " >" + (workdir / "logs" / ("shard-" + std::to_string(k) + ".log")).string() + " 2>&1; }");
     EXPECT_EQ(r.exitCode, 0) << "task " << k << ": "
                              << readFile(workdir / "logs" /
                                          ("shard-" + std::to_string(k) + ".log"));
   }
-  const auto merge = runCommand("bash " + (workdir / "merge.sh").string() + " >" +
-                                (workdir / "logs" / "merge.log").string() + " 2>&1");
+  const auto merge = runCommand("{ bash " + (workdir / "merge.sh").string() + " >" +
+                                (workdir / "logs" / "merge.log").string() + " 2>&1; }");
   EXPECT_EQ(merge.exitCode, 0) << readFile(workdir / "logs" / "merge.log");
 }
 
@@ -70,6 +71,12 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   // 8 that hold no terrain, as one run never builds them.
   runAsSlurmWould(work, 17);
   EXPECT_EQ(readFile(dir / "merged.3dtiles"), readFile(dir / "one.3dtiles"));
+  // The merge's log ends with what each shard cost, from the shards' logs.
+  const std::string mergeLog = readFile(work / "logs" / "merge.log");
+  for (int k = 0; k < 17; ++k)
+    EXPECT_NE(mergeLog.find("  shard " + std::to_string(k) + ": CPU "), std::string::npos)
+        << "shard " << k << " in:\n" << mergeLog;
+  EXPECT_NE(mergeLog.find("  all: CPU "), std::string::npos) << mergeLog;
   int stores = 0;
   for (const auto& e : fs::directory_iterator(work / "shards"))
     stores += e.path().extension() == ".3dtiles";

@@ -129,5 +129,26 @@ TEST(TileCli, TilesOverTheirZoomsToleranceAreSaidAndStrictFails) {
   EXPECT_TRUE(j["overTolerance"].empty());
 }
 
+TEST(TileCli, TheSummaryTellsWhatTheProcessCost) {
+  const auto dir = scratchDir("tile-cli-process");
+  const auto tin = smallTin(dir);
+  auto r = runTinsmith("tile " + tin.string() + " --tolerance 0.5 --json -o " +
+                       (dir / "a.3dtiles").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["cpuSeconds"].get<double>(), 0.0);
+  // The libraries alone take tens of MB; this small job well under a GB.
+  EXPECT_GT(j["peakMemoryBytes"].get<double>(), 10e6);
+  EXPECT_LT(j["peakMemoryBytes"].get<double>(), 1e9);
+  r = runTinsmith("tile " + tin.string() + " --tolerance 0.5 -o " + (dir / "b.3dtiles").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("  process: CPU "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" MB\n"), std::string::npos) << r.err;
+  // A store described is not a process measured.
+  r = runTinsmith("info " + (dir / "a.3dtiles").string() + " --json");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("cpuSeconds")) << r.out;
+}
+
 }  // namespace
 }  // namespace tinsmith::test

@@ -153,7 +153,17 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     << "  stores+=(\"$shards/$task.3dtiles\")\n"
     << "done\n"
     << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string()) << "\n"
-    << shellQuote(tinsmith) << " info " << shellQuote(output.string()) << "\n";
+    << shellQuote(tinsmith) << " info " << shellQuote(output.string()) << "\n"
+    // What each shard cost, from the last run in its log (tinsmith tile's
+    // "process:" line), and in all.
+    << "echo \"the shards, from the last run in each log:\"\n"
+    << "for task in $(seq 0 " << tasks - 1 << "); do\n"
+    << "  awk -v t=\"$task\" '/^  process: CPU / { cpu = $3; mem = $7 }\n"
+    << "    END { if (cpu != \"\") printf \"  shard %d: CPU %s s, peak memory %s MB\\n\", t, cpu, mem;\n"
+    << "          else printf \"  shard %d: no summary in its log\\n\", t }' "
+    << shellQuote((dir / "logs").string()) << "/shard-$task.log\n"
+    << "done | awk '{ print } $3 == \"CPU\" { cpu += $4; if ($8 + 0 > peak) peak = $8 + 0 }\n"
+    << "  END { printf \"  all: CPU %.1f s; the largest peak memory %.0f MB\\n\", cpu, peak }'\n";
   return s.str();
 }
 

@@ -1,5 +1,7 @@
 #include "tools/cli/tile_options.hpp"
 
+#include <sys/resource.h>
+
 #include <iostream>
 
 #include "core/base/error.hpp"
@@ -77,8 +79,16 @@ ingest::TileJobOptions withTileFlags(ingest::TileJobOptions o, const TileFlags& 
   return o;
 }
 
-void reportTileJob(const ingest::TileJobSummary& summary, const std::string& output, bool json,
+void reportTileJob(ingest::TileJobSummary summary, const std::string& output, bool json,
                    bool quiet) {
+  ::rusage usage{};
+  if (::getrusage(RUSAGE_SELF, &usage) == 0) {
+    const auto seconds = [](const ::timeval& t) {
+      return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+    };
+    summary.cpuSeconds = seconds(usage.ru_utime) + seconds(usage.ru_stime);
+    summary.peakMemoryBytes = static_cast<std::size_t>(usage.ru_maxrss) * 1024;  // Linux: KiB
+  }
   if (json) {
     std::cout << tileSummaryJson(summary, output);
   } else if (!quiet) {

@@ -36,10 +36,10 @@ void addTileFlags(CLI::App& cmd, TileFlags& flags, bool fromConfig);
 /// Throws usageError naming the option for a value no option takes.
 ingest::TileJobOptions withTileFlags(ingest::TileJobOptions base, const TileFlags& flags);
 
-/// The summary of a finished job: JSON on stdout with --json, else text on
-/// stderr unless -q; tiles over their zoom's tolerance are warned of on
-/// stderr in any case.
-void reportTileJob(const ingest::TileJobSummary& summary, const std::string& output, bool json,
+/// The summary of a finished job, with this process's CPU time and peak
+/// memory: JSON on stdout with --json, else text on stderr unless -q; tiles
+/// over their zoom's tolerance are warned of on stderr in any case.
+void reportTileJob(ingest::TileJobSummary summary, const std::string& output, bool json,
                    bool quiet);
 
 /// With --strict, throws CheckFailed (exit code 1) when a tile is over its

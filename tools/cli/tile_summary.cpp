@@ -26,6 +26,11 @@ std::string terrainText(const ingest::TerrainSummary& t) {
   }
   return out;
 }
+std::string processText(const ingest::TileJobSummary& s) {
+  if (s.cpuSeconds <= 0 && s.peakMemoryBytes == 0) return "";
+  return format("  process: CPU %.2f s, peak memory %.0f MB\n", s.cpuSeconds,
+                static_cast<double>(s.peakMemoryBytes) / 1e6);
+}
 }  // namespace
 
 std::string tileSummaryText(const ingest::TileJobSummary& s) {
@@ -33,7 +38,7 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
   // Cesium terrain alone (--scheme quantized-mesh) has no 3D Tiles to tell of.
   if (s.zooms.empty() && s.terrain) {
     if (s.seconds > 0) out += format("  %.1f s\n", s.seconds);
-    return out + terrainText(*s.terrain);
+    return out + terrainText(*s.terrain) + processText(s);
   }
   out += format(
       "  tiles: %zu in %zu zooms, %.2f MB (finest planned zoom %d, %d binary levels a tile)\n",
@@ -53,7 +58,7 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
                z.maxError, z.breakLineVertices);
   }
   if (s.terrain) out += terrainText(*s.terrain);
-  return out;
+  return out + processText(s);
 }
 
 std::string missedToleranceText(const ingest::TileJobSummary& s) {
@@ -107,6 +112,10 @@ nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
   j["levelsPerTile"] = s.levelsPerTile;
   j["fitPoints"] = s.dataPoints;
   j["seconds"] = s.seconds;
+  if (s.cpuSeconds > 0 || s.peakMemoryBytes > 0) {
+    j["cpuSeconds"] = s.cpuSeconds;
+    j["peakMemoryBytes"] = s.peakMemoryBytes;
+  }
   auto zooms = nlohmann::ordered_json::array();
   for (const auto& z : s.zooms) {
     zooms.push_back({{"zoom", z.z},
