@@ -75,7 +75,8 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   const std::string mergeLog = readFile(work / "logs" / "merge.log");
   for (int k = 0; k < 17; ++k)
     EXPECT_NE(mergeLog.find("  shard " + std::to_string(k) + ": CPU "), std::string::npos)
-        << "shard " << k << " in:\n" << mergeLog;
+        << "shard " << k << " in:\n"
+        << mergeLog;
   EXPECT_NE(mergeLog.find("  all: CPU "), std::string::npos) << mergeLog;
   int stores = 0;
   for (const auto& e : fs::directory_iterator(work / "shards"))
