@@ -30,7 +30,9 @@ normalize() {
   sed -E \
     -e 's#[0-9]+\.[0-9]+ s\b#\# s#g' \
     -e 's#("[a-z_]*(seconds|_s)": )[0-9.eE+-]+#\1\##g' \
-    -e 's#[0-9]+(\.[0-9]+)? (MB|MiB) peak#\# \2 peak#g'
+    -e 's#[0-9]+(\.[0-9]+)? (MB|MiB) peak#\# \2 peak#g' \
+    -e 's#peak memory [0-9]+ MB#peak memory \# MB#g' \
+    -e 's#("(cpuSeconds|peakMemoryBytes)": )[0-9.eE+-]+#\1\##g'
 }
 
 status=0
