@@ -14,8 +14,9 @@
 //               --unchecked-ancestors: a subtree under a tile that does not
 //               refine, or without terrain, is written all the same, and the
 //               merge leaves it out); shards/k.3dtiles, logs/shard-k.log;
-//   merge.sh    tinsmith merge of every shard into the output, then info
-//               (logs/merge.log);
+//   merge.sh    tinsmith merge of every shard into the output, then info,
+//               then what each shard cost, from the "process:" line of
+//               tinsmith tile's summary in its log (logs/merge.log);
 // and with --submit runs `sbatch --array` of the shards and `sbatch` of the
 // merge with afterok on each task. --resume resubmits only the tasks that
 // left no store (a failed, cancelled or lost shard), and a new merge after
@@ -158,10 +159,11 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     // "process:" line), and in all.
     << "echo \"the shards, from the last run in each log:\"\n"
     << "for task in $(seq 0 " << tasks - 1 << "); do\n"
+    << "  log=" << shellQuote((dir / "logs").string()) << "/shard-$task.log\n"
+    << "  [ -e \"$log\" ] || { echo \"  shard $task: no log\"; continue; }\n"
     << "  awk -v t=\"$task\" '/^  process: CPU / { cpu = $3; mem = $7 }\n"
     << "    END { if (cpu != \"\") printf \"  shard %d: CPU %s s, peak memory %s MB\\n\", t, cpu, mem;\n"
-    << "          else printf \"  shard %d: no summary in its log\\n\", t }' "
-    << shellQuote((dir / "logs").string()) << "/shard-$task.log\n"
+    << "          else printf \"  shard %d: no summary in its log\\n\", t }' \"$log\"\n"
     << "done | awk '{ print } $3 == \"CPU\" { cpu += $4; if ($8 + 0 > peak) peak = $8 + 0 }\n"
     << "  END { printf \"  all: CPU %.1f s; the largest peak memory %.0f MB\\n\", cpu, peak }'\n";
   return s.str();
