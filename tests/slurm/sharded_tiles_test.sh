@@ -164,25 +164,15 @@ merge=$(json "$again.out" 'd["merge"]')
 held=$(scontrol -o show job "$array" 2>/dev/null | grep -o 'Reason=[A-Za-z]*' | sort -u | paste -sd, -)
 expect "--sbatch-args=--hold reaches the array job $array ($held) and the merge job $merge ($(job_field "$merge" Reason))" \
   test "$held" = Reason=JobHeldUser -a "$(job_field "$merge" Reason)" = JobHeldUser
-mkdir -p "$again/shards/$victim.3dtiles"
-echo "not a tile store" >"$again/shards/$victim.3dtiles/notes.txt"
-scontrol release "$array" && scontrol release "$merge" || fatal "scontrol release $array $merge"
-merge_state=$(slurm_wait_job "$merge" "$(left 240)")
-array_state=$(slurm_wait_job "$array" "$(left 30)")
+fail_one_shard "$again" "$array" "$merge" "$victim" 240
 phase "failing run (release → merge cancelled)" "$t0"
-failed_list=$(failed_tasks "$array")
-expect "task $victim FAILED and no other ($failed_list; array: $array_state)" test "$failed_list" = "$victim"
+expect_failed_shard "$again" "$array" "$merge" "$victim" "$work/merged-again.3dtiles"
 code=$(task_field "$array" "$victim" ExitCode)
 if ! expect "task $victim exited with 5, i/o ($code)" test "$code" = 5:0; then
   show "$again/logs/shard-$victim.log"
 fi
 refusal=$(grep -m1 'ERROR' "$again/logs/shard-$victim.log" 2>/dev/null | cut -c1-160)
 expect "task $victim's log says why (${refusal:-no ERROR line})" test -n "$refusal"
-reason=$(job_field "$merge" Reason)
-expect "merge job $merge CANCELLED, DependencyNeverSatisfied ($merge_state, $reason)" \
-  test "$merge_state" = CANCELLED -a "$reason" = DependencyNeverSatisfied
-expect "the cancelled merge wrote no store" test ! -e "$work/merged-again.3dtiles"
-expect "the foreign file is untouched" test -f "$again/shards/$victim.3dtiles/notes.txt"
 
 # ---------------------------------------------------------------- 3. resume
 rm -rf "${again:?}/shards/$victim.3dtiles"

@@ -90,22 +90,12 @@ array=$(json "$run.out" 'd["array"]')
 merge=$(json "$run.out" 'd["merge"]')
 tasks=$(json "$run.out" 'd["tasks"]')
 expect "17 tasks: the top and the $subtrees subtrees ($tasks)" test "$tasks" = "$(seq -s ' ' 0 "$subtrees")"
-mkdir -p "$run/shards/$victim.3dtiles"
-echo "not a tile store" >"$run/shards/$victim.3dtiles/notes.txt"
 t0=$(date +%s.%N)
-scontrol release "$array" && scontrol release "$merge" || fatal "scontrol release $array $merge"
-merge_state=$(slurm_wait_job "$merge" "$(left 300)")
-array_state=$(slurm_wait_job "$array" "$(left 60)")
+fail_one_shard "$run" "$array" "$merge" "$victim" 300
 phase "17 shards on the cluster (release → merge cancelled)" "$t0"
-failed_list=$(failed_tasks "$array")
-expect "task $victim FAILED and no other ($failed_list; array: $array_state)" test "$failed_list" = "$victim"
+expect_failed_shard "$run" "$array" "$merge" "$victim" "$work/merged.3dtiles"
 kept=$(find "$run/shards" -maxdepth 1 -name '*.3dtiles' -type f | wc -l)
 expect "the $subtrees other shards left their stores ($kept)" test "$kept" -eq "$subtrees"
-reason=$(job_field "$merge" Reason)
-expect "merge job $merge CANCELLED, DependencyNeverSatisfied ($merge_state, $reason)" \
-  test "$merge_state" = CANCELLED -a "$reason" = DependencyNeverSatisfied
-expect "the cancelled merge wrote no store" test ! -e "$work/merged.3dtiles"
-expect "the foreign file is untouched" test -f "$run/shards/$victim.3dtiles/notes.txt"
 
 # ---------------------------------------------------------------- 2. the retry
 rm -rf "${run:?}/shards/$victim.3dtiles"

@@ -89,3 +89,31 @@ failed_tasks() {
   scontrol -o show job "$1" 2>/dev/null | grep 'JobState=FAILED' | grep -o 'ArrayTaskId=[0-9]*' | cut -d= -f2 | sort -n | paste -sd, -
 }
 
+
+# fail_one_shard WORKDIR ARRAY MERGE TASK SECONDS: the held jobs of a
+# `tinsmith slurm --sbatch-args=--hold` released after TASK's store path is
+# taken by a folder holding a foreign file (tinsmith tile will not replace
+# it), then waited for: the merge at most SECONDS, the array 30 s more (or
+# what is left of the budget). Sets merge_state and array_state.
+fail_one_shard() {
+  local dir="$1" array="$2" merge="$3" task="$4"
+  mkdir -p "$dir/shards/$task.3dtiles"
+  echo "not a tile store" >"$dir/shards/$task.3dtiles/notes.txt"
+  scontrol release "$array" && scontrol release "$merge" || fatal "scontrol release $array $merge"
+  merge_state=$(slurm_wait_job "$merge" "$(left "$5")")
+  array_state=$(slurm_wait_job "$array" "$(left 30)")
+}
+
+# expect_failed_shard WORKDIR ARRAY MERGE TASK OUTPUT: after fail_one_shard,
+# TASK alone FAILED, the merge was CANCELLED by its dependency and wrote no
+# store at OUTPUT, and the foreign file is untouched.
+expect_failed_shard() {
+  local dir="$1" array="$2" merge="$3" task="$4" output="$5" failed_list reason
+  failed_list=$(failed_tasks "$array")
+  expect "task $task FAILED and no other ($failed_list; array: $array_state)" test "$failed_list" = "$task"
+  reason=$(job_field "$merge" Reason)
+  expect "merge job $merge CANCELLED, DependencyNeverSatisfied ($merge_state, $reason)" \
+    test "$merge_state" = CANCELLED -a "$reason" = DependencyNeverSatisfied
+  expect "the cancelled merge wrote no store" test ! -e "$output"
+  expect "the foreign file is untouched" test -f "$dir/shards/$task.3dtiles/notes.txt"
+}
