@@ -113,9 +113,7 @@ if [ "$rc" -ne 0 ]; then
   show "$run.out" "$run.err"
   fatal "tinsmith slurm --submit (exit $rc)"
 fi
-array=$(json "$run.out" 'd["array"]')
-merge=$(json "$run.out" 'd["merge"]')
-tasks=$(json "$run.out" 'd["tasks"]')
+submission "$run.out"
 expect "--submit --json: the array holds the top and the $subtrees subtrees (tasks: $tasks)" \
   test "$tasks" = "$(seq -s ' ' 0 "$subtrees")"
 merge_state=$(slurm_wait_job "$merge" "$(left 240)")
@@ -159,8 +157,7 @@ if [ "$rc" -ne 0 ]; then
   show "$again.out" "$again.err"
   fatal "tinsmith slurm --submit --sbatch-args=--hold (exit $rc)"
 fi
-array=$(json "$again.out" 'd["array"]')
-merge=$(json "$again.out" 'd["merge"]')
+submission "$again.out"
 held=$(scontrol -o show job "$array" 2>/dev/null | grep -o 'Reason=[A-Za-z]*' | sort -u | paste -sd, -)
 expect "--sbatch-args=--hold reaches the array job $array ($held) and the merge job $merge ($(job_field "$merge" Reason))" \
   test "$held" = Reason=JobHeldUser -a "$(job_field "$merge" Reason)" = JobHeldUser
@@ -183,9 +180,7 @@ if [ "$rc" -ne 0 ]; then
   show "$again.out" "$again.err"
   fatal "tinsmith slurm --resume --submit (exit $rc)"
 fi
-array=$(json "$again.out" 'd["array"]')
-merge=$(json "$again.out" 'd["merge"]')
-tasks=$(json "$again.out" 'd["tasks"]')
+submission "$again.out"
 expect "--resume resubmitted task $victim alone (tasks: $tasks)" test "$tasks" = "$victim"
 merge_state=$(slurm_wait_job "$merge" "$(left 120)")
 array_state=$(slurm_wait_job "$array" "$(left 30)")
@@ -210,9 +205,7 @@ if [ "$rc" -ne 0 ]; then
   show "$again.out" "$again.err"
   fatal "tinsmith slurm --resume --submit with every shard done (exit $rc)"
 fi
-array=$(json "$again.out" 'd.get("array") or ""')
-merge=$(json "$again.out" 'd["merge"]')
-tasks=$(json "$again.out" 'd["tasks"]')
+submission "$again.out"
 dependency=$(job_field "$merge" Dependency)
 expect "--resume with every shard done: no tasks, no array, a merge with no dependency (tasks: '$tasks', array: '$array', $dependency)" \
   test -z "$tasks" -a -z "$array" -a "$dependency" = "(null)"

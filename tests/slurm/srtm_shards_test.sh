@@ -86,9 +86,7 @@ slurm_run() {
 t0=$(date +%s.%N)
 slurm_run --sbatch-args=--hold || { show "$run.out" "$run.err"; fatal "tinsmith slurm --submit --hold"; }
 phase "plan (tinsmith slurm)" "$t0"
-array=$(json "$run.out" 'd["array"]')
-merge=$(json "$run.out" 'd["merge"]')
-tasks=$(json "$run.out" 'd["tasks"]')
+submission "$run.out"
 expect "17 tasks: the top and the $subtrees subtrees ($tasks)" test "$tasks" = "$(seq -s ' ' 0 "$subtrees")"
 t0=$(date +%s.%N)
 fail_one_shard "$run" "$array" "$merge" "$victim" 300
@@ -101,9 +99,7 @@ expect "the $subtrees other shards left their stores ($kept)" test "$kept" -eq "
 rm -rf "${run:?}/shards/$victim.3dtiles"
 t0=$(date +%s.%N)
 slurm_run --resume || { show "$run.out" "$run.err"; fatal "tinsmith slurm --resume --submit"; }
-array=$(json "$run.out" 'd["array"]')
-merge=$(json "$run.out" 'd["merge"]')
-tasks=$(json "$run.out" 'd["tasks"]')
+submission "$run.out"
 expect "--resume resubmitted task $victim alone (tasks: $tasks)" test "$tasks" = "$victim"
 merge_state=$(slurm_wait_job "$merge" "$(left 120)")
 array_state=$(slurm_wait_job "$array" "$(left 30)")

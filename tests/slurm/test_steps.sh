@@ -76,6 +76,15 @@ same_keys() {
   return 1
 }
 
+# submission FILE: the jobs of a `tinsmith slurm --submit --json` (its stdout
+# in FILE): sets array (empty when no shard was submitted), merge and tasks
+# (the array's task ids, space-separated).
+submission() {
+  array=$(json "$1" 'd.get("array") or ""')
+  merge=$(json "$1" 'd["merge"]')
+  tasks=$(json "$1" 'd["tasks"]')
+}
+
 # task_field JOB TASK FIELD: a field of one array task in scontrol's view
 task_field() {
   scontrol -o show job "$1" 2>/dev/null | awk -v t="ArrayTaskId=$2" -v f="$3=" '

@@ -24,6 +24,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// `tinsmith tin` of a synthetic hill at UTM 12N into `tin`; `grid` gives its
+/// nx, ny and spacing (and any other key the generator takes, e.g. noise).
+CommandResult makeHillTin(const fs::path& tin, const std::string& grid) {
+  return runTinsmith(
+      "tin --points 'synthetic:grid?" + grid +
+      "&x0=430000&y0=4515000&surface=hill&z0=1600&scale=80' --crs EPSG:26912 -q -o " +
+      tin.string());
+}
+
 /// Runs every task of `workdir`'s shard.sh, then its merge.sh, as Slurm would.
 void runAsSlurmWould(const fs::path& workdir, int tasks) {
   for (int k = 0; k < tasks; ++k) {
@@ -45,11 +54,7 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   // 1.2 km × 0.4 km: the square's north half holds no terrain, so 8 of the
   // 16 subtrees at zoom 2 are not in the pyramid.
   const fs::path tin = dir / "site.tin";
-  ASSERT_EQ(runTinsmith("tin --points 'synthetic:grid?nx=121&ny=41&spacing=10&x0=430000&y0=4515000"
-                        "&surface=hill&z0=1600&scale=80&noise=0.5' --crs EPSG:26912 -q -o " +
-                        tin.string())
-                .exitCode,
-            0);
+  ASSERT_EQ(makeHillTin(tin, "nx=121&ny=41&spacing=10&noise=0.5").exitCode, 0);
   const std::string options = " --tolerance 0.2 --max-triangles 512";
   ASSERT_EQ(
       runTinsmith("tile " + tin.string() + options + " -q -o " + (dir / "one.3dtiles").string())
@@ -121,11 +126,7 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
 TEST(SlurmCli, ASubtreeOutsideThePyramidIsAnErrorUnlessEmptyIsOk) {
   const fs::path dir = scratchDir("slurm-empty-ok");
   const fs::path tin = dir / "site.tin";
-  ASSERT_EQ(runTinsmith("tin --points 'synthetic:grid?nx=121&ny=41&spacing=10&x0=430000"
-                        "&y0=4515000&surface=hill&z0=1600&scale=80' --crs EPSG:26912 -q -o " +
-                        tin.string())
-                .exitCode,
-            0);
+  ASSERT_EQ(makeHillTin(tin, "nx=121&ny=41&spacing=10").exitCode, 0);
   // 2/3/3 lies in the square's north half, where the TIN is not.
   const std::string tile = "tile " + tin.string() +
                            " --tolerance 0.2 --max-triangles 512 --subtree 2/3/3 -o " +
@@ -146,11 +147,7 @@ TEST(SlurmCli, APlanningCutShortIsPlannedAgainByTheRerun) {
   const fs::path dir = scratchDir("slurm-killed");
   // 360 k vertices: the planning takes a second or more, time for the kill.
   const fs::path tin = dir / "big.tin";
-  ASSERT_EQ(runTinsmith("tin --points 'synthetic:grid?nx=600&ny=600&spacing=2&x0=430000&y0=4515000"
-                        "&surface=hill&z0=1600&scale=80&noise=0.5' --crs EPSG:26912 -q -o " +
-                        tin.string())
-                .exitCode,
-            0);
+  ASSERT_EQ(makeHillTin(tin, "nx=600&ny=600&spacing=2&noise=0.5").exitCode, 0);
   const fs::path work = dir / "work";
   const std::string slurm = std::string(TINSMITH_BINARY) + " slurm " + tin.string() +
                             " --tolerance 0.2 --shard-zoom 1 --threads 1 -q --workdir " +
