@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
@@ -298,8 +299,9 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
     throw usageError("max_triangles must be at least 64 (got " +
                      std::to_string(options_.maxTriangles) + ")");
   }
-  // (Part of a TIN, for a region, may hold no triangle: the region's tiles are empty.)
-  if ((tin.triangles.empty() && !options_.region) || tin.vertices.size() < 3) {
+  // (Part of a TIN, for a region, may hold no triangle and no vertex: the
+  // region's tiles are empty.)
+  if (!options_.region && (tin.triangles.empty() || tin.vertices.size() < 3)) {
     throw inputError("the TIN has no triangles to tile", {}, "build it with tinsmith tin first");
   }
   const TilerPlan* plan = options_.plan.get();
@@ -323,6 +325,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   while (2.0 * std::pow(4.0, d + 2) <= static_cast<double>(options_.maxTriangles) / 2) ++d;
   levelsPerTile_ = std::max(d, 1);
   if (options_.region) within_ = tilerReadRegion(*options_.region);
+  const Rect dataBox = options_.region ? within_ : extent;  // holds the data, if it has no box
   FitData data = fitData(tin, plan, within_);
   data_ = std::move(data.all);
   tileFitData_ = std::move(data.tileFit);
@@ -331,7 +334,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   // The grids only speed up finding the data in a square (what is found is
   // put in the data's order): over the data's own box.
   auto gridOf = [&](const std::vector<Point3>& points) {
-    const Rect box = points.empty() ? extent : boundsOf(points);
+    const Rect box = points.empty() ? dataBox : boundsOf(points);
     CellGrid grid(box.x0, box.y0, box.x1, box.y1,
                   CellGrid::cellFor(box.width(), box.height(), points.size() / 4 + 1, 1e-9));
     grid.build(points.size(), [&](std::size_t i, auto&& emit) {
@@ -357,14 +360,34 @@ Rect tilerReadRegion(const Rect& region) {
   return {region.x0 - grow, region.y0 - grow, region.x1 + grow, region.y1 + grow};
 }
 
-TilerPlan Tiler::plan() const {
+Rect tilerVertexRegion(const TilerPlan& plan, const Rect& region) {
+  const Rect read = tilerReadRegion(region);
+  const double finer = std::ldexp(plan.geometry.size(), -(plan.cornerZoom + 1));
+  const double grow = kOffTinReach * std::min(region.width(), finer);
+  return {read.x0 - grow, read.y0 - grow, read.x1 + grow, read.y1 + grow};
+}
+
+TilerPlan Tiler::plan(int cornerZoom) const {
   if (options_.plan) return *options_.plan;
+  if (cornerZoom > kMaxCornerZoom)
+    throw internalError("Tiler::plan: corners to zoom " + std::to_string(cornerZoom) +
+                        ", more than " + std::to_string(kMaxCornerZoom));
   TilerPlan p;
   p.geometry = geometry_;
   p.finestZoom = finestZoom_;
   p.fitSpacing = fitSpacing_;
   p.tileFitAllData = tileFitAllData_;
   for (int z = 0; z <= finestZoom_; ++z) p.zoomLines.push_back(simplifiedLines(z));
+  p.cornerZoom = std::max(cornerZoom, -1);
+  for (int z = 0; z <= p.cornerZoom; ++z) {
+    const std::uint32_t lines = (1U << z) + 1;
+    for (std::uint32_t row = 0; row < lines; ++row) {
+      for (std::uint32_t column = 0; column < lines; ++column) {
+        if (index_.z({geometry_.lineX(z, column), geometry_.lineY(z, row)})) continue;
+        p.offTinCorners.push_back({z, row, column, offTinZ(z, column, row)});
+      }
+    }
+  }
   return p;
 }
 
@@ -516,11 +539,31 @@ double Tiler::fitZ(const fit::MultilevelFit* fit, Point2 p) const {
   return index_.z(p).value_or(0.0);
 }
 
-double Tiler::offTinZ(Point2 p, const Rect& rect) const {
-  // The nearest TIN vertex's z (the lowest index among equally near ones):
-  // the same in every tile that holds p.
+double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
+  const TilerPlan* plan = options_.plan.get();
+  if (plan && z <= plan->cornerZoom) {
+    const auto key = [](const TilerPlan::OffTinCorner& c) {
+      return std::tuple(c.zoom, std::uint64_t{c.row}, std::uint64_t{c.column});
+    };
+    const TilerPlan::OffTinCorner wanted{z, static_cast<std::uint32_t>(row),
+                                         static_cast<std::uint32_t>(column), 0.0};
+    const auto& corners = plan->offTinCorners;
+    const auto found = std::lower_bound(
+        corners.begin(), corners.end(), wanted,
+        [&key](const auto& a, const auto& b) { return key(a) < key(b); });
+    if (found == corners.end() || key(*found) != key(wanted))
+      throw internalError("Tiler: the plan has no z for the corner off the TIN at zoom " +
+                          std::to_string(z) + ", row " + std::to_string(row) + ", column " +
+                          std::to_string(column));
+    return found->z;
+  }
+  // The nearest TIN vertex's z (the lowest index among equally near ones),
+  // looked for in boxes that grow with the zoom's tile width: the same in
+  // every tile that holds the corner.
+  const Point2 p{geometry_.lineX(z, column), geometry_.lineY(z, row)};
+  const double width = std::ldexp(geometry_.size(), -z);
   std::vector<std::uint32_t> found;
-  for (double r = rect.width() / 64; r <= 4 * rect.width(); r *= 2) {
+  for (double r = width / 64; r <= kOffTinReach * width; r *= 2) {
     index_.verticesIn({p.x - r, p.y - r, p.x + r, p.y + r}, found);
     if (found.empty()) continue;
     std::uint32_t best = found.front();
@@ -653,7 +696,9 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
         // four tiles, whose sections reach it in different arithmetic),
         // else — off the TIN — the nearest TIN vertex's z.
         const auto z = index_.z(sp.p.xy());
-        must.back().p.z = z ? *z : offTinZ(sp.p.xy(), rect);
+        must.back().p.z = z ? *z
+                            : offTinZ(id.z, id.x + (sp.p.x == rect.x1 ? 1U : 0U),
+                                      id.y + (sp.p.y == rect.y1 ? 1U : 0U));
       }
     }
     auto& out = sideLines[k];

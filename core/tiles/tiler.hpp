@@ -80,12 +80,33 @@ struct TilerPlan {
   /// them to its tile sides. Simplifying keeps every chord on the TIN, which
   /// takes the TIN along the whole line.
   std::vector<std::vector<TerrainLine>> zoomLines;
+  /// The z of every tile corner off the TIN (in no triangle) at the zooms
+  /// to cornerZoom (−1: none), as the whole TIN gives it (Tiler::offTinZ): a
+  /// Tiler with a region takes them from here, and need then hold the TIN's
+  /// vertices around its region only as far as the finer zooms' corners
+  /// look (tilerVertexRegion).
+  struct OffTinCorner {
+    std::int32_t zoom = 0;
+    std::uint32_t row = 0, column = 0;  ///< its grid lines: lineY(zoom, row), lineX(zoom, column)
+    double z = 0;
+  };
+  int cornerZoom = -1;
+  std::vector<OffTinCorner> offTinCorners;  ///< by zoom, row, column
 };
 
 /// The square a Tiler with a region must read the TIN in: `region` grown by
 /// far more than a tile side's margin lines (which sections sample just
 /// outside a tile) and any rounding of the tile squares.
 Rect tilerReadRegion(const Rect& region);
+/// How far, in tile widths, a tile corner off the TIN looks for its nearest
+/// TIN vertex (whose z it takes).
+inline constexpr double kOffTinReach = 4;
+/// The deepest zoom TilerPlan::offTinCorners may go to (4^10 corners).
+inline constexpr int kMaxCornerZoom = 10;
+/// The box a Tiler with `plan` and `region` (a tile's square) must hold
+/// every TIN vertex of: the region grown by kOffTinReach tile widths of the
+/// coarsest zoom in it whose corners the plan does not hold.
+Rect tilerVertexRegion(const TilerPlan& plan, const Rect& region);
 
 struct TilerOptions {
   double tolerance = 1.0;            ///< metres; what the finest zoom meets
@@ -118,10 +139,11 @@ struct TilerOptions {
   /// are taken instead of found here. Not with `fixed`.
   std::shared_ptr<const TilerPlan> plan;
   /// With a plan: every tile asked for lies in this square (a shard's
-  /// subtree). The TIN must then hold every vertex, but need hold only the
-  /// triangles whose boxes meet tilerReadRegion(region), and the constrained
-  /// edges at their vertices (ingest::readTinFilePart): the fit data, the
-  /// index and the lines are those of the square, not of the whole TIN.
+  /// subtree). The TIN need then hold only the triangles and the constrained
+  /// edges whose boxes meet tilerReadRegion(region), the vertices they use
+  /// and those in tilerVertexRegion(region), in the whole TIN's order
+  /// (ingest::readTinFilePart): the fit data, the index and the lines are
+  /// those of the square, not of the whole TIN.
   std::optional<Rect> region;
 };
 
@@ -198,9 +220,10 @@ class Tiler {
   /// cannot choose (quantized-mesh's 0..32767 over the tile).
   [[nodiscard]] TileSurface buildTile(const TileId& id, double encodingAllowance = 0.0) const;
   /// What tiles of this pyramid need of the whole TIN, for Tilers that see
-  /// only part of it (TilerOptions::plan and region). Simplifies the lines
-  /// for every zoom to the finest: call it once.
-  [[nodiscard]] TilerPlan plan() const;
+  /// only part of it (TilerOptions::plan and region), with the off-TIN
+  /// corners of the zooms to `cornerZoom` (at most kMaxCornerZoom; −1: none).
+  /// Simplifies the lines for every zoom to the finest: call it once.
+  [[nodiscard]] TilerPlan plan(int cornerZoom = -1) const;
 
  private:
   struct Zoom;
@@ -222,8 +245,9 @@ class Tiler {
                                                           double tolerance) const;
   /// The fit's z at p (clamped into its square), or the TIN's without a fit.
   [[nodiscard]] double fitZ(const fit::MultilevelFit* fit, Point2 p) const;
-  /// A z for a point off the TIN that every tile holding it agrees on.
-  [[nodiscard]] double offTinZ(Point2 p, const Rect& rect) const;
+  /// A z for a tile corner of zoom z off the TIN that every tile holding it
+  /// agrees on: the nearest TIN vertex's (the plan's, to its cornerZoom).
+  [[nodiscard]] double offTinZ(int z, std::uint64_t column, std::uint64_t row) const;
   [[nodiscard]] TileInput tileInput(const TileId& id, const Zoom& zd,
                                     const fit::MultilevelFit* fit) const;
   [[nodiscard]] TileSurface triangulateTile(const TileId& id, const Rect& rect,

@@ -75,9 +75,9 @@ struct TileJobOptions {
   /// made of (with the options it was made with).
   std::shared_ptr<const TilingPlan> plan;
   /// `tin` is only the part around the subtree (readTinFilePart of
-  /// tiles::tilerReadRegion of its square) of the TIN this names (TinPart's
-  /// fileCrc and counts): for a subtree below the root whose ancestors are
-  /// unchecked, with the plan of that TIN.
+  /// tiles::tilerReadRegion and tiles::tilerVertexRegion of its square) of
+  /// the TIN this names (TinPart's fileCrc and counts): for a subtree below
+  /// the root whose ancestors are unchecked, with the plan of that TIN.
   std::optional<TinIdentity> partOf;
 };
 

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "core/base/error.hpp"
 #include "ingest/base/atomic_file.hpp"
@@ -62,14 +63,15 @@ class Reader {
 
 }  // namespace
 
-TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options) {
+TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
+                          int cornerZoom) {
   TilingPlan plan;
   plan.tin = {crc32(encodeTin(tin)), tin.vertices.size(), tin.triangles.size()};
   plan.options.tolerance = options.tolerance;
   plan.options.maxTriangles = options.maxTriangles;
   plan.options.maxZoom = options.maxZoom;
   plan.options.lambdaFactor = options.lambdaFactor;
-  plan.tiler = tiles::Tiler(tin, options).plan();
+  plan.tiler = tiles::Tiler(tin, options).plan(cornerZoom);
   return plan;
 }
 
@@ -106,6 +108,14 @@ std::string encodeTilingPlan(const TilingPlan& plan) {
         w.put(p.z);
       }
     }
+  }
+  w.put(static_cast<std::int32_t>(t.cornerZoom));
+  w.put(static_cast<std::uint64_t>(t.offTinCorners.size()));
+  for (const auto& c : t.offTinCorners) {
+    w.put(static_cast<std::uint8_t>(c.zoom));
+    w.put(c.row);
+    w.put(c.column);
+    w.put(c.z);
   }
   w.put(crc32(w.out));
   return std::move(w.out);
@@ -158,6 +168,25 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
       }
     }
   }
+  t.cornerZoom = r.get<std::int32_t>();
+  if (t.cornerZoom < -1 || t.cornerZoom > tiles::kMaxCornerZoom)
+    r.bad("corners off the TIN to zoom " + std::to_string(t.cornerZoom));
+  t.offTinCorners.resize(r.count(17));
+  for (auto& c : t.offTinCorners) {
+    c.zoom = r.get<std::uint8_t>();
+    c.row = r.get<std::uint32_t>();
+    c.column = r.get<std::uint32_t>();
+    c.z = r.get<double>();
+    const auto lines = (std::uint64_t{1} << std::min(c.zoom, 31)) + 1;
+    if (c.zoom > t.cornerZoom || c.row >= lines || c.column >= lines)
+      r.bad("a corner off the TIN outside the planned zooms");
+  }
+  const auto key = [](const tiles::TilerPlan::OffTinCorner& c) {
+    return std::tuple(c.zoom, c.row, c.column);
+  };
+  for (std::size_t k = 1; k < t.offTinCorners.size(); ++k)
+    if (!(key(t.offTinCorners[k - 1]) < key(t.offTinCorners[k])))
+      r.bad("the corners off the TIN are not in order");
   if (r.at() != body.size()) r.bad("bytes left over");
   return plan;
 }

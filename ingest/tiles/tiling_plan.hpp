@@ -12,6 +12,8 @@
 //   fit: f64 spacing, u8 tile fits take all data
 //   u32 zooms, per zoom u64 lines, per line u8 kind, u8 ring, u8 closed,
 //     u64 n, n × (f64 x, y, z)
+//   corners off the TIN: i32 cornerZoom (−1: none), u64 n,
+//     n × (u8 zoom, u32 row, u32 column, f64 z), by zoom, row, column
 //   u32 CRC-32 of everything before it
 #pragma once
 
@@ -25,7 +27,7 @@
 
 namespace tinsmith::ingest {
 
-inline constexpr std::uint32_t kTilingPlanVersion = 1;
+inline constexpr std::uint32_t kTilingPlanVersion = 2;
 
 /// Which TIN a plan (or a tile store's build record) is of.
 struct TinIdentity {
@@ -43,8 +45,11 @@ struct TilingPlan {
 };
 
 /// The plan of `tin` (the whole of it) for tiles with these options: runs
-/// the planning (tiles::Tiler::plan).
-TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options);
+/// the planning (tiles::Tiler::plan), with the corners off the TIN to
+/// `cornerZoom` (−1: none; a shard of zoom s reads vertices around its
+/// square as far as 4 tile widths of zoom cornerZoom + 1, if finer than s).
+TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
+                          int cornerZoom = -1);
 
 std::string encodeTilingPlan(const TilingPlan& plan);
 /// Throws inputError naming `name` for bytes that are not a whole plan of

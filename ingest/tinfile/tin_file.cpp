@@ -75,15 +75,29 @@ struct MeshSource : MeshView {
   [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const { return edges; }
 };
 
+std::size_t blockCount(std::size_t records, std::size_t perBlock) {
+  return (records + perBlock - 1) / perBlock;
+}
+
+constexpr std::size_t kBlockEntrySize = 4 * 8 + 4;
+
+std::uint64_t blockIndexSize(std::size_t vertices, std::size_t triangles, std::size_t edges,
+                             std::size_t perBlock) {
+  const std::size_t blocks = blockCount(vertices, perBlock) + blockCount(triangles, perBlock) +
+                             blockCount(edges, perBlock);
+  return 4 + 4 + 3 * 8 + kBlockEntrySize * blocks + 4;
+}
+
 template <class Source>
-std::uint64_t payloadSize(const Source& tin) {
+std::uint64_t payloadSize(const Source& tin, std::size_t perBlock = kTinBlockRecords) {
   std::uint64_t size = 4 + tin.crs().size();
   size += 8 + 24ull * tin.points().size();
   size += 8 + 12ull * tin.triangleCount();
   size += 8;
   for (const auto& f : tin.features()) size += 1 + 4 + f.source.size();
   size += 8 + 12ull * tin.constrainedEdges().size();
-  return size;
+  return size + blockIndexSize(tin.points().size(), tin.triangleCount(),
+                               tin.constrainedEdges().size(), perBlock);
 }
 
 // Buffers payload bytes, keeps the running CRC, and hands full buffers to a sink.
@@ -142,8 +156,10 @@ class PayloadWriter {
   std::uint32_t crc_ = 0;
 };
 
-template <class Source, class Sink>
-std::uint32_t writePayload(const Source& tin, Sink& sink, bool overlapChecksum = false) {
+/// `blockIndex()` gives the encoded block index, asked for after the sections.
+template <class Source, class BlockIndexBytes, class Sink>
+std::uint32_t writePayload(const Source& tin, BlockIndexBytes&& blockIndex, Sink& sink,
+                           bool overlapChecksum = false) {
   PayloadWriter<Sink> w(sink, overlapChecksum);
   w.putString(tin.crs());
   w.put(static_cast<std::uint64_t>(tin.points().size()));
@@ -176,6 +192,8 @@ std::uint32_t writePayload(const Source& tin, Sink& sink, bool overlapChecksum =
     w.put(e.b);
     w.put(e.feature);
   }
+  const std::string index = blockIndex();
+  w.append(reinterpret_cast<const std::uint8_t*>(index.data()), index.size());
   w.flush();
   return w.crc();
 }
@@ -189,6 +207,133 @@ std::array<std::uint8_t, kTinHeaderSize> makeHeader(std::uint64_t payload, std::
   putLe(h.data() + 24, crc);
   putLe(h.data() + 28, crc32({h.data(), 28}));
   return h;
+}
+
+// The block index (the file's layout above): per section, the box and the
+// CRC of each block of kTinBlockRecords records.
+struct BlockEntry {
+  tiles::Rect box;
+  std::uint32_t crc = 0;
+};
+enum BlockSection : std::size_t { kVertexBlocks, kTriangleBlocks, kEdgeBlocks };
+constexpr std::array<const char*, 3> kBlockSectionNames = {"vertex", "triangle",
+                                                           "constrained-edge"};
+struct BlockIndex {
+  std::uint32_t recordsPerBlock = kTinBlockRecords;
+  std::uint32_t frameCrc = 0;
+  std::array<std::vector<BlockEntry>, 3> sections;
+};
+
+void include(tiles::Rect& box, const Point3& p) {
+  box.x0 = std::min(box.x0, p.x);
+  box.y0 = std::min(box.y0, p.y);
+  box.x1 = std::max(box.x1, p.x);
+  box.y1 = std::max(box.y1, p.y);
+}
+
+/// Appends little-endian values to a byte string.
+class ByteString {
+ public:
+  template <class T>
+  void put(T value) {
+    std::array<std::uint8_t, sizeof(T)> b{};
+    putLe(b.data(), value);
+    bytes.append(reinterpret_cast<const char*>(b.data()), b.size());
+  }
+  void putString(const std::string& text) {
+    put(static_cast<std::uint32_t>(text.size()));
+    bytes += text;
+  }
+  std::string bytes;
+};
+
+template <class Source>
+BlockIndex makeBlockIndex(const Source& tin, std::uint32_t perBlock = kTinBlockRecords) {
+  BlockIndex index;
+  index.recordsPerBlock = perBlock;
+  ByteString frame;
+  frame.putString(tin.crs());
+  frame.put(static_cast<std::uint64_t>(tin.points().size()));
+  frame.put(static_cast<std::uint64_t>(tin.triangleCount()));
+  frame.put(static_cast<std::uint64_t>(tin.features().size()));
+  for (const auto& f : tin.features()) {
+    frame.put(static_cast<std::uint8_t>(f.kind));
+    frame.putString(f.source);
+  }
+  frame.put(static_cast<std::uint64_t>(tin.constrainedEdges().size()));
+  index.frameCrc = crc32(frame.bytes);
+
+  const auto& points = tin.points();
+  // Each block's records are encoded as the file holds them, for its CRC.
+  auto blocks = [perBlock = std::size_t{perBlock}](std::size_t records, auto&& encode,
+                                                  auto&& boxOf) {
+    std::vector<BlockEntry> out(blockCount(records, perBlock));
+    ByteString bytes;
+    for (std::size_t b = 0; b < out.size(); ++b) {
+      bytes.bytes.clear();
+      tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+      const std::size_t end = std::min(records, (b + 1) * perBlock);
+      for (std::size_t k = b * perBlock; k < end; ++k) {
+        encode(k, bytes);
+        boxOf(k, box);
+      }
+      out[b] = {box, crc32(bytes.bytes)};
+    }
+    return out;
+  };
+  index.sections[kVertexBlocks] = blocks(
+      points.size(),
+      [&](std::size_t k, ByteString& out) {
+        out.put(points[k].x);
+        out.put(points[k].y);
+        out.put(points[k].z);
+      },
+      [&](std::size_t k, tiles::Rect& box) { include(box, points[k]); });
+  const std::span<const std::uint32_t> corners = tin.cornerIndices();
+  index.sections[kTriangleBlocks] = blocks(
+      tin.triangleCount(),
+      [&](std::size_t k, ByteString& out) {
+        for (std::size_t i = 0; i < 3; ++i) out.put(corners[3 * k + i]);
+      },
+      [&](std::size_t k, tiles::Rect& box) {
+        for (std::size_t i = 0; i < 3; ++i) include(box, points[corners[3 * k + i]]);
+      });
+  const auto& edges = tin.constrainedEdges();
+  index.sections[kEdgeBlocks] = blocks(
+      edges.size(),
+      [&](std::size_t k, ByteString& out) {
+        out.put(edges[k].a);
+        out.put(edges[k].b);
+        out.put(edges[k].feature);
+      },
+      [&](std::size_t k, tiles::Rect& box) {
+        include(box, points[edges[k].a]);
+        include(box, points[edges[k].b]);
+      });
+  return index;
+}
+
+std::string encodeBlockIndex(const BlockIndex& index) {
+  ByteString out;
+  out.put(index.recordsPerBlock);
+  out.put(index.frameCrc);
+  for (const auto& section : index.sections) {
+    out.put(static_cast<std::uint64_t>(section.size()));
+    for (const auto& block : section) {
+      out.put(block.box.x0);
+      out.put(block.box.y0);
+      out.put(block.box.x1);
+      out.put(block.box.y1);
+      out.put(block.crc);
+    }
+  }
+  out.put(crc32(out.bytes));
+  return std::move(out.bytes);
+}
+
+[[noreturn]] void corruptFile(const std::string& what, const std::string& name) {
+  throw inputError("corrupt .tin file: " + what, fileLocation(name),
+                   "the file is damaged; write it again with `tinsmith tin`");
 }
 
 // Bounds-checked reading of the payload: every count is checked against the
@@ -219,12 +364,16 @@ class PayloadReader {
               ") does not fit in the file");
     return static_cast<std::size_t>(n);
   }
+  /// Steps over `count` records of `recordSize` bytes (a count getCount checked).
+  const std::uint8_t* skip(std::size_t count, std::size_t recordSize, const char* what) {
+    const std::uint8_t* at = p_;
+    need(count * recordSize, what);
+    p_ += count * recordSize;
+    return at;
+  }
   [[nodiscard]] std::size_t remaining() const { return static_cast<std::size_t>(end_ - p_); }
   [[nodiscard]] const std::uint8_t* position() const { return p_; }
-  [[noreturn]] void corrupt(const std::string& what) const {
-    throw inputError("corrupt .tin file: " + what, fileLocation(name_),
-                     "the file is damaged; write it again with `tinsmith tin`");
-  }
+  [[noreturn]] void corrupt(const std::string& what) const { corruptFile(what, name_); }
 
  private:
   void need(std::size_t n, const char* what) const {
@@ -257,6 +406,30 @@ std::uint32_t crc32(std::string_view bytes, std::uint32_t crc) {
   return crc32({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, crc);
 }
 
+namespace {
+
+// Polynomials modulo the CRC's, in its reflected bit order: bit 31 is x^0.
+std::uint32_t multiplyModCrc(std::uint32_t a, std::uint32_t b) {
+  std::uint32_t product = 0;
+  for (int i = 31; i >= 0; --i) {
+    if ((a >> i) & 1u) product ^= b;
+    b = (b & 1u) ? (b >> 1) ^ 0xEDB88320u : b >> 1;  // b · x
+  }
+  return product;
+}
+
+}  // namespace
+
+std::uint32_t crc32Combine(std::uint32_t first, std::uint32_t second, std::uint64_t secondLength) {
+  // Appending n bytes multiplies the first CRC by x^(8n): x^8, squared step by step.
+  std::uint32_t shift = 1u << 31;  // x^0
+  for (std::uint32_t power = 1u << 23; secondLength > 0; secondLength >>= 1) {
+    if (secondLength & 1) shift = multiplyModCrc(power, shift);
+    power = multiplyModCrc(power, power);
+  }
+  return multiplyModCrc(shift, first) ^ second;
+}
+
 std::string_view featureKindName(FeatureKind kind) {
   switch (kind) {
     case FeatureKind::Other: return "other";
@@ -287,8 +460,7 @@ template <class Source>
 void checkContract(const Source& tin, const std::string& name, bool forWriting) {
   auto bad = [&](const std::string& what) {
     if (forWriting) throw internalError("TinData for '" + name + "' is malformed: " + what);
-    throw inputError("corrupt .tin file: " + what, fileLocation(name),
-                     "the file is damaged; write it again with `tinsmith tin`");
+    corruptFile(what, name);
   };
   const std::size_t nv = tin.points().size();
   if (nv > 0xFFFFFFFFull) bad("more than 2^32 - 1 vertices");
@@ -326,17 +498,19 @@ void checkTinContract(const TinData& tin, const std::string& name, bool forWriti
   checkContract(TinSource{{tin}}, name, forWriting);
 }
 
-std::string encodeTin(const TinData& tin) {
+std::string encodeTin(const TinData& tin, std::uint32_t recordsPerBlock) {
+  if (recordsPerBlock == 0) throw internalError("encodeTin: blocks of 0 records");
   checkTinContract(tin, "(memory)", true);
   std::string out;
   const TinSource source{{tin}};
-  const std::uint64_t size = payloadSize(source);
+  const std::uint64_t size = payloadSize(source, recordsPerBlock);
   out.reserve(kTinHeaderSize + size);
   out.resize(kTinHeaderSize);
   auto sink = [&out](const std::uint8_t* data, std::size_t n) {
     out.append(reinterpret_cast<const char*>(data), n);
   };
-  const std::uint32_t crc = writePayload(source, sink);
+  const std::uint32_t crc = writePayload(
+      source, [&] { return encodeBlockIndex(makeBlockIndex(source, recordsPerBlock)); }, sink);
   const auto header = makeHeader(size, crc);
   std::memcpy(out.data(), header.data(), header.size());
   return out;
@@ -347,12 +521,17 @@ namespace {
 template <class Source>
 void writeFile(const std::filesystem::path& path, const Source& tin, unsigned threads) {
   checkContract(tin, path.string(), true);
+  // With threads, the block index is made while the sections are written.
+  const bool overlap = resolveThreads(threads) > 1;
+  auto blockIndex = std::async(overlap ? std::launch::async : std::launch::deferred,
+                               [&tin] { return encodeBlockIndex(makeBlockIndex(tin)); });
   AtomicFile file(path);
   const std::uint64_t size = payloadSize(tin);
   const auto placeholder = makeHeader(size, 0);
   file.write(placeholder.data(), placeholder.size());
   auto sink = [&file](const std::uint8_t* data, std::size_t n) { file.write(data, n); };
-  const std::uint32_t crc = writePayload(tin, sink, resolveThreads(threads) > 1);
+  const std::uint32_t crc = writePayload(
+      tin, [&blockIndex] { return blockIndex.get(); }, sink, overlap);
   const auto header = makeHeader(size, crc);
   file.writeAt(0, header.data(), header.size());
   file.commit();
@@ -370,10 +549,16 @@ void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned 
 
 namespace {
 
-/// Checks the header of a .tin file's bytes (all of them): the payload's span
-/// after it.
-std::span<const std::uint8_t> checkedPayload(std::span<const std::uint8_t> bytes,
-                                             const std::string& name) {
+/// A .tin file's payload, after its header was checked.
+struct CheckedPayload {
+  std::span<const std::uint8_t> bytes;
+  std::uint32_t version = 0;
+  std::uint32_t crc = 0;      ///< the header's payload CRC
+  std::uint32_t fileCrc = 0;  ///< CRC-32 of the whole file, from the header alone
+};
+
+/// Checks the header of a .tin file's bytes (all of them).
+CheckedPayload checkedPayload(std::span<const std::uint8_t> bytes, const std::string& name) {
   const std::uint8_t* data = bytes.data();
   if (bytes.size() < kMagic.size() || std::memcmp(data, kMagic.data(), kMagic.size()) != 0)
     throw inputError("not a .tin file (wrong magic bytes)", fileLocation(name),
@@ -385,14 +570,13 @@ std::span<const std::uint8_t> checkedPayload(std::span<const std::uint8_t> bytes
                      "the file is incomplete; write it again with `tinsmith tin`");
   const auto version = getLe<std::uint32_t>(data + 8);
   if (getLe<std::uint32_t>(data + 28) != crc32({data, 28}))
-    throw inputError("corrupt .tin file: the header checksum does not match", fileLocation(name),
-                     "the file is damaged; write it again with `tinsmith tin`");
+    corruptFile("the header checksum does not match", name);
   if (version > kTinFormatVersion)
     throw inputError(".tin format version " + std::to_string(version) +
                          " is newer than this tinsmith reads (version " +
                          std::to_string(kTinFormatVersion) + ")",
                      fileLocation(name), "use a newer tinsmith to read it");
-  if (version == 0) throw inputError("corrupt .tin file: format version 0", fileLocation(name));
+  if (version == 0) corruptFile("format version 0", name);
   const auto payload = getLe<std::uint64_t>(data + 16);
   const std::uint64_t have = bytes.size() - kTinHeaderSize;
   if (have < payload)
@@ -401,23 +585,26 @@ std::span<const std::uint8_t> checkedPayload(std::span<const std::uint8_t> bytes
                      fileLocation(name),
                      "the file is incomplete; write it again with `tinsmith tin`");
   if (have > payload)
-    throw inputError("corrupt .tin file: " + std::to_string(have - payload) +
-                         " unexpected bytes after the payload",
-                     fileLocation(name), "the file is damaged; write it again with `tinsmith tin`");
-  return {data + kTinHeaderSize, payload};
+    corruptFile(std::to_string(have - payload) + " unexpected bytes after the payload", name);
+  const auto crc = getLe<std::uint32_t>(data + 24);
+  return {{data + kTinHeaderSize, payload},
+          version,
+          crc,
+          crc32Combine(crc32({data, kTinHeaderSize}), crc, payload)};
 }
 
-[[noreturn]] void payloadChecksumMismatch(const std::string& name) {
-  throw inputError("corrupt .tin file: the payload checksum does not match", fileLocation(name),
-                   "the file is damaged; write it again with `tinsmith tin`");
+bool meetsRegion(const tiles::Rect& region, std::initializer_list<Point3> corners) {
+  return tiles::boundsOf(corners).overlaps(region);
 }
 
-/// Reads a payload's sections into `tin`: all of it, or with `region` every
-/// vertex and feature, the triangles whose boxes meet it and the constrained
-/// edges at their vertices. `pace()` runs every 65 536 records of the large
+/// Reads a payload's sections up to the block index into `tin`: all of it,
+/// or with `region` every vertex and feature, the triangles and the
+/// constrained edges whose boxes meet it (their vertices, in the file's
+/// numbering, go to `keep`). `pace()` runs every 65 536 records of the large
 /// sections. Returns the file's triangle count.
 template <class Pace>
-std::size_t readSections(PayloadReader& r, TinData& tin, const tiles::Rect* region, Pace&& pace) {
+std::size_t readSections(PayloadReader& r, TinData& tin, const tiles::Rect* region,
+                         std::vector<std::uint32_t>& keep, Pace&& pace) {
   tin.crs = r.getString("CRS text");
   tin.vertices.resize(r.getCount(24, "vertex"));
   for (std::size_t i = 0; i < tin.vertices.size(); ++i) {
@@ -429,7 +616,6 @@ std::size_t readSections(PayloadReader& r, TinData& tin, const tiles::Rect* regi
   }
   const std::size_t nv = tin.vertices.size();
   const std::size_t triangles = r.getCount(12, "triangle");
-  std::vector<char> used(region ? nv : 0, 0);
   if (!region) tin.triangles.reserve(triangles);
   for (std::size_t k = 0; k < triangles; ++k) {
     std::array<std::uint32_t, 3> t{};
@@ -442,11 +628,9 @@ std::size_t readSections(PayloadReader& r, TinData& tin, const tiles::Rect* regi
     if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
       r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
                 std::to_string(nv) + " vertices");
-    const std::array<Point3, 3> corners{tin.vertices[t[0]], tin.vertices[t[1]],
-                                        tin.vertices[t[2]]};
-    if (tiles::boundsOf(corners).overlaps(*region)) {
+    if (meetsRegion(*region, {tin.vertices[t[0]], tin.vertices[t[1]], tin.vertices[t[2]]})) {
       tin.triangles.push_back(t);
-      used[t[0]] = used[t[1]] = used[t[2]] = 1;
+      keep.insert(keep.end(), t.begin(), t.end());
     }
   }
   tin.features.resize(r.getCount(5, "feature"));
@@ -462,26 +646,73 @@ std::size_t readSections(PayloadReader& r, TinData& tin, const tiles::Rect* regi
     e.b = r.get<std::uint32_t>("constrained edges");
     e.feature = r.get<std::uint32_t>("constrained edges");
     if ((k & 0xFFFF) == 0) pace();
-    if (region && (e.a >= nv || e.b >= nv))
+    if (!region) {
+      tin.constrainedEdges.push_back(e);
+      continue;
+    }
+    if (e.a >= nv || e.b >= nv)
       r.corrupt("constrained edge " + std::to_string(k) + " refers to a vertex out of range");
-    if (!region || used[e.a] || used[e.b]) tin.constrainedEdges.push_back(e);
+    if (meetsRegion(*region, {tin.vertices[e.a], tin.vertices[e.b]})) {
+      tin.constrainedEdges.push_back(e);
+      keep.push_back(e.a);
+      keep.push_back(e.b);
+    }
   }
-  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
   return triangles;
+}
+
+/// Numbers a part's vertices anew: `keep` (the file's numbers, in any order,
+/// repeats allowed) in the file's order, with the triangles and edges, in
+/// the file's numbers, mapped onto them. `vertexAt(v)` gives vertex v.
+template <class VertexAt>
+void renumberPart(TinData& tin, std::vector<std::uint32_t> keep, VertexAt&& vertexAt) {
+  std::sort(keep.begin(), keep.end());
+  keep.erase(std::unique(keep.begin(), keep.end()), keep.end());
+  const auto local = [&keep](std::uint32_t v) {
+    return static_cast<std::uint32_t>(std::lower_bound(keep.begin(), keep.end(), v) - keep.begin());
+  };
+  for (auto& t : tin.triangles)
+    for (auto& v : t) v = local(v);
+  for (auto& e : tin.constrainedEdges) {
+    e.a = local(e.a);
+    e.b = local(e.b);
+  }
+  std::vector<Point3> vertices;
+  vertices.reserve(keep.size());
+  for (const std::uint32_t v : keep) vertices.push_back(vertexAt(v));
+  tin.vertices = std::move(vertices);
+}
+
+/// Checks what follows the sections: nothing in version 1; in version 2 the
+/// block index, which must be the one `tin` gives.
+void checkBlockIndex(const PayloadReader& r, const TinData& tin, std::uint32_t version) {
+  if (version < 2) {
+    if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+    return;
+  }
+  if (r.remaining() < 4) r.corrupt("it ends inside the block index");
+  const auto perBlock = getLe<std::uint32_t>(r.position());
+  if (perBlock == 0) r.corrupt("the block index has blocks of 0 records");
+  const std::string expected = encodeBlockIndex(makeBlockIndex(TinSource{{tin}}, perBlock));
+  if (r.remaining() != expected.size() ||
+      std::memcmp(r.position(), expected.data(), expected.size()) != 0)
+    r.corrupt("its block index does not match its sections");
 }
 
 }  // namespace
 
 TinData decodeTin(std::string_view bytes, const std::string& name) {
-  const std::span<const std::uint8_t> body =
+  const CheckedPayload payload =
       checkedPayload({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, name);
-  if (crc32(body) != getLe<std::uint32_t>(body.data() - kTinHeaderSize + 24))
-    payloadChecksumMismatch(name);
+  if (crc32(payload.bytes) != payload.crc)
+    corruptFile("the payload checksum does not match", name);
 
-  PayloadReader r(body.data(), body.size(), name);
+  PayloadReader r(payload.bytes.data(), payload.bytes.size(), name);
   TinData tin;
-  readSections(r, tin, nullptr, [] {});
+  std::vector<std::uint32_t> unused;
+  readSections(r, tin, nullptr, unused, [] {});
   checkTinContract(tin, name, false);
+  checkBlockIndex(r, tin, payload.version);
   return tin;
 }
 
@@ -517,7 +748,6 @@ class MappedFile {
         throw inputError("cannot map the .tin file into memory", fileLocation(name));
       }
       data_ = static_cast<const std::uint8_t*>(m);
-      ::madvise(m, size_, MADV_SEQUENTIAL);
     }
   }
   MappedFile(const MappedFile&) = delete;
@@ -527,6 +757,10 @@ class MappedFile {
     ::close(fd_);
   }
   [[nodiscard]] std::span<const std::uint8_t> bytes() const { return {data_, size_}; }
+  /// Tells the kernel the file will be read from start to end.
+  void readInOrder() const {
+    if (data_) ::madvise(const_cast<std::uint8_t*>(data_), size_, MADV_SEQUENTIAL);
+  }
   /// Gives back the pages wholly before `upTo`, which have been read: they
   /// stop counting in the process's memory (a second read maps them again).
   void release(const std::uint8_t* upTo) const {
@@ -540,6 +774,190 @@ class MappedFile {
   const std::uint8_t* data_ = nullptr;
   std::size_t size_ = 0;
 };
+
+/// A version 1 file's part: every section read through, the checksum
+/// following the reader a window at a time and what it has passed given
+/// back, so the file is never all in memory.
+TinPart readPartThrough(const MappedFile& file, const CheckedPayload& payload,
+                        const std::string& name, const tiles::Rect& region,
+                        const tiles::Rect& vertexRegion) {
+  file.readInOrder();
+  const std::span<const std::uint8_t> body = payload.bytes;
+  std::uint32_t crc = 0;
+  const std::uint8_t* checked = body.data();
+  const auto checkUpTo = [&](const std::uint8_t* to) {
+    crc = crc32({checked, static_cast<std::size_t>(to - checked)}, crc);
+    checked = to;
+    file.release(to);
+  };
+  constexpr std::ptrdiff_t kWindow = std::ptrdiff_t{8} << 20;
+  PayloadReader r(body.data(), body.size(), name);
+  const auto keepUp = [&] {
+    if (r.position() - checked >= kWindow) checkUpTo(r.position());
+  };
+
+  TinPart part;
+  std::vector<std::uint32_t> keep;
+  part.triangles = readSections(r, part.tin, &region, keep, keepUp);
+  if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
+  checkUpTo(body.data() + body.size());
+  if (crc != payload.crc) corruptFile("the payload checksum does not match", name);
+  part.bytesRead = kTinHeaderSize + body.size();
+  part.vertices = part.tin.vertices.size();
+  const std::vector<Point3> all = std::move(part.tin.vertices);
+  for (std::uint32_t v = 0; v < all.size(); ++v)
+    if (vertexRegion.contains(all[v].xy())) keep.push_back(v);
+  renumberPart(part.tin, std::move(keep), [&all](std::uint32_t v) { return all[v]; });
+  return part;
+}
+
+/// A version 2 file's part, through its block index: the frame (CRS, counts,
+/// features) and the index are read whole and checked, then only the blocks
+/// the part needs, each checked against its CRC.
+TinPart readPartByBlocks(const CheckedPayload& payload, const std::string& name,
+                         const tiles::Rect& region, const tiles::Rect& vertexRegion) {
+  PayloadReader r(payload.bytes.data(), payload.bytes.size(), name);
+  TinPart part;
+  TinData& tin = part.tin;
+  // The frame's pieces, each with its CRC continued from the last.
+  std::uint32_t frameCrc = 0;
+  const auto frameFrom = [&](const std::uint8_t* from) {
+    const std::span<const std::uint8_t> piece(from, static_cast<std::size_t>(r.position() - from));
+    frameCrc = crc32(piece, frameCrc);
+    part.bytesRead += piece.size();
+  };
+  const std::uint8_t* from = r.position();
+  tin.crs = r.getString("CRS text");
+  const std::size_t nv = r.getCount(24, "vertex");
+  frameFrom(from);
+  const std::uint8_t* vertexRecords = r.skip(nv, 24, "vertices");
+  from = r.position();
+  const std::size_t nt = r.getCount(12, "triangle");
+  frameFrom(from);
+  const std::uint8_t* triangleRecords = r.skip(nt, 12, "triangles");
+  from = r.position();
+  tin.features.resize(r.getCount(5, "feature"));
+  for (auto& f : tin.features) {
+    f.kind = static_cast<FeatureKind>(r.get<std::uint8_t>("features"));
+    f.source = r.getString("features");
+  }
+  const std::size_t ne = r.getCount(12, "constrained edge");
+  frameFrom(from);
+  const std::uint8_t* edgeRecords = r.skip(ne, 12, "constrained edges");
+
+  from = r.position();
+  BlockIndex index;
+  index.recordsPerBlock = r.get<std::uint32_t>("block index");
+  if (index.recordsPerBlock == 0) r.corrupt("the block index has blocks of 0 records");
+  index.frameCrc = r.get<std::uint32_t>("block index");
+  const std::size_t perBlock = index.recordsPerBlock;
+  const std::array<std::size_t, 3> records{nv, nt, ne};
+  for (std::size_t s = 0; s < 3; ++s) {
+    auto& blocks = index.sections[s];
+    blocks.resize(r.getCount(kBlockEntrySize, "block index"));
+    if (blocks.size() != blockCount(records[s], perBlock))
+      r.corrupt("the block index lists " + std::to_string(blocks.size()) + " " +
+                kBlockSectionNames[s] + " blocks for " + std::to_string(records[s]) + " records");
+    for (auto& b : blocks) {
+      b.box.x0 = r.get<double>("block index");
+      b.box.y0 = r.get<double>("block index");
+      b.box.x1 = r.get<double>("block index");
+      b.box.y1 = r.get<double>("block index");
+      b.crc = r.get<std::uint32_t>("block index");
+    }
+  }
+  const std::span<const std::uint8_t> indexBytes(from, static_cast<std::size_t>(r.position() - from));
+  if (r.get<std::uint32_t>("block index") != crc32(indexBytes))
+    r.corrupt("the block index checksum does not match");
+  if (r.remaining() != 0) r.corrupt("bytes left over after the block index");
+  if (frameCrc != index.frameCrc)
+    r.corrupt("the checksum of the CRS, the counts and the features does not match");
+  part.bytesRead += kTinHeaderSize + indexBytes.size() + 4;
+
+  const auto checkBlock = [&](BlockSection s, std::size_t b, const std::uint8_t* section,
+                              std::size_t recordSize) {
+    const std::size_t first = b * perBlock;
+    const std::span<const std::uint8_t> bytes(
+        section + first * recordSize, std::min(perBlock, records[s] - first) * recordSize);
+    if (crc32(bytes) != index.sections[s][b].crc)
+      r.corrupt(std::string(kBlockSectionNames[s]) + " block " + std::to_string(b) +
+                " does not match its checksum");
+    part.bytesRead += bytes.size();
+  };
+  std::vector<char> vertexBlockChecked(index.sections[kVertexBlocks].size(), 0);
+  const auto vertexAt = [&](std::uint32_t v) {
+    const std::size_t b = v / perBlock;
+    if (!vertexBlockChecked[b]) {
+      checkBlock(kVertexBlocks, b, vertexRecords, 24);
+      vertexBlockChecked[b] = 1;
+    }
+    const std::uint8_t* p = vertexRecords + std::size_t{24} * v;
+    return Point3{getLe<double>(p), getLe<double>(p + 8), getLe<double>(p + 16)};
+  };
+  const auto blocksMeeting = [&](BlockSection s, const tiles::Rect& box, auto&& each) {
+    const auto& blocks = index.sections[s];
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      if (!blocks[b].box.overlaps(box)) continue;
+      const std::size_t end = std::min(records[s], (b + 1) * perBlock);
+      each(b, b * perBlock, end);
+    }
+  };
+
+  // Whether records at these vertices may meet the region: the boxes of
+  // their vertices' blocks do (they hold their boxes), asked before the
+  // vertices' own blocks are read.
+  const auto mayMeet = [&](std::initializer_list<std::uint32_t> vertices) {
+    tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (const std::uint32_t v : vertices) {
+      const tiles::Rect& b = index.sections[kVertexBlocks][v / perBlock].box;
+      include(box, {b.x0, b.y0, 0.0});
+      include(box, {b.x1, b.y1, 0.0});
+    }
+    return box.overlaps(region);
+  };
+
+  std::vector<std::uint32_t> keep;
+  blocksMeeting(kTriangleBlocks, region, [&](std::size_t b, std::size_t first, std::size_t end) {
+    checkBlock(kTriangleBlocks, b, triangleRecords, 12);
+    for (std::size_t k = first; k < end; ++k) {
+      const std::uint8_t* p = triangleRecords + 12 * k;
+      const std::array<std::uint32_t, 3> t{getLe<std::uint32_t>(p), getLe<std::uint32_t>(p + 4),
+                                           getLe<std::uint32_t>(p + 8)};
+      if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
+        r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
+                  std::to_string(nv) + " vertices");
+      if (mayMeet({t[0], t[1], t[2]}) &&
+          meetsRegion(region, {vertexAt(t[0]), vertexAt(t[1]), vertexAt(t[2])})) {
+        tin.triangles.push_back(t);
+        keep.insert(keep.end(), t.begin(), t.end());
+      }
+    }
+  });
+  blocksMeeting(kEdgeBlocks, region, [&](std::size_t b, std::size_t first, std::size_t end) {
+    checkBlock(kEdgeBlocks, b, edgeRecords, 12);
+    for (std::size_t k = first; k < end; ++k) {
+      const std::uint8_t* p = edgeRecords + 12 * k;
+      const TinData::ConstrainedEdge e{getLe<std::uint32_t>(p), getLe<std::uint32_t>(p + 4),
+                                       getLe<std::uint32_t>(p + 8)};
+      if (e.a >= nv || e.b >= nv)
+        r.corrupt("constrained edge " + std::to_string(k) + " refers to a vertex out of range");
+      if (mayMeet({e.a, e.b}) && meetsRegion(region, {vertexAt(e.a), vertexAt(e.b)})) {
+        tin.constrainedEdges.push_back(e);
+        keep.push_back(e.a);
+        keep.push_back(e.b);
+      }
+    }
+  });
+  blocksMeeting(kVertexBlocks, vertexRegion, [&](std::size_t, std::size_t first, std::size_t end) {
+    for (std::size_t v = first; v < end; ++v)
+      if (vertexRegion.contains(vertexAt(static_cast<std::uint32_t>(v)).xy()))
+        keep.push_back(static_cast<std::uint32_t>(v));
+  });
+  renumberPart(tin, std::move(keep), vertexAt);
+  part.vertices = nv;
+  part.triangles = nt;
+  return part;
+}
 
 }  // namespace
 
@@ -559,35 +977,23 @@ TinData readTinFile(const std::filesystem::path& path) {
   return decodeTin(bytes, name);
 }
 
-TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region) {
+std::uint32_t tinFileVersion(const std::filesystem::path& path) {
   const std::string name = path.string();
   requireReadableFile(path, name);
   const MappedFile file(path, name);
-  const std::span<const std::uint8_t> body = checkedPayload(file.bytes(), name);
-  const std::uint8_t* header = file.bytes().data();
-  // The checksums follow the reader a window at a time, and what they have
-  // passed is given back: the file is never all in memory.
-  std::uint32_t payloadCrc = 0;
-  std::uint32_t fileCrc = crc32({header, kTinHeaderSize});
-  const std::uint8_t* checked = body.data();
-  const auto checkUpTo = [&](const std::uint8_t* to) {
-    const std::span<const std::uint8_t> chunk(checked, static_cast<std::size_t>(to - checked));
-    payloadCrc = crc32(chunk, payloadCrc);
-    fileCrc = crc32(chunk, fileCrc);
-    checked = to;
-    file.release(to);
-  };
-  constexpr std::ptrdiff_t kWindow = std::ptrdiff_t{8} << 20;
-  PayloadReader r(body.data(), body.size(), name);
-  const auto keepUp = [&] {
-    if (r.position() - checked >= kWindow) checkUpTo(r.position());
-  };
+  return checkedPayload(file.bytes(), name).version;
+}
 
-  TinPart part;
-  part.triangles = readSections(r, part.tin, &region, keepUp);
-  checkUpTo(body.data() + body.size());
-  if (payloadCrc != getLe<std::uint32_t>(header + 24)) payloadChecksumMismatch(name);
-  part.fileCrc = fileCrc;
+TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region,
+                        const tiles::Rect& vertexRegion) {
+  const std::string name = path.string();
+  requireReadableFile(path, name);
+  const MappedFile file(path, name);
+  const CheckedPayload payload = checkedPayload(file.bytes(), name);
+  TinPart part = payload.version < 2
+                     ? readPartThrough(file, payload, name, region, vertexRegion)
+                     : readPartByBlocks(payload, name, region, vertexRegion);
+  part.fileCrc = payload.fileCrc;
   checkTinContract(part.tin, name, false);
   return part;
 }

@@ -16,8 +16,20 @@
 //     triangles         u64 n + n × (u32 a, b, c), counter-clockwise
 //     features          u64 n + n × (u8 FeatureKind, u32 length + UTF-8 source)
 //     constrained edges u64 n + n × (u32 a, u32 b, u32 feature), a < b
+//     block index       (version 2; what a reader of part of the file needs)
+//       u32 records a block, k (4096)
+//       u32 CRC-32 of the frame: the crs section, the vertex and triangle
+//           counts, the features section and the constrained-edge count, in
+//           the file's order
+//       for the vertices, the triangles and the constrained edges:
+//         u64 blocks ⌈n / k⌉ + per block of k records (the last one shorter):
+//           f64 x0, y0, x1, y1  the box of its vertices, of its triangles'
+//                               corners, of its edges' ends
+//           u32 CRC-32          of its records' bytes
+//       u32 CRC-32 of the index's bytes before it
 //
 // Python check of a file's payload: zlib.crc32(data[32:]) == header CRC.
+// Version 1 files (no block index) are still read, whole or in part.
 #pragma once
 
 #include <cstdint>
@@ -33,7 +45,9 @@
 
 namespace tinsmith::ingest {
 
-inline constexpr std::uint32_t kTinFormatVersion = 1;
+inline constexpr std::uint32_t kTinFormatVersion = 2;
+/// Records a block of the block index (the file says its own).
+inline constexpr std::uint32_t kTinBlockRecords = 4096;
 inline constexpr std::size_t kTinHeaderSize = 32;
 
 /// Writes `tin` atomically (temp file + rename; a failure leaves no file).
@@ -53,28 +67,44 @@ void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned 
 /// truncated file, a checksum mismatch, and any index out of range.
 TinData readTinFile(const std::filesystem::path& path);
 
+/// The format version of a file readTinFile has read.
+std::uint32_t tinFileVersion(const std::filesystem::path& path);
+
 /// Part of a `.tin` file, for the tiles of one square (a shard's subtree,
-/// tiles::TilerOptions::region): every vertex (its index unchanged), every
-/// feature, the triangles whose boxes meet `region` (in the file's order),
-/// and the constrained edges at their vertices.
+/// tiles::TilerOptions::region): the triangles whose boxes meet `region` (in
+/// the file's order), the constrained edges whose boxes meet it, every
+/// feature, and the vertices these use together with every vertex inside
+/// `vertexRegion` (a box around `region`). The vertices keep the file's order
+/// and are numbered anew from 0.
 struct TinPart {
   TinData tin;
-  std::uint32_t fileCrc = 0;  ///< CRC-32 of the whole file: crc32(encodeTin(whole TIN))
-  std::size_t triangles = 0;  ///< in the whole file
+  std::uint32_t fileCrc = 0;    ///< CRC-32 of the whole file: crc32(encodeTin(whole TIN))
+  std::size_t vertices = 0;     ///< in the whole file
+  std::size_t triangles = 0;    ///< in the whole file
+  std::uint64_t bytesRead = 0;  ///< of the file's, each checked against its CRC
 };
-/// Reads the part, checking the file as readTinFile does (the checksum
-/// after the parse), with the file mapped and given back as it is read:
-/// the memory it takes is the part's.
-TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region);
+/// Reads the part with the file mapped. A version 2 file is read through its
+/// block index: only the blocks whose boxes meet the regions (and those of
+/// the vertices their triangles and edges use) are read, each checked
+/// against its own CRC, as are the header, the frame and the index; damage in
+/// a block the part does not read goes unseen here (readTinFile sees it). A
+/// version 1 file is read through, its checksum checked after the parse,
+/// and given back as it is read.
+TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region,
+                        const tiles::Rect& vertexRegion);
 
-/// The exact bytes writeTinFile would write (for tests and tools).
-std::string encodeTin(const TinData& tin);
+/// The exact bytes writeTinFile would write (for tests and tools); with
+/// another block size, those of a file readers read alike.
+std::string encodeTin(const TinData& tin, std::uint32_t recordsPerBlock = kTinBlockRecords);
 /// Parses bytes as readTinFile does; `name` appears in error messages.
 TinData decodeTin(std::string_view bytes, const std::string& name);
 
 /// CRC-32 (IEEE, reflected, as zlib) continued from `crc` (0 to start).
 std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
 std::uint32_t crc32(std::string_view bytes, std::uint32_t crc = 0);
+/// The CRC-32 of two byte strings one after the other, from the CRC of each
+/// and the second's length (as zlib's crc32_combine).
+std::uint32_t crc32Combine(std::uint32_t first, std::uint32_t second, std::uint64_t secondLength);
 
 /// Throws (internalError when `forWriting`, else inputError naming `name`)
 /// when `tin` breaks its contract: indices out of range, a triangle or edge

@@ -116,7 +116,7 @@ std::string TinSummary::json() const {
   if (!file.empty()) {
     j["file"] = file;
     j["bytes"] = fileBytes;
-    j["format_version"] = kTinFormatVersion;
+    j["format_version"] = formatVersion;
   }
   j["crs"] = crs;
   j["vertices"] = vertices;
@@ -141,7 +141,7 @@ std::string TinSummary::text() const {
   std::ostringstream s;
   char buf[256];
   if (!file.empty())
-    s << file << ": tinsmith TIN, format version " << kTinFormatVersion << ", " << fileBytes
+    s << file << ": tinsmith TIN, format version " << formatVersion << ", " << fileBytes
       << " bytes\n";
   s << "  CRS: " << (crs.empty() ? "(unknown)" : crs) << "\n";
   s << "  " << vertices << " vertices, " << triangles << " triangles, " << constrainedEdges

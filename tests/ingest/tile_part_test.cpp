@@ -1,14 +1,16 @@
 // A shard's tiles from its part of the TIN: a Tiler given the whole TIN's
 // plan (through the plan file) and only the part of the .tin around its
-// square (readTinFilePart) builds the tiles the whole TIN gives, bit for bit
-// — on a TIN with a river, a hole whose edge crosses tile sides and corners
-// off the TIN, and sparse triangles that the fit data sample.
+// square (readTinFilePart: the vertices only half its width around it) builds
+// the tiles the whole TIN gives, bit for bit — on a TIN with a river, a hole
+// whose edge crosses tile sides and corners off the TIN, and sparse triangles
+// that the fit data sample.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <tuple>
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
@@ -78,7 +80,8 @@ TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const TinData whole = holedTin();
-  writeTinFile(dir / "site.tin", whole);
+  // Blocks of 128 records: a subtree's part reads some of them, not all.
+  std::ofstream(dir / "site.tin", std::ios::binary) << encodeTin(whole, 128);
 
   tiles::TilerOptions options;
   options.tolerance = 0.1;
@@ -86,7 +89,11 @@ TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
   options.threads = 1;
   const tiles::Tiler wholeTiler(whole, options);
   ASSERT_GE(wholeTiler.finestZoom(), 2);
-  const TilingPlan plan = makeTilingPlan(whole, options);
+  // The corners off the TIN to zoom 3 in the plan: a part holds the
+  // vertices only half a subtree's width around it (tilerVertexRegion).
+  const TilingPlan plan = makeTilingPlan(whole, options, 3);
+  EXPECT_EQ(plan.tiler.cornerZoom, 3);
+  EXPECT_FALSE(plan.tiler.offTinCorners.empty());
   writeTilingPlan(dir / "tiler.plan", plan);
   const auto read = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
   EXPECT_EQ(read->tiler.zoomLines.size(), static_cast<std::size_t>(wholeTiler.finestZoom()) + 1);
@@ -101,11 +108,14 @@ TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
     for (std::uint32_t x = 0; x < 2; ++x) {
       const tiles::TileId subtree{1, x, y};
       const tiles::Rect square = read->tiler.geometry.bounds(subtree);
-      const TinPart part = readTinFilePart(dir / "site.tin", tiles::tilerReadRegion(square));
-      EXPECT_EQ(part.fileCrc, plan.tin.crc32);
+      const TinPart part = readTinFilePart(dir / "site.tin", tiles::tilerReadRegion(square),
+                                           tiles::tilerVertexRegion(read->tiler, square));
+      EXPECT_EQ(part.fileCrc, crc32(encodeTin(whole, 128)));
       EXPECT_EQ(part.triangles, whole.triangles.size());
-      EXPECT_EQ(part.tin.vertices, whole.vertices);
+      EXPECT_EQ(part.vertices, whole.vertices.size());
+      EXPECT_LT(part.tin.vertices.size(), whole.vertices.size());
       EXPECT_LT(part.tin.triangles.size(), whole.triangles.size());
+      EXPECT_LT(part.bytesRead, fs::file_size(dir / "site.tin"));
       tiles::TilerOptions partOptions = options;
       partOptions.plan = std::shared_ptr<const tiles::TilerPlan>(read, &read->tiler);
       partOptions.region = square;
@@ -134,17 +144,64 @@ TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
   EXPECT_GT(offTinCorners, 0u);  // the hole's tiles were among them
 }
 
+TEST(TilePart, ThePlansCornersOffTheTinTakeTheNearestVertex) {
+  const TinData whole = holedTin();
+  tiles::TilerOptions options;
+  options.tolerance = 0.1;
+  options.maxTriangles = 512;
+  options.threads = 1;
+  const TilingPlan plan = makeTilingPlan(whole, options, 4);
+  const tiles::TinIndex index(whole);
+  const tiles::PyramidGeometry& g = plan.tiler.geometry;
+  // Every corner of zooms 0 … 4 in no triangle, in order, with the z of the
+  // nearest vertex in the first of the boxes, growing from 1/64 to 4 tile
+  // widths, that holds any (the lowest index among equally near ones).
+  std::vector<tiles::TilerPlan::OffTinCorner> expected;
+  for (int z = 0; z <= 4; ++z) {
+    const double width = std::ldexp(g.size(), -z);
+    for (std::uint32_t row = 0; row <= (1U << z); ++row) {
+      for (std::uint32_t column = 0; column <= (1U << z); ++column) {
+        const Point2 p{g.lineX(z, column), g.lineY(z, row)};
+        if (index.z(p)) continue;
+        double value = 0;
+        for (double r = width / 64; r <= 4 * width; r *= 2) {
+          double best = HUGE_VAL;
+          for (const Point3& v : whole.vertices) {
+            if (std::abs(v.x - p.x) > r || std::abs(v.y - p.y) > r) continue;
+            const double d = std::hypot(v.x - p.x, v.y - p.y);
+            if (d < best) best = d, value = v.z;
+          }
+          if (best < HUGE_VAL) break;
+        }
+        expected.push_back({z, row, column, value});
+      }
+    }
+  }
+  ASSERT_EQ(plan.tiler.offTinCorners.size(), expected.size());
+  EXPECT_GT(expected.size(), 20u);  // the hole's and the square's beyond the TIN
+  std::size_t nearHole = 0;
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    const auto& a = plan.tiler.offTinCorners[k];
+    const auto& b = expected[k];
+    EXPECT_EQ(std::tuple(a.zoom, a.row, a.column, a.z), std::tuple(b.zoom, b.row, b.column, b.z));
+    if (b.z != 0) ++nearHole;
+  }
+  EXPECT_GT(nearHole, 0u);
+  // Past kMaxCornerZoom the plan is refused, not made huge.
+  EXPECT_THROW((void)makeTilingPlan(whole, options, tiles::kMaxCornerZoom + 1), Error);
+}
+
 TEST(TilePart, ADamagedFileIsRefusedWhenReadInPart) {
   const fs::path dir = fs::path(testing::TempDir()) / "tile_part_damaged";
   fs::remove_all(dir);
   fs::create_directories(dir);
   const TinData whole = holedTin();
   std::string bytes = encodeTin(whole);
-  bytes[bytes.size() - 100] ^= 0x10;  // in the last section, after every triangle
+  bytes[bytes.size() - 100] ^= 0x10;  // in the block index
   std::ofstream(dir / "damaged.tin", std::ios::binary) << bytes;
   const tiles::Rect everything{-1e9, -1e9, 1e9, 1e9};
-  EXPECT_THROW((void)readTinFilePart(dir / "damaged.tin", everything), Error);
-  EXPECT_THROW((void)readTinFilePart(dir / "missing.tin", everything), Error);
+  EXPECT_THROW((void)readTinFilePart(dir / "damaged.tin", everything, everything), Error);
+  EXPECT_THROW((void)readTinFilePart(dir / "missing.tin", everything, everything), Error);
   TilingPlan empty;
   empty.tiler.zoomLines.resize(1);  // finest zoom 0: one set of lines
   std::string plan = encodeTilingPlan(empty);

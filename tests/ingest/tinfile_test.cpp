@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
 
 #include "core/base/error.hpp"
 #include "core/mesh/mesh.hpp"
@@ -93,7 +94,9 @@ TEST(TinFile, BytesAreDeterministicAndMatchTheDocumentedLayout) {
   EXPECT_EQ(static_cast<unsigned char>(a[8]), kTinFormatVersion);  // little-endian u32
   const std::uint64_t expectedPayload = 4 + tin.crs.size() + 8 + 24 * 5 + 8 + 12 * 4 + 8 +
                                         (5 + tin.features[0].source.size()) +
-                                        (5 + tin.features[1].source.size()) + 8 + 12 * 3;
+                                        (5 + tin.features[1].source.size()) + 8 + 12 * 3 +
+                                        // the block index: one block a section
+                                        4 + 4 + 3 * (8 + 36) + 4;
   EXPECT_EQ(a.size(), kTinHeaderSize + expectedPayload);
   std::uint32_t storedCrc = 0;
   for (int i = 3; i >= 0; --i) storedCrc = (storedCrc << 8) | static_cast<unsigned char>(a[24 + i]);
@@ -119,6 +122,189 @@ TEST(TinFile, TheChecksumOnASecondThreadWritesTheSameBytes) {
   EXPECT_EQ(one, test::readFile(dir / "two.tin"));
   EXPECT_EQ(one, test::readFile(dir / "mesh.tin"));
   expectSame(readTinFile(dir / "two.tin"), tin);
+}
+
+TEST(TinFile, Crc32CombineIsTheCrcOfBothStrings) {
+  std::mt19937 rng(5);
+  std::string text(70000, '\0');
+  for (char& c : text) c = static_cast<char>(rng());
+  for (const std::size_t cut : {std::size_t{0}, std::size_t{1}, std::size_t{7}, std::size_t{32},
+                                std::size_t{4095}, std::size_t{69999}, text.size()}) {
+    const std::string_view first = std::string_view(text).substr(0, cut);
+    const std::string_view second = std::string_view(text).substr(cut);
+    EXPECT_EQ(crc32Combine(crc32(first), crc32(second), second.size()), crc32(text)) << cut;
+  }
+}
+
+/// A jittered grid of n × n vertices at UTM-sized coordinates (two
+/// triangles a cell) with a road along a row, diagonal edges off it, and a
+/// few vertices in no triangle.
+TinData gridTin(std::uint32_t n) {
+  TinData tin;
+  tin.crs = "EPSG:32612";
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i)
+      tin.vertices.push_back({431000.0 + i + jitter(rng), 4512000.0 + j + jitter(rng), 0.5 * i});
+  const auto at = [n](std::uint32_t i, std::uint32_t j) { return j * n + i; };
+  for (std::uint32_t j = 0; j + 1 < n; ++j) {
+    for (std::uint32_t i = 0; i + 1 < n; ++i) {
+      tin.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      tin.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  }
+  tin.features = {{FeatureKind::Road, "roads.gpkg, layer roads, feature 7"}};
+  for (std::uint32_t i = 0; i + 1 < n; ++i) tin.constrainedEdges.push_back({at(i, n / 2), at(i + 1, n / 2), 0});
+  for (std::uint32_t k = 0; k + 1 < n; ++k) tin.constrainedEdges.push_back({at(k, k), at(k + 1, k + 1), 0});
+  for (std::uint32_t k = 0; k < 3; ++k)
+    tin.vertices.push_back({431000.0 + 10.5 * k, 4512000.0 + n + 5.0, 1.0});
+  return tin;
+}
+
+/// The part readTinFilePart documents, made from the whole TIN in memory.
+TinData expectedPart(const TinData& tin, const tiles::Rect& region, const tiles::Rect& vertices) {
+  TinData part;
+  part.crs = tin.crs;
+  part.features = tin.features;
+  std::vector<char> keep(tin.vertices.size(), 0);
+  const auto meets = [&](std::initializer_list<std::uint32_t> ids) {
+    std::vector<Point3> corners;
+    for (const auto v : ids) corners.push_back(tin.vertices[v]);
+    return tiles::boundsOf(corners).overlaps(region);
+  };
+  for (const auto& t : tin.triangles)
+    if (meets({t[0], t[1], t[2]})) part.triangles.push_back(t), keep[t[0]] = keep[t[1]] = keep[t[2]] = 1;
+  for (const auto& e : tin.constrainedEdges)
+    if (meets({e.a, e.b})) part.constrainedEdges.push_back(e), keep[e.a] = keep[e.b] = 1;
+  std::vector<std::uint32_t> number(tin.vertices.size(), 0);
+  for (std::uint32_t v = 0; v < tin.vertices.size(); ++v) {
+    if (!keep[v] && !vertices.contains(tin.vertices[v].xy())) continue;
+    number[v] = static_cast<std::uint32_t>(part.vertices.size());
+    part.vertices.push_back(tin.vertices[v]);
+  }
+  for (auto& t : part.triangles)
+    for (auto& v : t) v = number[v];
+  for (auto& e : part.constrainedEdges) e.a = number[e.a], e.b = number[e.b];
+  return part;
+}
+
+/// The same TIN as a version 1 file: no block index.
+std::string versionOneBytes(const TinData& tin) {
+  const std::string v2 = encodeTin(tin);
+  std::uint64_t payload = 4 + tin.crs.size() + 8 + 24 * tin.vertices.size() + 8 +
+                          12 * tin.triangles.size() + 8 + 8 + 12 * tin.constrainedEdges.size();
+  for (const auto& f : tin.features) payload += 5 + f.source.size();
+  std::string bytes = v2.substr(0, kTinHeaderSize + payload);
+  const auto put = [&bytes](std::size_t at, std::uint64_t value, int size) {
+    for (int i = 0; i < size; ++i) bytes[at + i] = static_cast<char>(value >> (8 * i));
+  };
+  put(8, 1, 4);
+  put(16, payload, 8);
+  put(24, crc32(std::string_view(bytes).substr(kTinHeaderSize)), 4);
+  put(28, crc32(std::string_view(bytes).substr(0, 28)), 4);
+  return bytes;
+}
+
+TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
+  const TinData tin = gridTin(300);  // 90 k vertices: 22 vertex blocks, 44 triangle blocks
+  const auto dir = test::scratchDir("tinfile-part");
+  writeTinFile(dir / "grid.tin", tin);
+  std::ofstream(dir / "v1.tin", std::ios::binary) << versionOneBytes(tin);
+  expectSame(readTinFile(dir / "v1.tin"), tin);
+  const auto size = std::filesystem::file_size(dir / "grid.tin");
+  const std::uint32_t fileCrc = crc32(encodeTin(tin));
+  const double x = 431000, y = 4512000;
+  struct Case {
+    tiles::Rect region, vertices;
+  };
+  const std::vector<Case> cases = {
+      {{x + 100.25, y + 40, x + 130, y + 80}, {x + 90, y + 30, x + 140, y + 90}},  // a square
+      {{x + 20, y + 140, x + 60, y + 170}, {x, y + 120, x + 100, y + 190}},  // across the road
+      {{x - 50, y - 50, x - 10, y - 10}, {x - 50, y - 50, x - 10, y - 10}},  // off the TIN
+      {{x, y + 305, x + 30, y + 306}, {x, y + 300, x + 30, y + 310}},  // the lone vertices
+      {{-1e9, -1e9, 1e9, 1e9}, {-1e9, -1e9, 1e9, 1e9}},                // all of it
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(testing::Message() << c.region.x0 - x << " " << c.region.y0 - y);
+    const TinData expected = expectedPart(tin, c.region, c.vertices);
+    const TinPart part = readTinFilePart(dir / "grid.tin", c.region, c.vertices);
+    expectSame(part.tin, expected);
+    EXPECT_EQ(part.fileCrc, fileCrc);
+    EXPECT_EQ(part.vertices, tin.vertices.size());
+    EXPECT_EQ(part.triangles, tin.triangles.size());
+    if (c.region.x0 > -1e9) {
+      EXPECT_LT(part.bytesRead, size / 4);
+    } else {
+      EXPECT_EQ(part.bytesRead, size);
+    }
+    // A version 1 file gives the same part, read through.
+    const TinPart old = readTinFilePart(dir / "v1.tin", c.region, c.vertices);
+    expectSame(old.tin, expected);
+    EXPECT_EQ(old.bytesRead, std::filesystem::file_size(dir / "v1.tin"));
+    EXPECT_EQ(old.fileCrc, crc32(versionOneBytes(tin)));
+  }
+}
+
+/// Flips a bit `at` bytes into a file's payload, in place.
+void damage(const std::filesystem::path& file, std::size_t at) {
+  std::string bytes = test::readFile(file);
+  bytes[kTinHeaderSize + at] = static_cast<char>(bytes[kTinHeaderSize + at] ^ 0x04);
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+TEST(TinFile, APartRefusesDamageInWhatItReads) {
+  const TinData tin = gridTin(300);
+  const auto dir = test::scratchDir("tinfile-part-damage");
+  const std::filesystem::path file = dir / "grid.tin";
+  const double x = 431000, y = 4512000;
+  const tiles::Rect nearOrigin{x + 1, y + 1, x + 5, y + 5};  // in the first blocks
+  const std::size_t vertices = 4 + tin.crs.size() + 8;      // where the vertex records start
+  const std::size_t triangles = vertices + 24 * tin.vertices.size() + 8;
+  const std::size_t lastTriangle = triangles + 12 * (tin.triangles.size() - 1);
+  const auto partError = [&] { return errorOf([&] { (void)readTinFilePart(file, nearOrigin, nearOrigin); }); };
+  struct Case {
+    std::size_t at;
+    const char* says;  // "" when the part does not read it
+  };
+  for (const Case c : {Case{6, "CRS, the counts and the features"},  // in the CRS text
+                       Case{vertices + 5, "vertex block 0 does not match"},
+                       Case{triangles + 30, "triangle block 0 does not match"},
+                       Case{lastTriangle, ""}}) {
+    writeTinFile(file, tin);
+    damage(file, c.at);
+    SCOPED_TRACE(c.at);
+    const std::string msg = partError();
+    if (*c.says) {
+      EXPECT_NE(msg.find(c.says), std::string::npos) << msg;
+      EXPECT_NE(msg.find("grid.tin"), std::string::npos) << msg;
+    } else {
+      EXPECT_EQ(msg, "(no error)");  // a block it does not read: the whole read sees it
+    }
+    EXPECT_NE(errorOf([&] { (void)readTinFile(file); }).find("checksum"), std::string::npos);
+  }
+  // The index itself: its checksum.
+  writeTinFile(file, tin);
+  const auto size = std::filesystem::file_size(file);
+  damage(file, size - kTinHeaderSize - 20);
+  EXPECT_NE(partError().find("block index checksum"), std::string::npos) << partError();
+}
+
+TEST(TinFile, AnIndexThatDisagreesWithItsSectionsIsRefused) {
+  // Valid checksums over a wrong box: a writer's mistake, not damage in transit.
+  const TinData tin = gridTin(20);
+  std::string bytes = encodeTin(tin);
+  const std::size_t indexAt = bytes.size() - (4 + 4 + 3 * (8 + 36) + 4);
+  bytes[indexAt + 4 + 4 + 8 + 8 * 2] ^= 0x01;  // the first vertex block's x1
+  const auto resum = [&bytes](std::size_t from, std::size_t to, std::size_t at) {
+    const std::uint32_t c = crc32(std::string_view(bytes).substr(from, to - from));
+    for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<char>(c >> (8 * i));
+  };
+  resum(indexAt, bytes.size() - 4, bytes.size() - 4);
+  resum(kTinHeaderSize, bytes.size(), 24);
+  resum(0, 28, 28);
+  const auto msg = errorOf([&] { (void)decodeTin(bytes, "odd.tin"); });
+  EXPECT_NE(msg.find("block index does not match"), std::string::npos) << msg;
 }
 
 TEST(TinFile, WrongMagicIsRefusedNamingTheFile) {

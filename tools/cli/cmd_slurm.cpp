@@ -277,8 +277,12 @@ void runSlurm(const SlurmCliOptions& o) {
     if (!f.quiet && !f.json) std::cerr << "planning the pyramid of " << tin.string() << "\n";
     tiles::TilerOptions tilerOptions = jobOptions.tiler;
     tilerOptions.threads = jobOptions.threads;
+    // The corners off the TIN of a shard's top four zooms come with the plan:
+    // a shard then reads the vertices only within 4 tile widths of the fifth
+    // zoom around its square (1/8 of its width; tiles::tilerVertexRegion).
+    const int cornerZoom = std::min(o.shardZoom + 4, tiles::kMaxCornerZoom);
     const ingest::TilingPlan tilingPlan =
-        ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions);
+        ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions, cornerZoom);
     finestZoom = tilingPlan.tiler.finestZoom;
     ingest::writeTilingPlan(tilerPlanPath, tilingPlan);
   }

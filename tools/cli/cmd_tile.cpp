@@ -9,6 +9,7 @@
 // A summary goes to stderr (or JSON to stdout with --json); a progress bar
 // when stderr is a terminal.
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -93,9 +94,20 @@ void addTileCommand(CLI::App& app) {
     // A shard below the root reads only its square of the TIN.
     TinData tin;
     if (o.plan && o.subtree && o.subtree->z > 0 && o.uncheckedAncestors) {
-      ingest::TinPart part = ingest::readTinFilePart(
-          opt->tin, tiles::tilerReadRegion(o.plan->tiler.geometry.bounds(*o.subtree)));
-      o.partOf = ingest::TinIdentity{part.fileCrc, part.tin.vertices.size(), part.triangles};
+      const tiles::Rect square = o.plan->tiler.geometry.bounds(*o.subtree);
+      ingest::TinPart part =
+          ingest::readTinFilePart(opt->tin, tiles::tilerReadRegion(square),
+                                  tiles::tilerVertexRegion(o.plan->tiler, square));
+      o.partOf = ingest::TinIdentity{part.fileCrc, part.vertices, part.triangles};
+      if (!opt->flags.quiet && !opt->flags.json) {
+        const auto megabytes = [](std::uint64_t bytes) { return static_cast<double>(bytes) / 1e6; };
+        std::cerr << std::fixed << std::setprecision(1) << "read the part of " << opt->tin
+                  << " around tile " << o.subtree->name() << ": " << part.tin.vertices.size()
+                  << " of " << part.vertices << " vertices, " << part.tin.triangles.size() << " of "
+                  << part.triangles << " triangles, " << megabytes(part.bytesRead) << " of "
+                  << megabytes(std::filesystem::file_size(opt->tin)) << " MB\n"
+                  << std::defaultfloat;
+      }
       tin = std::move(part.tin);
     } else {
       tin = ingest::readTinFile(opt->tin);

@@ -33,12 +33,14 @@ read -r pw pu ps pm <plan.time
 awk -v ow="$ow" -v oc="$(echo "$ou $os" | awk '{print $1 + $2}')" -v om="$om" \
     -v mc="$(echo "$mu $ms" | awk '{print $1 + $2}')" -v mm="$mm" -v tasks="$tasks" -v same="$same" \
     -v pc="$(echo "$pu $ps" | awk '{print $1 + $2}')" -v pm="$pm" '
-  { c = $3 + $4; cpu += c; if ($5 > peak) peak = $5; if (min == "" || $5 < min) min = $5 }
+  { c = $3 + $4; cpu += c; if ($5 > peak) peak = $5; if (min == "" || $5 < min) min = $5
+    if ($1 > 0 && $5 > subtree) subtree = $5 }
   END {
     printf "| run | CPU s | peak MB |\n|---|---|---|\n"
     printf "| one tinsmith tile | %.2f | %.0f |\n", oc, om / 1024
     printf "| plan (tinsmith slurm) | %.2f | %.0f |\n", pc, pm / 1024
     printf "| %d shards (sum of CPU; largest and smallest peak) | %.2f | %.0f (%.2f×), smallest %.0f |\n", tasks, cpu, peak / 1024, peak / om, min / 1024
+    printf "| the largest subtree shard | | %.0f (%.2f×) |\n", subtree / 1024, subtree / om
     printf "| plan + shards | %.2f (%.2f×) | |\n", pc + cpu, (pc + cpu) / oc
     printf "| merge | %.2f | %.0f |\n", mc, mm / 1024
     printf "\nThe merged store and the one run: %s.\n", same
