@@ -378,12 +378,18 @@ TilerPlan Tiler::plan(int cornerZoom) const {
   p.fitSpacing = fitSpacing_;
   p.tileFitAllData = tileFitAllData_;
   for (int z = 0; z <= finestZoom_; ++z) p.zoomLines.push_back(simplifiedLines(z));
+  // A corner more than a tile width from the TIN's box is left out: the
+  // four tiles at it hold no terrain, whatever z it has.
   p.cornerZoom = std::max(cornerZoom, -1);
+  const Rect extent = boundsOf(tin_.vertices);
   for (int z = 0; z <= p.cornerZoom; ++z) {
+    const double width = std::ldexp(geometry_.size(), -z);
+    const Rect near{extent.x0 - width, extent.y0 - width, extent.x1 + width, extent.y1 + width};
     const std::uint32_t lines = (1U << z) + 1;
     for (std::uint32_t row = 0; row < lines; ++row) {
       for (std::uint32_t column = 0; column < lines; ++column) {
-        if (index_.z({geometry_.lineX(z, column), geometry_.lineY(z, row)})) continue;
+        const Point2 corner{geometry_.lineX(z, column), geometry_.lineY(z, row)};
+        if (!near.contains(corner) || index_.z(corner)) continue;
         p.offTinCorners.push_back({z, row, column, offTinZ(z, column, row)});
       }
     }
@@ -540,8 +546,11 @@ double Tiler::fitZ(const fit::MultilevelFit* fit, Point2 p) const {
 }
 
 double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
+  // A Tiler of a region takes the plan's corners, made from the whole TIN;
+  // one the plan leaves out lies more than a tile width from the TIN's box,
+  // so every tile at it is empty and its z does not matter.
   const TilerPlan* plan = options_.plan.get();
-  if (plan && z <= plan->cornerZoom) {
+  if (options_.region && z <= plan->cornerZoom) {
     const auto key = [](const TilerPlan::OffTinCorner& c) {
       return std::tuple(c.zoom, std::uint64_t{c.row}, std::uint64_t{c.column});
     };
@@ -551,11 +560,7 @@ double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
     const auto found = std::lower_bound(
         corners.begin(), corners.end(), wanted,
         [&key](const auto& a, const auto& b) { return key(a) < key(b); });
-    if (found == corners.end() || key(*found) != key(wanted))
-      throw internalError("Tiler: the plan has no z for the corner off the TIN at zoom " +
-                          std::to_string(z) + ", row " + std::to_string(row) + ", column " +
-                          std::to_string(column));
-    return found->z;
+    return found == corners.end() || key(*found) != key(wanted) ? 0.0 : found->z;
   }
   // The nearest TIN vertex's z (the lowest index among equally near ones),
   // looked for in boxes that grow with the zoom's tile width: the same in

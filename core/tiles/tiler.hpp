@@ -80,11 +80,11 @@ struct TilerPlan {
   /// them to its tile sides. Simplifying keeps every chord on the TIN, which
   /// takes the TIN along the whole line.
   std::vector<std::vector<TerrainLine>> zoomLines;
-  /// The z of every tile corner off the TIN (in no triangle) at the zooms
-  /// to cornerZoom (−1: none), as the whole TIN gives it (Tiler::offTinZ): a
-  /// Tiler with a region takes them from here, and need then hold the TIN's
-  /// vertices around its region only as far as the finer zooms' corners
-  /// look (tilerVertexRegion).
+  /// The z of the tile corners off the TIN (in no triangle) within a tile
+  /// width of the TIN's box, at the zooms to cornerZoom (−1: none), as the
+  /// whole TIN gives it (Tiler::offTinZ): a Tiler with a region takes them
+  /// from here, and need then hold the TIN's vertices around its region
+  /// only as far as the finer zooms' corners look (tilerVertexRegion).
   struct OffTinCorner {
     std::int32_t zoom = 0;
     std::uint32_t row = 0, column = 0;  ///< its grid lines: lineY(zoom, row), lineX(zoom, column)

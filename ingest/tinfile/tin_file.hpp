@@ -17,7 +17,7 @@
 //     features          u64 n + n × (u8 FeatureKind, u32 length + UTF-8 source)
 //     constrained edges u64 n + n × (u32 a, u32 b, u32 feature), a < b
 //     block index       (version 2; what a reader of part of the file needs)
-//       u32 records a block, k (4096)
+//       u32 records a block, k (1024)
 //       u32 CRC-32 of the frame: the crs section, the vertex and triangle
 //           counts, the features section and the constrained-edge count, in
 //           the file's order
@@ -47,7 +47,7 @@ namespace tinsmith::ingest {
 
 inline constexpr std::uint32_t kTinFormatVersion = 2;
 /// Records a block of the block index (the file says its own).
-inline constexpr std::uint32_t kTinBlockRecords = 4096;
+inline constexpr std::uint32_t kTinBlockRecords = 1024;
 inline constexpr std::size_t kTinHeaderSize = 32;
 
 /// Writes `tin` atomically (temp file + rename; a failure leaves no file).

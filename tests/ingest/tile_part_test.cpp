@@ -153,16 +153,24 @@ TEST(TilePart, ThePlansCornersOffTheTinTakeTheNearestVertex) {
   const TilingPlan plan = makeTilingPlan(whole, options, 4);
   const tiles::TinIndex index(whole);
   const tiles::PyramidGeometry& g = plan.tiler.geometry;
-  // Every corner of zooms 0 … 4 in no triangle, in order, with the z of the
-  // nearest vertex in the first of the boxes, growing from 1/64 to 4 tile
-  // widths, that holds any (the lowest index among equally near ones).
+  // Every corner of zooms 0 … 4 in no triangle and within a tile width of
+  // the TIN's box, in order, with the z of the nearest vertex in the first
+  // of the boxes, growing from 1/64 to 4 tile widths, that holds any (the
+  // lowest index among equally near ones).
+  const tiles::Rect box = tiles::boundsOf(whole.vertices);
   std::vector<tiles::TilerPlan::OffTinCorner> expected;
+  std::size_t far = 0;
   for (int z = 0; z <= 4; ++z) {
     const double width = std::ldexp(g.size(), -z);
     for (std::uint32_t row = 0; row <= (1U << z); ++row) {
       for (std::uint32_t column = 0; column <= (1U << z); ++column) {
         const Point2 p{g.lineX(z, column), g.lineY(z, row)};
         if (index.z(p)) continue;
+        if (p.x < box.x0 - width || p.x > box.x1 + width || p.y < box.y0 - width ||
+            p.y > box.y1 + width) {
+          ++far;
+          continue;
+        }
         double value = 0;
         for (double r = width / 64; r <= 4 * width; r *= 2) {
           double best = HUGE_VAL;
@@ -187,6 +195,7 @@ TEST(TilePart, ThePlansCornersOffTheTinTakeTheNearestVertex) {
     if (b.z != 0) ++nearHole;
   }
   EXPECT_GT(nearHole, 0u);
+  EXPECT_GT(far, 0u);  // the square reaches beyond the TIN's box
   // Past kMaxCornerZoom the plan is refused, not made huge.
   EXPECT_THROW((void)makeTilingPlan(whole, options, tiles::kMaxCornerZoom + 1), Error);
 }

@@ -207,7 +207,7 @@ std::string versionOneBytes(const TinData& tin) {
 }
 
 TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
-  const TinData tin = gridTin(300);  // 90 k vertices: 22 vertex blocks, 44 triangle blocks
+  const TinData tin = gridTin(300);  // 90 k vertices: 88 vertex blocks, 175 triangle blocks
   const auto dir = test::scratchDir("tinfile-part");
   writeTinFile(dir / "grid.tin", tin);
   std::ofstream(dir / "v1.tin", std::ios::binary) << versionOneBytes(tin);
