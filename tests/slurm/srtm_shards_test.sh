@@ -123,8 +123,14 @@ subtree_mb=$(awk '$1 == "shard" && $2 != "0:" && $3 == "CPU" && $8 + 0 > m { m =
 one_mb=$(json "$work/one.json" 'round(d["peakMemoryBytes"] / 1e6)')
 expect "the merge's log tells what each of the 17 shards cost ($listed; peak memory: top $top_mb MB, largest subtree $subtree_mb MB, single run $one_mb MB)" \
   test "$listed" -eq 17
-expect "the largest subtree shard took at most half the single run's memory" \
-  test "$((2 * ${subtree_mb:-0}))" -le "${one_mb:-0}" -a "${subtree_mb:-0}" -gt 0
+expect "the largest subtree shard took at most a quarter of the single run's memory" \
+  test "$((4 * ${subtree_mb:-0}))" -le "${one_mb:-0}" -a "${subtree_mb:-0}" -gt 0
+# Each subtree shard reads its part of the .tin through the block index and
+# says how much ("read the part of … : … X of Y MB").
+parts=$(for t in $(seq 1 "$subtrees"); do grep -h '^read the part of' "$run/logs/shard-$t.log"; done)
+read_most=$(awk '{ f = $(NF - 3) / $(NF - 1); if (f > m) m = f } END { printf "%.2f", m }' <<<"$parts")
+expect "every subtree shard read at most a third of the .tin ($(wc -l <<<"$parts") reads, the most $read_most of it)" \
+  awk -v m="$read_most" -v n="$(wc -l <<<"$parts")" 'BEGIN { exit !(n >= '"$subtrees"' && m > 0 && m <= 0.34) }'
 missing_logs=""
 for t in $(seq 0 "$subtrees"); do [ -s "$run/logs/shard-$t.log" ] || missing_logs+=" $t"; done
 expect "a log per task and one for the merge${missing_logs:+ (missing:$missing_logs)}" \
