@@ -290,6 +290,36 @@ TEST(TinFile, APartRefusesDamageInWhatItReads) {
   EXPECT_NE(partError().find("block index checksum"), std::string::npos) << partError();
 }
 
+TEST(TinFile, NoDamagedByteGivesAWrongPart) {
+  // Blocks of 64 records: many blocks, some read and some not. A flipped
+  // byte anywhere is refused as damage or lies where the part does not read.
+  const TinData tin = gridTin(24);
+  const std::string bytes = encodeTin(tin, 64);
+  const double x = 431000, y = 4512000;
+  const tiles::Rect region{x + 3, y + 4, x + 9, y + 8}, vertices{x, y, x + 12, y + 12};
+  const TinData expected = expectedPart(tin, region, vertices);
+  const auto dir = test::scratchDir("tinfile-part-flips");
+  const std::filesystem::path file = dir / "flip.tin";
+  std::size_t refused = 0, unread = 0;
+  for (std::size_t i = 0; i < bytes.size(); i += 7) {  // every 7th byte, each bit in turn
+    std::string damaged = bytes;
+    damaged[i] = static_cast<char>(damaged[i] ^ (1 << (i / 7 % 8)));
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << damaged;
+    try {
+      const TinPart part = readTinFilePart(file, region, vertices);
+      SCOPED_TRACE(i);
+      expectSame(part.tin, expected);
+      EXPECT_EQ(part.fileCrc, crc32(bytes));
+      ++unread;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input) << i << ": " << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GT(refused, 0u);
+  EXPECT_GT(unread, bytes.size() / 14);  // most blocks lie outside the region
+}
+
 TEST(TinFile, AnIndexThatDisagreesWithItsSectionsIsRefused) {
   // Valid checksums over a wrong box: a writer's mistake, not damage in transit.
   const TinData tin = gridTin(20);
