@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <tuple>
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
@@ -551,16 +550,13 @@ double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
   // so every tile at it is empty and its z does not matter.
   const TilerPlan* plan = options_.plan.get();
   if (options_.region && z <= plan->cornerZoom) {
-    const auto key = [](const TilerPlan::OffTinCorner& c) {
-      return std::tuple(c.zoom, std::uint64_t{c.row}, std::uint64_t{c.column});
-    };
     const TilerPlan::OffTinCorner wanted{z, static_cast<std::uint32_t>(row),
                                          static_cast<std::uint32_t>(column), 0.0};
     const auto& corners = plan->offTinCorners;
-    const auto found = std::lower_bound(
-        corners.begin(), corners.end(), wanted,
-        [&key](const auto& a, const auto& b) { return key(a) < key(b); });
-    return found == corners.end() || key(*found) != key(wanted) ? 0.0 : found->z;
+    const auto found =
+        std::lower_bound(corners.begin(), corners.end(), wanted,
+                         [](const auto& a, const auto& b) { return a.key() < b.key(); });
+    return found == corners.end() || found->key() != wanted.key() ? 0.0 : found->z;
   }
   // The nearest TIN vertex's z (the lowest index among equally near ones),
   // looked for in boxes that grow with the zoom's tile width: the same in

@@ -50,6 +50,7 @@
 #include <mutex>
 #include <optional>
 #include <span>
+#include <tuple>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -89,6 +90,8 @@ struct TilerPlan {
     std::int32_t zoom = 0;
     std::uint32_t row = 0, column = 0;  ///< its grid lines: lineY(zoom, row), lineX(zoom, column)
     double z = 0;
+    /// What the corners are ordered by.
+    [[nodiscard]] auto key() const { return std::tuple(zoom, row, column); }
   };
   int cornerZoom = -1;
   std::vector<OffTinCorner> offTinCorners;  ///< by zoom, row, column

@@ -5,7 +5,6 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
-#include <tuple>
 
 #include "core/base/error.hpp"
 #include "ingest/base/atomic_file.hpp"
@@ -181,11 +180,8 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
     if (c.zoom > t.cornerZoom || c.row >= lines || c.column >= lines)
       r.bad("a corner off the TIN outside the planned zooms");
   }
-  const auto key = [](const tiles::TilerPlan::OffTinCorner& c) {
-    return std::tuple(c.zoom, c.row, c.column);
-  };
   for (std::size_t k = 1; k < t.offTinCorners.size(); ++k)
-    if (!(key(t.offTinCorners[k - 1]) < key(t.offTinCorners[k])))
+    if (!(t.offTinCorners[k - 1].key() < t.offTinCorners[k].key()))
       r.bad("the corners off the TIN are not in order");
   if (r.at() != body.size()) r.bad("bytes left over");
   return plan;
