@@ -17,6 +17,7 @@
 
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/tiling_plan.hpp"
+#include "ingest/tinfile/tin_file.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -121,6 +122,38 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
                         (dir / "w3").string() + " -o " + (dir / "z.3dtiles").string())
                 .exitCode,
             2);
+}
+
+TEST(SlurmCli, AFormatOneTinIsRefusedWithWhatToDo) {
+  // Its shards could not name it as the plan does (by its format 2 bytes).
+  const fs::path dir = scratchDir("slurm-cli-format-1");
+  const fs::path tin = dir / "hill.tin";
+  ASSERT_EQ(makeHillTin(tin, "nx=21&ny=21&spacing=10").exitCode, 0);
+  // The same TIN as format 1: the sections without the block index, with
+  // the header of version 1.
+  const TinData whole = ingest::readTinFile(tin);
+  std::uint64_t payload = 4 + whole.crs.size() + 8 + 24 * whole.vertices.size() + 8 +
+                          12 * whole.triangles.size() + 8 + 8 + 12 * whole.constrainedEdges.size();
+  for (const auto& f : whole.features) payload += 5 + f.source.size();
+  std::string bytes = readFile(tin).substr(0, ingest::kTinHeaderSize + payload);
+  const auto put = [&bytes](std::size_t at, std::uint64_t value, int size) {
+    for (int i = 0; i < size; ++i) bytes[at + i] = static_cast<char>(value >> (8 * i));
+  };
+  put(8, 1, 4);
+  put(16, payload, 8);
+  put(24, ingest::crc32(std::string_view(bytes).substr(ingest::kTinHeaderSize)), 4);
+  put(28, ingest::crc32(std::string_view(bytes).substr(0, 28)), 4);
+  const fs::path old = dir / "old.tin";
+  std::ofstream(old, std::ios::binary) << bytes;
+  ASSERT_EQ(ingest::tinFileVersion(old), 1u);
+  const auto r =
+      runTinsmith("slurm " + old.string() + " --tolerance 0.5 --shard-zoom 1 --workdir " +
+                  (dir / "work").string() + " -o " + (dir / "out.3dtiles").string());
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.err.find("old.tin"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("format version 1"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("tinsmith tin"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "work"));
 }
 
 TEST(SlurmCli, ASubtreeOutsideThePyramidIsAnErrorUnlessEmptyIsOk) {

@@ -258,6 +258,14 @@ void runSlurm(const SlurmCliOptions& o) {
                      "give an empty or new --workdir: tinsmith slurm keeps its plan, scripts, "
                      "shards and logs there");
   }
+  // The shards and the plan name the TIN by the CRC of its format 2 bytes,
+  // which a subtree shard takes from the file's header.
+  if (const auto version = ingest::tinFileVersion(tin); version < 2)
+    throw inputError(".tin format version " + std::to_string(version) +
+                         " has no block index for the shards to read their parts by",
+                     fileLocation(tin.string()),
+                     "build it again with this tinsmith's `tinsmith tin` (it writes format 2), "
+                     "then tile it in shards");
   // The plan of the whole TIN, made once for the job (a resumed job keeps
   // its plan, which its shards were built with): the pyramid, the finest
   // zoom, the fit sampling and the simplified lines. Every shard takes it,
