@@ -63,9 +63,10 @@ class Reader {
 }  // namespace
 
 TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
-                          int cornerZoom) {
+                          int cornerZoom, std::optional<std::uint32_t> fileCrc) {
   TilingPlan plan;
-  plan.tin = {crc32(encodeTin(tin)), tin.vertices.size(), tin.triangles.size()};
+  plan.tin = {fileCrc ? *fileCrc : crc32(encodeTin(tin)), tin.vertices.size(),
+              tin.triangles.size()};
   plan.options.tolerance = options.tolerance;
   plan.options.maxTriangles = options.maxTriangles;
   plan.options.maxZoom = options.maxZoom;

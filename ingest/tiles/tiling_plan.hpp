@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -48,8 +49,10 @@ struct TilingPlan {
 /// the planning (tiles::Tiler::plan), with the corners off the TIN to
 /// `cornerZoom` (−1: none; a shard of zoom s reads vertices around its
 /// square as far as 4 tile widths of zoom cornerZoom + 1, if finer than s).
+/// `fileCrc` names the TIN: that of the format 2 file it was read from
+/// (ingest::readTinFileHeader), else crc32(encodeTin(tin)) is taken.
 TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
-                          int cornerZoom = -1);
+                          int cornerZoom = -1, std::optional<std::uint32_t> fileCrc = {});
 
 std::string encodeTilingPlan(const TilingPlan& plan);
 /// Throws inputError naming `name` for bytes that are not a whole plan of

@@ -977,11 +977,12 @@ TinData readTinFile(const std::filesystem::path& path) {
   return decodeTin(bytes, name);
 }
 
-std::uint32_t tinFileVersion(const std::filesystem::path& path) {
+TinFileHeader readTinFileHeader(const std::filesystem::path& path) {
   const std::string name = path.string();
   requireReadableFile(path, name);
   const MappedFile file(path, name);
-  return checkedPayload(file.bytes(), name).version;
+  const CheckedPayload payload = checkedPayload(file.bytes(), name);
+  return {payload.version, payload.fileCrc};
 }
 
 TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region,

@@ -67,8 +67,12 @@ void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned 
 /// truncated file, a checksum mismatch, and any index out of range.
 TinData readTinFile(const std::filesystem::path& path);
 
-/// The format version of a file readTinFile has read.
-std::uint32_t tinFileVersion(const std::filesystem::path& path);
+/// What a `.tin` file's header tells (checked as readTinFile checks it).
+struct TinFileHeader {
+  std::uint32_t version = 0;
+  std::uint32_t fileCrc = 0;  ///< CRC-32 of the whole file, from the header alone
+};
+TinFileHeader readTinFileHeader(const std::filesystem::path& path);
 
 /// Part of a `.tin` file, for the tiles of one square (a shard's subtree,
 /// tiles::TilerOptions::region): the triangles whose boxes meet `region` (in

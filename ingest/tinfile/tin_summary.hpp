@@ -15,7 +15,7 @@ namespace tinsmith::ingest {
 struct TinSummary : TinCounts {
   std::string file;
   std::size_t fileBytes = 0;
-  std::uint32_t formatVersion = 0;  ///< the file's (tinFileVersion)
+  std::uint32_t formatVersion = 0;  ///< the file's (readTinFileHeader)
   std::string crs;
   bool empty = true;  ///< no vertices: extent and z range are meaningless
   double area = 0;    ///< sum of triangle areas in x, y (square metres)

@@ -145,7 +145,7 @@ TEST(SlurmCli, AFormatOneTinIsRefusedWithWhatToDo) {
   put(28, ingest::crc32(std::string_view(bytes).substr(0, 28)), 4);
   const fs::path old = dir / "old.tin";
   std::ofstream(old, std::ios::binary) << bytes;
-  ASSERT_EQ(ingest::tinFileVersion(old), 1u);
+  ASSERT_EQ(ingest::readTinFileHeader(old).version, 1u);
   const auto r =
       runTinsmith("slurm " + old.string() + " --tolerance 0.5 --shard-zoom 1 --workdir " +
                   (dir / "work").string() + " -o " + (dir / "out.3dtiles").string());

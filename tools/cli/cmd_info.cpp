@@ -49,7 +49,7 @@ void addInfoCommand(CLI::App& app) {
     auto summary = ingest::summariseTin(tin);
     summary.file = opt->file;
     summary.fileBytes = static_cast<std::size_t>(std::filesystem::file_size(path));
-    summary.formatVersion = ingest::tinFileVersion(path);
+    summary.formatVersion = ingest::readTinFileHeader(path).version;
     std::cout << (opt->json ? summary.json() : summary.text());
   });
 }

@@ -260,8 +260,9 @@ void runSlurm(const SlurmCliOptions& o) {
   }
   // The shards and the plan name the TIN by the CRC of its format 2 bytes,
   // which a subtree shard takes from the file's header.
-  if (const auto version = ingest::tinFileVersion(tin); version < 2)
-    throw inputError(".tin format version " + std::to_string(version) +
+  const ingest::TinFileHeader header = ingest::readTinFileHeader(tin);
+  if (header.version < 2)
+    throw inputError(".tin format version " + std::to_string(header.version) +
                          " has no block index for the shards to read their parts by",
                      fileLocation(tin.string()),
                      "build it again with this tinsmith's `tinsmith tin` (it writes format 2), "
@@ -290,7 +291,7 @@ void runSlurm(const SlurmCliOptions& o) {
     // zoom around its square (1/8 of its width; tiles::tilerVertexRegion).
     const int cornerZoom = std::min(o.shardZoom + 4, tiles::kMaxCornerZoom);
     const ingest::TilingPlan tilingPlan =
-        ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions, cornerZoom);
+        ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions, cornerZoom, header.fileCrc);
     finestZoom = tilingPlan.tiler.finestZoom;
     ingest::writeTilingPlan(tilerPlanPath, tilingPlan);
   }
