@@ -110,6 +110,7 @@ void Cdt::finalize() {
   }
   m.insertPendingPoints();
   m.insertPendingSegments();
+  if (m.options.canonicalTies) m.settleTies();
   // Vertex half-edges serve constraint insertion only: recomputed when more
   // constraints come.
   m.trackVhe = false;

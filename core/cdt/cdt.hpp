@@ -23,7 +23,8 @@
 //
 // Degeneracies, decided deterministically (same input and options → same mesh):
 //   * cocircular quadruples: an edge is flipped only if the opposite vertex is
-//     strictly inside the circumcircle — the neutral case keeps the current edge;
+//     strictly inside the circumcircle — the neutral case keeps the current edge
+//     (or, with CdtOptions::canonicalTies, the diagonal avoiding the least point);
 //   * points closer than snapTolerance (exactly equal when 0) merge into the
 //     vertex already there; z is taken from the higher constraintPriority()
 //     feature (ties: the earlier input), the merge is recorded in the report;
@@ -85,6 +86,15 @@ struct CdtOptions {
   /// cocircular input the mesh may depend on this value (any choice is
   /// Delaunay); it never depends on `threads`.
   std::size_t splitMinPoints = 50000;
+  /// Cocircular ties are broken by a symbolic perturbation instead of
+  /// keeping the edge already there: each point's lift onto the paraboloid
+  /// is raised by ε^rank, ranked by (x, y), so of a cocircular quad's two
+  /// diagonals the one avoiding its least point wins. The mesh is then a
+  /// function of the points and constraints alone — not of their order, the
+  /// split or anything else — so triangulations of overlapping parts of one
+  /// point set agree where they are Delaunay (ingest/build/block_tin.hpp).
+  /// Costs one pass of incircle tests over the edges after the insertion.
+  bool canonicalTies = false;
 };
 
 /// What the CDT changed in its input, so callers can report it.

@@ -61,6 +61,48 @@ void TriangleStore::lopAround(VertexId v) {
   lop(todo);
 }
 
+namespace {
+
+/// (x, y) order: the rank of the symbolic lift.
+bool lessXY(const Point2& a, const Point2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
+
+}  // namespace
+
+void TriangleStore::settleTies() {
+  // Every edge once (the half-edge with the smaller id); each flip queues the
+  // quad's four outer edges. A flip at a tie keeps every incircle test where
+  // it was, so the rest of the mesh stays Delaunay; the perturbed lift makes
+  // the flips a descent, so they end (Lawson).
+  std::vector<HalfedgeId> todo;
+  for (std::uint32_t i = 0; i < tv.size(); ++i) {
+    const HalfedgeId h(i);
+    if (i < twin(h).value) todo.push_back(h);
+  }
+  std::size_t flips = 0;
+  while (!todo.empty()) {
+    const HalfedgeId h = todo.back();
+    todo.pop_back();
+    if (cons[h]) continue;
+    const HalfedgeId g = twin(h);
+    const VertexId p = origin(h), q = origin(nxt(h)), c = origin(prv(h)), d = origin(prv(g));
+    if (std::max({p, q, c, d}) >= kInfinite) continue;
+    if (geometry::incircle(xy[p], xy[q], xy[c], xy[d]) != 0) continue;
+    // Raising the least point's lift puts d inside (p, q, c) when the least
+    // is p or q (d's barycentric weights there are positive), outside when
+    // it is c or d: flip pq to cd exactly when pq touches the least point.
+    VertexId least = p;
+    for (const VertexId v : {q, c, d})
+      if (lessXY(xy[v], xy[least])) least = v;
+    if (least != p && least != q) continue;
+    if (++flips > 64 + 64 * xy.size()) throw internalError("settling cocircular ties did not terminate");
+    flip(h);
+    const TriangleId t0 = triangleOf(h), t1 = triangleOf(g);
+    for (const HalfedgeId e : {halfedgeOf(t0, 0), halfedgeOf(t0, 1), halfedgeOf(t1, 0),
+                               halfedgeOf(t1, 1)})
+      todo.push_back(e);
+  }
+}
+
 MeshStorage TriangleStore::pack(std::vector<std::uint8_t> inside, std::span<const double> z,
                                 std::size_t featureCount, unsigned threads,
                                 IdVector<VertexId, VertexId>& vertexOf) {

@@ -273,6 +273,12 @@ class TriangleStore {
   /// forced split at a rounded intersection point, where v may lie off the
   /// split edge and edges at v itself can be non-Delaunay.
   void lopAround(VertexId v);
+  /// Flips, until none is left, every unconstrained edge between two finite
+  /// triangles whose quad is cocircular and whose other diagonal avoids the
+  /// quad's least point by (x, y) (CdtOptions::canonicalTies): on a
+  /// Delaunay triangulation it gives the one Delaunay triangulation of the
+  /// points lifted by ε^rank, whatever the order they went in.
+  void settleTies();
 
   /// Triangles to reserve for a first bulk: 2 per point, plus room for
   /// constraint crossings (2 triangles each; up to 16 per segment, at most
