@@ -543,6 +543,150 @@ void writeTinFile(const std::filesystem::path& path, const TinData& tin, unsigne
   writeFile(path, TinSource{{tin}}, threads);
 }
 
+// The payload as four pieces, each with its own CRC, combined at the end:
+// [crs, vertex count, vertices] [triangle count] [triangles] [features,
+// edge count, block index]. The two counts are written as 0 and patched.
+struct TinStreamWriter::State {
+  State(const std::filesystem::path& path, std::string crsText, std::uint32_t perBlock)
+      : file(path), crs(std::move(crsText)) {
+    index.recordsPerBlock = perBlock;
+    const auto placeholder = makeHeader(0, 0);
+    file.write(placeholder.data(), placeholder.size());
+    ByteString head;
+    head.putString(crs);
+    vertexCountAt = kTinHeaderSize + head.bytes.size();
+    head.put(std::uint64_t{0});
+    file.write(head.bytes);
+    headBytes = head.bytes.size();
+  }
+  /// A record of `section` went into the running block.
+  void endRecord(BlockSection section) {
+    if (++inBlock == index.recordsPerBlock) endBlock(section);
+  }
+  void endBlock(BlockSection section) {
+    if (inBlock == 0) return;
+    index.sections[section].push_back({box, blockCrc});
+    box = {HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    blockCrc = 0;
+    inBlock = 0;
+  }
+  void closeVertices() {
+    if (verticesClosed) return;
+    endBlock(kVertexBlocks);
+    verticesClosed = true;
+    triangleCountAt = kTinHeaderSize + headBytes + 24 * vertices;
+    file.write(std::string(8, '\0'));
+  }
+
+  AtomicFile file;
+  std::string crs;
+  BlockIndex index;
+  std::uint64_t vertices = 0, triangles = 0;
+  std::uint64_t headBytes = 0;  // the crs section and the vertex count
+  std::uint64_t vertexCountAt = 0, triangleCountAt = 0;
+  std::uint32_t vertexCrc = 0, triangleCrc = 0;  // of the records
+  tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  std::uint32_t blockCrc = 0;
+  std::uint32_t inBlock = 0;  // records in the running block
+  bool verticesClosed = false;
+  std::vector<std::uint8_t> bytes;  // records of one call, as the file holds them
+};
+
+TinStreamWriter::TinStreamWriter(const std::filesystem::path& path, std::string crs,
+                                 std::uint32_t recordsPerBlock)
+    : state_(std::make_unique<State>(path, std::move(crs), recordsPerBlock)) {
+  if (recordsPerBlock == 0) throw internalError("TinStreamWriter: blocks of 0 records");
+}
+
+TinStreamWriter::~TinStreamWriter() = default;
+
+std::uint64_t TinStreamWriter::vertexCount() const { return state_->vertices; }
+std::uint64_t TinStreamWriter::triangleCount() const { return state_->triangles; }
+
+void TinStreamWriter::addVertices(std::span<const Point3> vertices) {
+  State& s = *state_;
+  if (s.verticesClosed) throw internalError("TinStreamWriter: vertices after triangles");
+  s.bytes.resize(24 * vertices.size());
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    const Point3& p = vertices[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw internalError("TinStreamWriter: a vertex with a non-finite coordinate");
+    std::uint8_t* record = s.bytes.data() + 24 * i;
+    putLe(record, p.x);
+    putLe(record + 8, p.y);
+    putLe(record + 16, p.z);
+    s.blockCrc = crc32({record, 24}, s.blockCrc);
+    include(s.box, p);
+    ++s.vertices;
+    s.endRecord(kVertexBlocks);
+  }
+  s.vertexCrc = crc32(s.bytes, s.vertexCrc);
+  s.file.write(s.bytes.data(), s.bytes.size());
+}
+
+void TinStreamWriter::addTriangles(std::span<const TinData::Triangle> triangles,
+                                   std::span<const Point3> corners) {
+  State& s = *state_;
+  if (corners.size() != 3 * triangles.size())
+    throw internalError("TinStreamWriter: not three corner points per triangle");
+  s.closeVertices();
+  s.bytes.resize(12 * triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& tri = triangles[t];
+    if (std::max({tri[0], tri[1], tri[2]}) >= s.vertices || tri[0] == tri[1] ||
+        tri[1] == tri[2] || tri[0] == tri[2])
+      throw internalError("TinStreamWriter: a triangle's corner is out of range or repeated");
+    std::uint8_t* record = s.bytes.data() + 12 * t;
+    for (int i = 0; i < 3; ++i) {
+      putLe(record + 4 * i, tri[i]);
+      include(s.box, corners[3 * t + i]);
+    }
+    s.blockCrc = crc32({record, 12}, s.blockCrc);
+    ++s.triangles;
+    s.endRecord(kTriangleBlocks);
+  }
+  s.triangleCrc = crc32(s.bytes, s.triangleCrc);
+  s.file.write(s.bytes.data(), s.bytes.size());
+}
+
+void TinStreamWriter::commit(const std::vector<TinFeature>& features) {
+  State& s = *state_;
+  s.closeVertices();
+  s.endBlock(kTriangleBlocks);
+  ByteString frame;
+  frame.putString(s.crs);
+  frame.put(s.vertices);
+  frame.put(s.triangles);
+  ByteString tail;
+  tail.put(static_cast<std::uint64_t>(features.size()));
+  for (const auto& f : features) {
+    tail.put(static_cast<std::uint8_t>(f.kind));
+    tail.putString(f.source);
+  }
+  tail.put(std::uint64_t{0});  // constrained edges
+  frame.bytes += tail.bytes;
+  s.index.frameCrc = crc32(frame.bytes);
+  tail.bytes += encodeBlockIndex(s.index);
+  s.file.write(tail.bytes);
+
+  ByteString head;
+  head.putString(s.crs);
+  head.put(s.vertices);
+  ByteString count;
+  count.put(s.triangles);
+  std::uint32_t crc = crc32Combine(crc32(head.bytes), s.vertexCrc, 24 * s.vertices);
+  crc = crc32Combine(crc, crc32(count.bytes), 8);
+  crc = crc32Combine(crc, s.triangleCrc, 12 * s.triangles);
+  crc = crc32Combine(crc, crc32(tail.bytes), tail.bytes.size());
+  const std::uint64_t payload = s.headBytes + 24 * s.vertices + 8 + 12 * s.triangles +
+                                tail.bytes.size();
+  s.file.writeAt(s.vertexCountAt, head.bytes.data() + head.bytes.size() - 8, 8);
+  s.file.writeAt(s.triangleCountAt, count.bytes.data(), 8);
+  const auto header = makeHeader(payload, crc);
+  s.file.writeAt(0, header.data(), header.size());
+  s.file.commit();
+}
+
 void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned threads) {
   writeFile(path, MeshSource(mesh), threads);
 }

@@ -34,10 +34,12 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/mesh/mesh.hpp"
 #include "core/tiles/pyramid.hpp"
@@ -61,6 +63,38 @@ void writeTinFile(const std::filesystem::path& path, const TinData& tin, unsigne
 /// bytes — without the TinData copy (only the constrained-edge records, 12
 /// bytes each, are made).
 void writeTinFile(const std::filesystem::path& path, const Mesh& mesh, unsigned threads = 1);
+
+/// Writes a `.tin` whose sections come in pieces, for a TIN that is never
+/// whole in memory (ingest/build/block_tin.hpp): all the vertices first, then
+/// the triangles, each with its corners' points (for the block index). The
+/// bytes are those writeTinFile writes for the whole TIN (no constrained
+/// edges); the counts are patched in at the end, the payload's CRC combined
+/// from its pieces'. Atomic: nothing appears until commit().
+class TinStreamWriter {
+ public:
+  /// Throws ioError naming `path` when its directory is not writable.
+  TinStreamWriter(const std::filesystem::path& path, std::string crs,
+                  std::uint32_t recordsPerBlock = kTinBlockRecords);
+  ~TinStreamWriter();
+  TinStreamWriter(const TinStreamWriter&) = delete;
+  TinStreamWriter& operator=(const TinStreamWriter&) = delete;
+
+  /// Throws internalError for a non-finite coordinate, or after triangles.
+  void addVertices(std::span<const Point3> vertices);
+  /// `corners` holds the points of each triangle's corners, three per
+  /// triangle. Throws internalError for an index out of range or repeated.
+  void addTriangles(std::span<const TinData::Triangle> triangles,
+                    std::span<const Point3> corners);
+  [[nodiscard]] std::uint64_t vertexCount() const;
+  [[nodiscard]] std::uint64_t triangleCount() const;
+  /// Writes the features, the block index and the header, and renames the
+  /// file into place. Throws ioError.
+  void commit(const std::vector<TinFeature>& features);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 /// Reads a `.tin` file. Throws inputError naming the file for: a missing or
 /// unreadable file, a wrong magic (not a .tin file), a newer format version, a

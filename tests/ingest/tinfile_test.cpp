@@ -253,6 +253,54 @@ void damage(const std::filesystem::path& file, std::size_t at) {
   std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
 }
 
+TEST(TinFile, AStreamWrittenTinHasTheWholeTinsBytes) {
+  // In uneven pieces, with small blocks whose ends fall inside the pieces,
+  // and with none: the bytes encodeTin gives the whole TIN.
+  const auto dir = test::scratchDir("tinfile-stream");
+  TinData tin = gridTin(60);
+  tin.constrainedEdges.clear();
+  for (const std::uint32_t perBlock : {kTinBlockRecords, 7u, 1u}) {
+    for (const std::size_t piece : {std::size_t{1}, std::size_t{333}, std::size_t{100000}}) {
+      const auto path = dir / ("stream-" + std::to_string(perBlock) + "-" + std::to_string(piece) + ".tin");
+      TinStreamWriter writer(path, tin.crs, perBlock);
+      for (std::size_t i = 0; i < tin.vertices.size(); i += piece) {
+        const std::size_t n = std::min(piece, tin.vertices.size() - i);
+        writer.addVertices({tin.vertices.data() + i, n});
+      }
+      std::vector<Point3> corners;
+      for (std::size_t t = 0; t < tin.triangles.size(); t += piece) {
+        const std::size_t n = std::min(piece, tin.triangles.size() - t);
+        corners.clear();
+        for (std::size_t k = t; k < t + n; ++k)
+          for (const std::uint32_t v : tin.triangles[k]) corners.push_back(tin.vertices[v]);
+        writer.addTriangles({tin.triangles.data() + t, n}, corners);
+      }
+      EXPECT_EQ(writer.vertexCount(), tin.vertices.size());
+      EXPECT_EQ(writer.triangleCount(), tin.triangles.size());
+      EXPECT_FALSE(std::filesystem::exists(path)) << "visible before commit";
+      writer.commit(tin.features);
+      EXPECT_EQ(test::readFile(path), encodeTin(tin, perBlock)) << perBlock << " records a block, pieces of " << piece;
+    }
+  }
+  // No triangles at all, and a writer never committed leaves nothing.
+  TinData points;
+  points.crs = "EPSG:4978";
+  points.vertices = {{1, 2, 3}, {4, 5, 6}};
+  {
+    TinStreamWriter writer(dir / "points.tin", points.crs);
+    writer.addVertices(points.vertices);
+    writer.commit({});
+  }
+  EXPECT_EQ(test::readFile(dir / "points.tin"), encodeTin(points));
+  {
+    TinStreamWriter writer(dir / "dropped.tin", "");
+    writer.addVertices(points.vertices);
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "dropped.tin"));
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(entry.path().extension(), ".tin") << "a temp file was left: " << entry.path();
+}
+
 TEST(TinFile, APartRefusesDamageInWhatItReads) {
   const TinData tin = gridTin(300);
   const auto dir = test::scratchDir("tinfile-part-damage");
