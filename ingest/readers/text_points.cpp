@@ -331,90 +331,100 @@ std::size_t nextLineStart(std::string_view text, std::size_t at) {
 
 }  // namespace
 
-TextPointTable parseTextPoints(std::string_view text, const std::string& sourceName,
-                               const TextPointOptions& options) {
-  TextPointTable table;
-  table.delimiter = options.delimiter;
+namespace {
 
-  // Strip a UTF-8 byte-order mark.
-  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
-
-  // Up to the first content line: the columns; the data lines after it.
+/// Parsing a text that comes in chunks cut at line ends: the columns, once
+/// found, and the lines parsed so far.
+struct TextChunkParser {
+  TextPointTable& table;  // the columns found; points and lines appended here
+  const std::string& sourceName;
+  const TextPointOptions& options;
   Columns columns;
-  std::int64_t lineNo = 0;
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string_view::npos) end = text.size();
-    const std::string_view line = trim(text.substr(pos, end - pos));
-    ++lineNo;
-    if (!line.empty() && line.front() != '#') {
-      if (setUpColumns(line, lineNo, sourceName, options, table, columns))
-        pos = end + 1;  // a header: the data starts on the next line
-      else
-        --lineNo;  // data: this line is the data's first
-      break;
+  std::int64_t lineNo = 0;  // lines parsed so far
+  bool columnsFound = false;
+
+  void parse(std::string_view text) {
+    // Up to the first content line: the columns; the data lines after it.
+    std::size_t pos = 0;
+    if (!columnsFound && lineNo == 0 && text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF")
+      pos = 3;  // a UTF-8 byte-order mark
+    while (!columnsFound && pos < text.size()) {
+      std::size_t end = text.find('\n', pos);
+      if (end == std::string_view::npos) end = text.size();
+      const std::string_view line = trim(text.substr(pos, end - pos));
+      ++lineNo;
+      if (!line.empty() && line.front() != '#') {
+        columnsFound = true;
+        if (setUpColumns(line, lineNo, sourceName, options, table, columns))
+          pos = end + 1;  // a header: the data starts on the next line
+        else
+          --lineNo;  // data: this line is the data's first
+        break;
+      }
+      pos = end + 1;
     }
-    pos = end + 1;
+    if (columnsFound && pos < text.size()) parseData(text.substr(pos));
   }
-  const std::string_view data = pos < text.size() ? text.substr(pos) : std::string_view{};
 
   // The data in pieces cut at line ends, parsed in parallel with line numbers
   // counted from each piece's start, then joined in order. A piece that fails
   // is parsed again from its true first line, so the error (the first in the
   // file: pieces before it parsed cleanly) names the right line.
-  struct Piece {
-    std::size_t begin = 0, end = 0;
-    std::vector<Point3> points;
-    std::vector<std::int64_t> lines;
-    std::int64_t lineCount = 0;
-    bool failed = false;
-  };
-  const unsigned pieces = data.size() < kParallelBytes ? 1 : kPieces;
-  std::vector<Piece> parts(pieces);
-  parallelParts(data.size(), pieces, resolveThreads(options.threads),
-                [&](std::size_t b, std::size_t e, unsigned k) {
-                  Piece& piece = parts[k];
-                  piece.begin = nextLineStart(data, b);
-                  piece.end = std::max(piece.begin, nextLineStart(data, e));
-                  const std::string_view slice = data.substr(piece.begin, piece.end - piece.begin);
-                  piece.points.reserve(slice.size() / 24);
-                  piece.lines.reserve(slice.size() / 24);
-                  try {
-                    piece.lineCount = parseDataLines(slice, 1, sourceName, options, table.delimiter,
-                                                     columns, piece.points, piece.lines);
-                  } catch (const Error&) {
-                    piece.failed = true;
-                  }
-                });
-  std::size_t total = 0;
-  for (const Piece& piece : parts) total += piece.points.size();
-  table.points.reserve(total);
-  table.lines.reserve(total);
-  for (Piece& piece : parts) {
-    const std::int64_t firstLine = lineNo + 1;
-    if (piece.failed) {
+  void parseData(std::string_view data) {
+    struct Piece {
+      std::size_t begin = 0, end = 0;
       std::vector<Point3> points;
       std::vector<std::int64_t> lines;
-      parseDataLines(data.substr(piece.begin, piece.end - piece.begin), firstLine, sourceName,
-                     options, table.delimiter, columns, points, lines);
-      throw internalError("a text point piece failed once and parsed cleanly the second time");
+      std::int64_t lineCount = 0;
+      bool failed = false;
+    };
+    const unsigned pieces = data.size() < kParallelBytes ? 1 : kPieces;
+    std::vector<Piece> parts(pieces);
+    parallelParts(data.size(), pieces, resolveThreads(options.threads),
+                  [&](std::size_t b, std::size_t e, unsigned k) {
+                    Piece& piece = parts[k];
+                    piece.begin = nextLineStart(data, b);
+                    piece.end = std::max(piece.begin, nextLineStart(data, e));
+                    const std::string_view slice = data.substr(piece.begin, piece.end - piece.begin);
+                    piece.points.reserve(slice.size() / 24);
+                    piece.lines.reserve(slice.size() / 24);
+                    try {
+                      piece.lineCount = parseDataLines(slice, 1, sourceName, options,
+                                                       table.delimiter, columns, piece.points,
+                                                       piece.lines);
+                    } catch (const Error&) {
+                      piece.failed = true;
+                    }
+                  });
+    std::size_t total = 0;
+    for (const Piece& piece : parts) total += piece.points.size();
+    table.points.reserve(table.points.size() + total);
+    table.lines.reserve(table.lines.size() + total);
+    for (Piece& piece : parts) {
+      const std::int64_t firstLine = lineNo + 1;
+      if (piece.failed) {
+        std::vector<Point3> points;
+        std::vector<std::int64_t> lines;
+        parseDataLines(data.substr(piece.begin, piece.end - piece.begin), firstLine, sourceName,
+                       options, table.delimiter, columns, points, lines);
+        throw internalError("a text point piece failed once and parsed cleanly the second time");
+      }
+      table.points.insert(table.points.end(), piece.points.begin(), piece.points.end());
+      for (const std::int64_t l : piece.lines) table.lines.push_back(l + lineNo);
+      lineNo += piece.lineCount;
+      std::vector<Point3>().swap(piece.points);
+      std::vector<std::int64_t>().swap(piece.lines);
     }
-    table.points.insert(table.points.end(), piece.points.begin(), piece.points.end());
-    for (const std::int64_t l : piece.lines) table.lines.push_back(l + lineNo);
-    lineNo += piece.lineCount;
-    std::vector<Point3>().swap(piece.points);
-    std::vector<std::int64_t>().swap(piece.lines);
   }
-  if (table.points.empty()) {
-    throw inputError("the file holds no points", atLine(sourceName),
-                     "check the file and its delimiter");
-  }
-  return table;
+};
+
+void throwNoPoints(const std::string& sourceName) {
+  throw inputError("the file holds no points", atLine(sourceName),
+                   "check the file and its delimiter");
 }
 
-TextPointTable readTextPointTable(const std::filesystem::path& path,
-                                  const TextPointOptions& options) {
+/// The file opened for reading, or the error readTextPointTable gives.
+std::ifstream openTextFile(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     throw inputError("file not found", atLine(path.string()),
@@ -427,6 +437,71 @@ TextPointTable readTextPointTable(const std::filesystem::path& path,
   if (!in)
     throw inputError("cannot open the file for reading", atLine(path.string()),
                      "check its permissions");
+  return in;
+}
+
+void refuseBinary(std::string_view text, const std::filesystem::path& path) {
+  if (text.find('\0') != std::string_view::npos) {
+    throw inputError("is not a text file (it contains NUL bytes)", atLine(path.string()),
+                     "give a CSV/XYZ text file, or a GIS file in an OGR format");
+  }
+}
+
+}  // namespace
+
+TextPointTable parseTextPoints(std::string_view text, const std::string& sourceName,
+                               const TextPointOptions& options) {
+  TextPointTable table;
+  table.delimiter = options.delimiter;
+  TextChunkParser parser{table, sourceName, options, {}, 0, false};
+  parser.parse(text);
+  if (table.points.empty()) throwNoPoints(sourceName);
+  return table;
+}
+
+void readTextPointsInChunks(const std::filesystem::path& path, const TextPointOptions& options,
+                            std::size_t chunkBytes,
+                            const std::function<void(std::span<const Point3>)>& sink) {
+  std::ifstream in = openTextFile(path);
+  const std::string name = path.string();
+  TextPointTable table;
+  table.delimiter = options.delimiter;
+  TextChunkParser parser{table, name, options, {}, 0, false};
+  std::string buffer;
+  std::string carry;  // the last chunk's unfinished line
+  bool any = false;
+  chunkBytes = std::max<std::size_t>(chunkBytes, 1);
+  while (true) {
+    buffer.assign(carry);
+    const std::size_t have = buffer.size();
+    buffer.resize(have + chunkBytes);
+    in.read(buffer.data() + have, static_cast<std::streamsize>(chunkBytes));
+    buffer.resize(have + static_cast<std::size_t>(in.gcount()));
+    if (in.bad()) throw inputError("cannot read the file", atLine(name), "check its permissions");
+    const bool last = !in;
+    std::size_t cut = buffer.size();
+    if (!last) {
+      const std::size_t nl = buffer.rfind('\n');
+      cut = nl == std::string::npos ? 0 : nl + 1;
+    }
+    carry.assign(buffer, cut);
+    buffer.resize(cut);
+    refuseBinary(buffer, path);
+    parser.parse(buffer);
+    if (!table.points.empty()) {
+      any = true;
+      sink(table.points);
+      table.points.clear();
+      table.lines.clear();
+    }
+    if (last) break;
+  }
+  if (!any) throwNoPoints(name);
+}
+
+TextPointTable readTextPointTable(const std::filesystem::path& path,
+                                  const TextPointOptions& options) {
+  std::ifstream in = openTextFile(path);
   std::string text;
   in.seekg(0, std::ios::end);
   const auto size = in.tellg();
@@ -437,10 +512,7 @@ TextPointTable readTextPointTable(const std::filesystem::path& path,
   }
   if (!in && size > 0)
     throw inputError("cannot read the file", atLine(path.string()), "check its permissions");
-  if (text.find('\0') != std::string::npos) {
-    throw inputError("is not a text file (it contains NUL bytes)", atLine(path.string()),
-                     "give a CSV/XYZ text file, or a GIS file in an OGR format");
-  }
+  refuseBinary(text, path);
   return parseTextPoints(text, path.string(), options);
 }
 

@@ -20,7 +20,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -64,6 +66,12 @@ TextPointTable readTextPointTable(const std::filesystem::path& path,
 std::vector<Point3> readTextPoints(const std::filesystem::path& path,
                                    const TextPointOptions& options = {});
 
+/// Reads `path` about `chunkBytes` at a time, cut at line ends, handing each
+/// chunk's points to `sink` in the file's order: the file is never whole in
+/// memory. The points and errors are readTextPointTable's.
+void readTextPointsInChunks(const std::filesystem::path& path, const TextPointOptions& options,
+                            std::size_t chunkBytes,
+                            const std::function<void(std::span<const Point3>)>& sink);
 /// Parses text already in memory; `sourceName` names it in errors.
 TextPointTable parseTextPoints(std::string_view text, const std::string& sourceName,
                                const TextPointOptions& options = {});

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include "core/base/error.hpp"
@@ -210,6 +211,40 @@ TEST(TextPoints, ReadsFromFile) {
   const auto points = readTextPoints(path);
   ASSERT_EQ(points.size(), 1u);
   EXPECT_EQ(points[0], (Point3{10, 20, 30}));
+}
+
+TEST(TextPoints, ChunksGiveTheWholeFilesPointsAndErrors) {
+  // A BOM, comments and blank lines before a header, a file without a final
+  // newline: every chunk size, down to one byte, reads what the whole does.
+  std::string text = "\xEF\xBB\xBF# survey 2024\n\n# crew B\nE,N,H\n";
+  for (int i = 0; i < 300; ++i)
+    text += std::to_string(431000 + i) + ".25," + std::to_string(4512000 - i) + "," +
+            std::to_string(1500 + i % 17) + (i % 50 == 7 ? "\n# a note\n" : "\n");
+  text += "431999,4511000,1499";
+  const auto path = writeText("text_points_chunks", "p.csv", text);
+  const auto whole = readTextPoints(path);
+  for (const std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{64}, std::size_t{1} << 20}) {
+    std::vector<Point3> read;
+    std::size_t calls = 0;
+    readTextPointsInChunks(path, {}, chunk, [&](std::span<const Point3> points) {
+      ++calls;
+      read.insert(read.end(), points.begin(), points.end());
+    });
+    EXPECT_EQ(read, whole) << "chunks of " << chunk << " bytes";
+    if (chunk == 64) {
+      EXPECT_GT(calls, 50u);
+    }
+  }
+  // The error names the file's line, not the chunk's.
+  const auto bad = writeText("text_points_chunks", "bad.csv", text.substr(0, text.find("431200")) + "431200,x,1\n");
+  const std::int64_t badLine = std::count(text.begin(), text.begin() + text.find("431200"), '\n') + 1;
+  const auto e = expectError([&] { readTextPointsInChunks(bad, {}, 100, [](std::span<const Point3>) {}); });
+  EXPECT_EQ(e.where().line, badLine) << e.what();
+  EXPECT_EQ(expectError([&] { readTextPoints(bad); }).where().line, badLine);
+  const auto empty = writeText("text_points_chunks", "empty.csv", "# nothing\n\n");
+  EXPECT_NE(std::string(expectError([&] { readTextPointsInChunks(empty, {}, 4, [](std::span<const Point3>) {}); }).what())
+                .find("holds no points"),
+            std::string::npos);
 }
 
 TEST(TextPoints, RedButteSpotHeights) {
