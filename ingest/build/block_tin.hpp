@@ -1,0 +1,100 @@
+// A TIN for more points than memory holds, built block by block (`tinsmith
+// tin --block-points`): the Delaunay triangulation of the points without the
+// triangles whose circumcircle's radius is more than `maxCircumradius` R —
+// the same triangles whatever the blocks, as one machine's triangulation of
+// all the points gives them (filtered alike, cocircular ties broken alike).
+//
+// Why blocks can decide it: the points are cut into squares (blocks). A
+// block triangulates its own points and every point within 2R of its square
+// (CdtOptions::canonicalTies, so the mesh is a function of the points alone)
+// and keeps the triangles of radius ≤ R whose least corner by (x, y) is its
+// own. Such a triangle's circle passes through that corner, so it lies within
+// 2R of the square: every point that could be inside it was triangulated, and
+// the triangle is Delaunay among all the points exactly when it is among the
+// block's. Conversely a Delaunay triangle of radius ≤ R has its corners within
+// 2R of its least one, so the block of that corner has it. Each triangle is
+// kept once, by its least corner's block. What is left out is what no block
+// can vouch for without holding everything: the hull's slivers (what
+// --trim-hull cuts) and triangles across gaps in the data wider than 2R.
+//
+// The passes, each holding at most one block and its surroundings (plus
+// buffers of a few MB):
+//   spool        the sources, chunk by chunk, into one binary file; their box
+//   bucket       each point into its block's file (squares of side B chosen so
+//                that a block holds about `blockPoints` on average)
+//   deduplicate  each block's exact (x, y) duplicates: the first one's z kept
+//   vertices     written block by block (rows of blocks from the south-west),
+//                each block's in the input's order
+//   triangulate  block by block, into the .tin (TinStreamWriter)
+// The scratch files live in a folder next to the output and are removed
+// however the build ends; the output appears only when complete.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/base/point.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "ingest/base/progress.hpp"
+
+namespace tinsmith::ingest {
+
+/// A point source read in chunks: calls `sink` with each chunk, in order.
+struct PointSource {
+  std::string name;  ///< the file, in messages
+  std::function<void(const std::function<void(std::span<const Point3>)>& sink)> read;
+};
+
+struct BlockTinOptions {
+  std::string crs;                      ///< recorded in the TIN
+  std::size_t blockPoints = 1'000'000;  ///< about this many points a block's own
+  /// The largest circumradius a triangle may have (metres); must be > 0.
+  double maxCircumradius = 0;
+  unsigned threads = 1;  ///< for each block's triangulation (the TIN is the same for any)
+};
+
+struct BlockTinReport {
+  std::size_t inputPoints = 0;
+  std::size_t duplicates = 0;  ///< exact (x, y) repeats dropped
+  std::size_t vertices = 0;
+  std::size_t triangles = 0;
+  std::size_t leftOut =
+      0;  ///< triangles over maxCircumradius (each counted by its least corner's block)
+  std::size_t gridBlocks = 0;  ///< blocks in the grid
+  std::size_t blocks = 0;      ///< blocks with points
+  double blockSide = 0;        ///< B, metres
+  double maxCircumradius = 0;
+  std::size_t largestTriangulated = 0;  ///< points one block triangulated, its surroundings' too
+  std::size_t triangulated = 0;         ///< over every block: the overlap's cost against `vertices`
+  tiles::Rect extent;
+  double zMin = 0, zMax = 0;
+  struct StageTime {
+    std::string stage;
+    double seconds = 0;
+  };
+  std::vector<StageTime> times;
+  double totalSeconds = 0;
+  [[nodiscard]] std::string summary() const;
+  [[nodiscard]] std::string toJson() const;
+};
+
+/// Builds the TIN of `sources` into `output` (a .tin). Throws inputError for
+/// a non-finite coordinate or one out of the triangulation's range (naming
+/// the source and the point), geometryError when no triangle is within R,
+/// usageError for R ≤ 0 or blockPoints < 16, ioError when the scratch files
+/// or the output cannot be written (nothing is left behind).
+BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
+                                const std::filesystem::path& output, const BlockTinOptions& options,
+                                const Progress* progress = nullptr);
+
+/// The circumcircle's radius of the triangle a, b, c (+inf when they are
+/// collinear), computed from the corners sorted by (x, y), so the same
+/// whatever their order: the rule both a block and a whole triangulation
+/// apply.
+double circumradius(Point2 a, Point2 b, Point2 c);
+
+}  // namespace tinsmith::ingest
