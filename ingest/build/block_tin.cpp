@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numeric>
@@ -172,11 +173,10 @@ double circumradius(Point2 a, Point2 b, Point2 c) {
 BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
                                 const std::filesystem::path& output, const BlockTinOptions& options,
                                 const Progress* progress) {
-  if (!(options.maxCircumradius > 0) || !std::isfinite(options.maxCircumradius))
+  if (!(options.maxCircumradius >= 0) || !std::isfinite(options.maxCircumradius))
     throw usageError("the largest circumradius must be a length in metres greater than 0");
   if (options.blockPoints < 16) throw usageError("a block must hold at least 16 points");
   BlockTinReport report;
-  report.maxCircumradius = options.maxCircumradius;
   Stopwatch clock;
   const ScratchDir scratch(output);
   const auto spool = scratch.path() / "points.bin";
@@ -234,6 +234,10 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
   grid.nx = static_cast<std::uint32_t>(std::floor(w / grid.side)) + 1;
   grid.ny = static_cast<std::uint32_t>(std::floor(h / grid.side)) + 1;
   report.gridBlocks = grid.count();
+  const double spacing = std::sqrt(std::max(w * h, 0.0) / double(report.inputPoints));
+  report.maxCircumradius = options.maxCircumradius > 0 ? options.maxCircumradius : 8 * spacing;
+  if (!(report.maxCircumradius > 0))
+    throw geometryError("the points lie on one line: no triangle", {}, "give points that span an area");
   report.blockSide = grid.side;
 
   // Bucket: each point into its block's file.
@@ -300,7 +304,7 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
   report.times.push_back({"write vertices", clock.lap()});
 
   // Triangulate each block with every point within 2R (and a hair) of it.
-  const double R = options.maxCircumradius;
+  const double R = report.maxCircumradius;
   const double reach = 2 * R * (1 + 1e-9) + grid.side * 1e-9;
   {
     ProgressTicker ticker(progress, "blocks.triangulate", "", grid.count());
@@ -388,9 +392,8 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
   if (report.triangles == 0)
     throw geometryError(
         "no triangle has a circumradius within " + std::to_string(R) + " m", {},
-        "give a larger --max-circumradius (the points' spacing is " +
-            std::to_string(std::sqrt(std::max(w * h, 0.0) / double(report.vertices))) +
-            " m on average)");
+        "give a larger --max-circumradius (the points' mean spacing is " +
+                            std::to_string(spacing) + " m)");
   std::vector<TinFeature> features;
   for (const PointSource& source : sources) features.push_back({FeatureKind::Other, source.name});
   writer.commit(features);
@@ -401,16 +404,17 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
 
 std::string BlockTinReport::summary() const {
   std::ostringstream s;
+  s << std::fixed << std::setprecision(1);
   s << "TIN built by blocks\n";
   s << "  input: " << inputPoints << " points, " << duplicates << " exact duplicates dropped\n";
   s << "  blocks: " << blocks << " with points of " << gridBlocks << ", " << blockSide
     << " m square; each triangulated with the points within " << 2 * maxCircumradius
-    << " m of it: " << largestTriangulated << " points at most, "
-    << (vertices ? double(triangulated) / double(vertices) : 0.0) << "× the vertices in all\n";
+    << " m of it: at most " << largestTriangulated << " points, "
+    << (vertices ? double(triangulated) / double(vertices) : 0.0) << "x the vertices in all\n";
   s << "  result: " << vertices << " vertices, " << triangles << " triangles; " << leftOut
-    << " Delaunay triangles over the circumradius " << maxCircumradius << " m left out\n";
-  s << "  extent: x " << extent.x0 << " .. " << extent.x1 << ", y " << extent.y0 << " .. "
-    << extent.y1 << "; z " << zMin << " .. " << zMax << " m\n";
+    << " Delaunay triangles with a circumradius over " << maxCircumradius << " m left out\n";
+  s << std::setprecision(3) << "  extent: x " << extent.x0 << " .. " << extent.x1 << ", y "
+    << extent.y0 << " .. " << extent.y1 << "; z " << zMin << " .. " << zMax << " m\n";
   s << "  time:";
   for (const auto& t : times) s << " " << t.stage << " " << t.seconds << " s;";
   s << " total " << totalSeconds << " s\n";

@@ -52,7 +52,8 @@ struct PointSource {
 struct BlockTinOptions {
   std::string crs;                      ///< recorded in the TIN
   std::size_t blockPoints = 1'000'000;  ///< about this many points a block's own
-  /// The largest circumradius a triangle may have (metres); must be > 0.
+  /// The largest circumradius a triangle may have (metres); 0: 8 × the
+  /// points' mean spacing over their box.
   double maxCircumradius = 0;
   unsigned threads = 1;  ///< for each block's triangulation (the TIN is the same for any)
 };
@@ -85,7 +86,7 @@ struct BlockTinReport {
 /// Builds the TIN of `sources` into `output` (a .tin). Throws inputError for
 /// a non-finite coordinate or one out of the triangulation's range (naming
 /// the source and the point), geometryError when no triangle is within R,
-/// usageError for R ≤ 0 or blockPoints < 16, ioError when the scratch files
+/// usageError for R < 0 or blockPoints < 16, ioError when the scratch files
 /// or the output cannot be written (nothing is left behind).
 BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
                                 const std::filesystem::path& output, const BlockTinOptions& options,

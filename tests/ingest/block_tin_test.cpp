@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <random>
 #include <set>
 #include <tuple>
@@ -190,6 +191,20 @@ TEST(BlockTin, ALargeRadiusReachesAcrossBlocks) {
   expectSameAsWhole(c, "reach");
 }
 
+TEST(BlockTin, TheDefaultRadiusIsEightMeanSpacings) {
+  Case c;
+  c.sources = {randomPoints(4000, 9, 0, 0, 400)};  // 6.3 m apart on average
+  c.radius = 8 * std::sqrt(400.0 * 400.0 / 4000);
+  const auto dir = test::scratchDir("block-tin-default");
+  BlockTinOptions options;
+  options.blockPoints = 500;
+  const auto report = buildTinByBlocks(sourcesOf(c.sources, 1000), dir / "t.tin", options);
+  // The box is a hair inside the square the points were drawn in.
+  EXPECT_NEAR(report.maxCircumradius, c.radius, 0.05);
+  EXPECT_EQ(triangleSet(readTinFile(dir / "t.tin")),
+            triangleSet(wholeTriangulation(c.sources, report.maxCircumradius)));
+}
+
 TEST(BlockTin, BadInputNamesItsSourceAndLeavesNothing) {
   const auto dir = test::scratchDir("block-tin-bad");
   BlockTinOptions options;
@@ -217,7 +232,7 @@ TEST(BlockTin, BadInputNamesItsSourceAndLeavesNothing) {
   for (int i = 0; i < 100; ++i) line.push_back({double(i), 2.0 * i, 0});
   expectError({line}, "no triangle", options);
   BlockTinOptions none = options;
-  none.maxCircumradius = 0;
+  none.maxCircumradius = -1;
   expectError({grid(5, 0, 0, 1)}, "greater than 0", none);
 }
 

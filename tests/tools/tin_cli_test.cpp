@@ -421,6 +421,70 @@ TEST(TinCli, BadInputFailsClearlyAndLeavesNoFile) {
   }
 }
 
+// --block-points: the bowed grid built block by block — every point a
+// vertex, the hull's slivers gone by the circumradius, a TIN the validator
+// (Delaunay property included) accepts — and what it refuses.
+TEST(TinCli, ByBlocksEveryPointStaysAndTheValidatorAccepts) {
+  const fs::path dir = test::scratchDir("cli-blocks");
+  std::string pts = "# a bowed grid\nx y z\n";
+  char buf[128];
+  for (int j = 0; j < 40; ++j) {
+    const double bow = 300 * std::sin(3.14159265358979 * j / 39.0);
+    for (int i = 0; i < 40; ++i) {
+      std::snprintf(buf, sizeof buf, "%.3f %.3f %.3f\n", 431000 + 90.0 * i + bow,
+                    4512000 + 90.0 * j, 1500.0 + i + (j % 3));
+      pts += buf;
+    }
+  }
+  writeText(dir / "grid.xyz", pts);
+  const fs::path tin = dir / "blocks.tin", report = dir / "blocks.json";
+  auto r = runTinsmith("tin --points " + (dir / "grid.xyz").string() +
+                       " --crs EPSG:26912 --block-points 100 --max-circumradius 120 --report " +
+                       report.string() + " -o " + tin.string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("TIN built by blocks"), std::string::npos) << r.err;
+  const auto json = nlohmann::json::parse(readFile(report));
+  EXPECT_GT(json["blocks"]["withPoints"].get<int>(), 9) << json.dump();
+  EXPECT_EQ(json["vertices"], 1600);
+  EXPECT_GT(json["leftOut"].get<int>(), 0) << "the bow's slivers";
+  const auto info = nlohmann::json::parse(runTinsmith("info " + tin.string() + " --json").out);
+  EXPECT_EQ(info["vertices"], 1600);
+  EXPECT_EQ(info["triangles"], json["triangles"]);
+  // Cells of 90 m (circumradius 63.6 m) all kept: 2 × 39 × 39 triangles.
+  EXPECT_EQ(info["triangles"], 2 * 39 * 39);
+  r = runTinsmith("validate " + tin.string());
+  EXPECT_EQ(r.exitCode, 0) << r.out << r.err;
+  // No scratch left beside the output.
+  EXPECT_EQ(test::filesIn(dir), 3u);
+
+  const std::string points = " --points " + (dir / "grid.xyz").string();
+  const std::vector<BadCase> cases = {
+      {"with break lines", points + " --breaklines " + (dir / "grid.xyz").string() + " --block-points 100", 2, "--points only"},
+      {"with --trim-hull", points + " --block-points 100 --trim-hull 200", 2, "--max-circumradius"},
+      {"radius alone", points + " --max-circumradius 100", 2, "--block-points"},
+      {"radius 0", points + " --block-points 100 --max-circumradius 0", 2, "greater than 0"},
+      {"tiny blocks", points + " --block-points 3", 2, "block-points"},
+      {"radius under every cell", points + " --block-points 100 --max-circumradius 40", 4, "circumradius"},
+  };
+  for (const auto& c : cases) {
+    const fs::path out = dir / "out" / (std::string(c.name) + ".tin");
+    fs::create_directories(out.parent_path());
+    r = runTinsmith("tin" + c.args + " -o \"" + out.string() + "\"");
+    EXPECT_EQ(r.exitCode, c.exitCode) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.mentions), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_EQ(test::filesIn(out.parent_path()), 0u) << c.name << " left a file behind";
+  }
+  // A bad line deep in a file read in chunks is named by its line.
+  pts += "431000 4512000 x\n";
+  writeText(dir / "bad.xyz", pts);
+  r = runTinsmith("tin --points " + (dir / "bad.xyz").string() + " --block-points 100 -o " +
+                  (dir / "out" / "bad.tin").string());
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("bad.xyz"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("line 1603"), std::string::npos) << r.err;
+  EXPECT_EQ(test::filesIn(dir / "out"), 0u);
+}
+
 TEST(TinCli, AFailedRunKeepsTheOldOutputAndAMissingDirectoryIsAnIoError) {
   const auto in = makePlainInputs("cli-keep");
   const fs::path out = in.dir / "keep.tin";

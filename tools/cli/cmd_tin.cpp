@@ -1,12 +1,15 @@
 // `tinsmith tin`: build a constrained Delaunay TIN.
 //   tinsmith tin CONFIG.toml -o site.tin [--report r.json] [--strict] [--validate]
 //   tinsmith tin --points FILE... --breaklines FILE... -o OUT.tin [--snap T] [--crs C] [--validate]
+//   tinsmith tin --points FILE... --block-points N [--max-circumradius R] -o OUT.tin
 // The first reads every [[layer]] of the config (ingest: read, reproject,
 // clean) and applies the terrain rules (builders.tin); the second triangulates
 // plain inputs as they are: XYZ/CSV points, and break lines as GeoJSON (or any
 // OGR format) 3D (Multi)LineStrings or text polylines (x y z per line, a
 // blank line between polylines); either may be a synthetic spec instead of a
 // file (`--points 'synthetic:grid?nx=20&ny=20'`, readers/synthetic_reader.hpp).
+// The third builds a TIN of more points than memory holds, block by block
+// (ingest/build/block_tin.hpp).
 // A human summary goes to stderr; progress bars too when stderr is a terminal.
 // Outputs are written atomically: a failed run leaves no file behind.
 #include <unistd.h>
@@ -15,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +27,7 @@
 #include "core/base/error.hpp"
 #include "core/tin/hull_trim.hpp"
 #include "ingest/base/progress.hpp"
+#include "ingest/build/block_tin.hpp"
 #include "ingest/build/from_ingest.hpp"
 #include "ingest/readers/text_polylines.hpp"
 #include "ingest/build/tin_builder.hpp"
@@ -54,6 +59,8 @@ struct TinOptions {
   bool noFlatRepair = false;
   bool fullValidation = false;
   std::optional<double> trimHull;
+  std::optional<std::size_t> blockPoints;
+  std::optional<double> maxCircumradius;
   unsigned threads = 0;
   bool quiet = false;
 };
@@ -61,6 +68,19 @@ struct TinOptions {
 bool isTextPolylineFile(const std::filesystem::path& p) {
   const auto ext = p.extension().string();
   return ext == ".txt" || ext == ".xyz" || ext == ".pl" || ext == ".poly" || ext == ".lines";
+}
+
+/// A --points file that is not XYZ/CSV text: a synthetic spec or an OGR file.
+std::vector<Point3> readOtherPoints(const std::string& file) {
+  if (ingest::isSyntheticSpec(file))
+    return ingest::readSyntheticLayer(ingest::commandLineLayer(file, file, ingest::LayerKind::Points))
+        .points;
+  const auto name = std::filesystem::path(file).filename().string();
+  auto read = ingest::readOgrLayer(ingest::commandLineLayer(name, file, ingest::LayerKind::Points));
+  if (!read.hasZ)
+    throw inputError("the points have no z", fileLocation(file),
+                     "give 3D points, or use a config with a 'z' attribute");
+  return std::move(read.points);
 }
 
 // Plain mode: every input as it is; points of kind Other, break lines of kind
@@ -77,25 +97,16 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
   };
   for (const auto& file : o.points) {
     ingest::BuildLayer layer;
-    layer.name = std::filesystem::path(file).filename().string();
+    layer.name = ingest::isSyntheticSpec(file) ? file : std::filesystem::path(file).filename().string();
     layer.kindName = "points";
     layer.kind = FeatureKind::Other;
     layer.source = file;
-    if (ingest::isSyntheticSpec(file)) {
-      layer.name = file;
-      layer.points =
-          ingest::readSyntheticLayer(ingest::commandLineLayer(file, file, ingest::LayerKind::Points)).points;
-    } else if (ingest::isTextPointFile(file)) {
+    if (ingest::isTextPointFile(file)) {
       ingest::TextPointOptions text;
       text.threads = o.threads;
       layer.points = ingest::readTextPoints(file, text);
     } else {
-      const auto read =
-          ingest::readOgrLayer(ingest::commandLineLayer(layer.name, file, ingest::LayerKind::Points));
-      if (!read.hasZ)
-        throw inputError("the points have no z", fileLocation(file),
-                         "give 3D points, or use a config with a 'z' attribute");
-      layer.points = read.points;
+      layer.points = readOtherPoints(file);
     }
     timeRead(layer);
     layers.push_back(std::move(layer));
@@ -145,7 +156,65 @@ void writeReport(const std::string& path, const ingest::BuildReport& report) {
   file.commit();
 }
 
+/// The --points files as sources read in chunks: XYZ/CSV text a chunk at a
+/// time, the rest (synthetic specs, OGR files) whole.
+std::vector<ingest::PointSource> pointSources(const TinOptions& o) {
+  std::vector<ingest::PointSource> sources;
+  for (const auto& file : o.points) {
+    if (ingest::isTextPointFile(file)) {
+      sources.push_back({file, [file, threads = o.threads](const auto& sink) {
+                           ingest::TextPointOptions text;
+                           text.threads = threads;
+                           ingest::readTextPointsInChunks(file, text, std::size_t{64} << 20, sink);
+                         }});
+    } else {
+      sources.push_back({file, [file](const auto& sink) { sink(readOtherPoints(file)); }});
+    }
+  }
+  return sources;
+}
+
+// --block-points: the TIN built block by block (ingest/build/block_tin.hpp).
+void runByBlocks(const TinOptions& o) {
+  if (!o.config.empty() || !o.breaklines.empty() || o.points.empty())
+    throw usageError("--block-points builds a TIN of --points only",
+                     "give the points with --points; break lines need the whole TIN");
+  if (o.trimHull)
+    throw usageError("--trim-hull needs the whole TIN; with --block-points the hull's slivers go by --max-circumradius");
+  if (o.snap && *o.snap != 0) throw usageError("--block-points merges exact duplicates only: leave out --snap");
+  if (o.fullValidation)
+    throw usageError("--validate needs the whole TIN in memory",
+                     "run `tinsmith validate` on the .tin where it fits");
+  if (o.maxCircumradius && !(*o.maxCircumradius > 0))
+    throw usageError("--max-circumradius must be a length in metres greater than 0");
+  if (!o.crs.empty()) ingest::checkProjectCrs(o.crs, "--crs");
+  checkOutputDirectory(o.output, "the TIN (-o)");
+  if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
+  ingest::BlockTinOptions options;
+  options.crs = o.crs;
+  options.blockPoints = *o.blockPoints;
+  options.maxCircumradius = o.maxCircumradius.value_or(0.0);
+  options.threads = o.threads;
+  auto bar = terminalProgress(o.quiet);
+  const auto report = ingest::buildTinByBlocks(pointSources(o), o.output, options, bar.get());
+  bar.bar.reset();
+  if (!o.report.empty()) {
+    try {
+      ingest::AtomicFile file(o.report);
+      file.write(report.toJson());
+      file.commit();
+    } catch (...) {
+      std::error_code ec;
+      std::filesystem::remove(o.output, ec);  // both outputs or neither
+      throw;
+    }
+  }
+  if (!o.quiet) std::cerr << report.summary() << "wrote " << o.output << "\n";
+}
+
 void run(const TinOptions& o) {
+  if (o.blockPoints) return runByBlocks(o);
+  if (o.maxCircumradius) throw usageError("--max-circumradius goes with --block-points");
   const bool plain = !o.points.empty() || !o.breaklines.empty();
   if (plain && !o.config.empty())
     throw usageError("give either a config file or --points/--breaklines, not both");
@@ -242,6 +311,16 @@ void addTinCommand(CLI::App& app) {
                   "Remove the convex hull's slivers around non-convex data (a projected DEM's "
                   "curved edges): hull triangles whose outer edge is longer than this many "
                   "metres, from the outside in (e.g. 3 × the grid spacing)");
+  cmd->add_option("--block-points", opt->blockPoints,
+                  "Build the TIN block by block, each block holding about this many points, "
+                  "for more points than memory holds (plain mode, --points only): the points "
+                  "go through files next to the output, one block in memory at a time")
+      ->check(CLI::Range(std::size_t{16}, std::numeric_limits<std::size_t>::max()));
+  cmd->add_option("--max-circumradius", opt->maxCircumradius,
+                  "With --block-points: leave out the Delaunay triangles whose circumcircle's "
+                  "radius is more than this many metres (the hull's slivers and gaps in the data "
+                  "wider than twice it); each block reads the points within twice it. Default: "
+                  "8 × the points' mean spacing");
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");
