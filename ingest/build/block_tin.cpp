@@ -5,9 +5,11 @@
 #include <stdlib.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -18,6 +20,7 @@
 #include "core/cdt/cdt.hpp"
 #include "core/geometry/predicates.hpp"
 #include "core/tin/tin_data.hpp"
+#include "ingest/base/atomic_file.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 namespace tinsmith::ingest {
@@ -170,16 +173,165 @@ double circumradius(Point2 a, Point2 b, Point2 c) {
   return circumcircle(a, b, c).radius;
 }
 
-BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
-                                const std::filesystem::path& output, const BlockTinOptions& options,
-                                const Progress* progress) {
+namespace {
+
+constexpr const char* kBlocksFormat = "tinsmith-blocks/1";
+constexpr std::array<char, 8> kTriMagic = {'T', 'I', 'N', 'B', 'L', 'K', '1', '\0'};
+
+std::filesystem::path bucketPath(const std::filesystem::path& dir, std::size_t block) {
+  return dir / "points" / ("block-" + std::to_string(block) + ".bin");
+}
+std::filesystem::path trianglesPath(const std::filesystem::path& dir, std::size_t task) {
+  return dir / "triangles" / (std::to_string(task) + ".tri");
+}
+
+/// What stage 1 decided, as blocks.json keeps it.
+struct BlockLayout {
+  BlockGrid grid;
+  double radius = 0;
+  std::vector<std::uint64_t> first;  // per block: its first vertex; one more at the end
+  std::vector<std::size_t> tasks;    // the blocks with points, in order
+  std::string crs;
+  std::vector<std::string> sources;
+  BlockTinReport report;  // stage 1's part
+
+  [[nodiscard]] std::size_t own(std::size_t b) const { return first[b + 1] - first[b]; }
+};
+
+void writeLayout(const std::filesystem::path& dir, const BlockLayout& layout) {
+  const BlockTinReport& r = layout.report;
+  nlohmann::ordered_json j;
+  j["format"] = kBlocksFormat;
+  j["crs"] = layout.crs;
+  j["sources"] = layout.sources;
+  j["grid"] = {{"x0", layout.grid.x0},
+               {"y0", layout.grid.y0},
+               {"side", layout.grid.side},
+               {"nx", layout.grid.nx},
+               {"ny", layout.grid.ny}};
+  j["maxCircumradius"] = layout.radius;
+  j["tasks"] = layout.tasks;
+  j["first"] = layout.first;
+  j["inputPoints"] = r.inputPoints;
+  j["duplicates"] = r.duplicates;
+  j["extent"] = {r.extent.x0, r.extent.y0, r.extent.x1, r.extent.y1};
+  j["z"] = {r.zMin, r.zMax};
+  nlohmann::ordered_json times = nlohmann::ordered_json::object();
+  for (const auto& t : r.times) times[t.stage] = t.seconds;
+  j["seconds"] = times;
+  AtomicFile file(dir / "blocks.json");
+  file.write(j.dump(1) + "\n");
+  file.commit();
+}
+
+BlockLayout readLayout(const std::filesystem::path& dir) {
+  const auto path = dir / "blocks.json";
+  std::ifstream in(path);
+  if (!in)
+    throw inputError("no blocks.json: not a folder of points prepared in blocks",
+                     fileLocation(dir.string()), "prepare it with tinsmith slurm-tin");
+  const auto j = nlohmann::json::parse(in, nullptr, false);
+  if (!j.is_object() || j.value("format", "") != kBlocksFormat)
+    throw inputError(
+        "not a blocks.json this tinsmith reads (format " + std::string(kBlocksFormat) + ")",
+        fileLocation(path.string()), "prepare the points again with this tinsmith");
+  BlockLayout layout;
+  try {
+    layout.crs = j.at("crs").get<std::string>();
+    layout.sources = j.at("sources").get<std::vector<std::string>>();
+    const auto& g = j.at("grid");
+    layout.grid = {g.at("x0").get<double>(), g.at("y0").get<double>(), g.at("side").get<double>(),
+                   g.at("nx").get<std::uint32_t>(), g.at("ny").get<std::uint32_t>()};
+    layout.radius = j.at("maxCircumradius").get<double>();
+    layout.tasks = j.at("tasks").get<std::vector<std::size_t>>();
+    layout.first = j.at("first").get<std::vector<std::uint64_t>>();
+    BlockTinReport& r = layout.report;
+    r.inputPoints = j.at("inputPoints").get<std::size_t>();
+    r.duplicates = j.at("duplicates").get<std::size_t>();
+    const auto e = j.at("extent").get<std::array<double, 4>>();
+    r.extent = {e[0], e[1], e[2], e[3]};
+    const auto z = j.at("z").get<std::array<double, 2>>();
+    r.zMin = z[0];
+    r.zMax = z[1];
+    for (const auto& [stage, seconds] : j.at("seconds").items())
+      r.times.push_back({stage, seconds.get<double>()});
+  } catch (const nlohmann::json::exception& e) {
+    throw inputError(std::string("blocks.json is damaged: ") + e.what(),
+                     fileLocation(path.string()), "prepare the points again");
+  }
+  if (layout.first.size() != layout.grid.count() + 1)
+    throw inputError("blocks.json is damaged: its offsets do not match its grid",
+                     fileLocation(path.string()), "prepare the points again");
+  layout.report.gridBlocks = layout.grid.count();
+  layout.report.blocks = layout.tasks.size();
+  layout.report.blockSide = layout.grid.side;
+  layout.report.maxCircumradius = layout.radius;
+  layout.report.vertices = layout.first.back();
+  return layout;
+}
+
+/// A block's own points and those of other blocks within reach, each with
+/// its TIN vertex: the same for the triangulation and the assembly.
+struct LoadedBlock {
+  std::vector<Point3> points;  // its own first
+  std::vector<std::uint32_t> global;
+  std::size_t own = 0;
+  tiles::Rect around;  // what was read: the square grown by 2R and a hair
+};
+
+LoadedBlock loadBlock(const BlockLayout& layout, const std::filesystem::path& dir, std::size_t b) {
+  const BlockGrid& grid = layout.grid;
+  LoadedBlock load;
+  load.own = layout.own(b);
+  load.points = readPoints(bucketPath(dir, b));
+  if (load.points.size() != load.own)
+    throw inputError("block " + std::to_string(b) + " holds " + std::to_string(load.points.size()) +
+                         " points where blocks.json says " + std::to_string(load.own),
+                     fileLocation(bucketPath(dir, b).string()), "prepare the points again");
+  load.global.resize(load.own);
+  std::iota(load.global.begin(), load.global.end(), static_cast<std::uint32_t>(layout.first[b]));
+  const std::uint32_t column = static_cast<std::uint32_t>(b % grid.nx);
+  const std::uint32_t row = static_cast<std::uint32_t>(b / grid.nx);
+  const double reach = 2 * layout.radius * (1 + 1e-9) + grid.side * 1e-9;
+  load.around = {grid.x0 + column * grid.side - reach, grid.y0 + row * grid.side - reach,
+                 grid.x0 + (column + 1) * grid.side + reach,
+                 grid.y0 + (row + 1) * grid.side + reach};
+  const tiles::Rect& around = load.around;
+  // The blocks the reach meets (one more each way: the block of a point on a
+  // square's side is the rounding's).
+  const std::uint32_t c0 = grid.column(around.x0), c1 = grid.column(around.x1);
+  const std::uint32_t r0 = grid.row(around.y0), r1 = grid.row(around.y1);
+  for (std::uint32_t r = r0 > 0 ? r0 - 1 : 0; r <= std::min(r1 + 1, grid.ny - 1); ++r) {
+    for (std::uint32_t c = c0 > 0 ? c0 - 1 : 0; c <= std::min(c1 + 1, grid.nx - 1); ++c) {
+      const std::size_t o = std::size_t{r} * grid.nx + c;
+      if (o == b || layout.own(o) == 0) continue;
+      const std::vector<Point3> theirs = readPoints(bucketPath(dir, o));
+      for (std::size_t i = 0; i < theirs.size(); ++i) {
+        const Point3& p = theirs[i];
+        if (p.x < around.x0 || p.x > around.x1 || p.y < around.y0 || p.y > around.y1) continue;
+        load.points.push_back(p);
+        load.global.push_back(static_cast<std::uint32_t>(layout.first[o] + i));
+      }
+    }
+  }
+  return load;
+}
+
+}  // namespace
+
+BlockTinReport prepareBlocks(const std::vector<PointSource>& sources,
+                             const std::filesystem::path& dir, const BlockTinOptions& options,
+                             const Progress* progress) {
   if (!(options.maxCircumradius >= 0) || !std::isfinite(options.maxCircumradius))
     throw usageError("the largest circumradius must be a length in metres greater than 0");
   if (options.blockPoints < 16) throw usageError("a block must hold at least 16 points");
-  BlockTinReport report;
+  BlockLayout layout;
+  BlockTinReport& report = layout.report;
+  layout.crs = options.crs;
+  for (const PointSource& source : sources) layout.sources.push_back(source.name);
   Stopwatch clock;
-  const ScratchDir scratch(output);
-  const auto spool = scratch.path() / "points.bin";
+  std::filesystem::create_directories(dir / "points");
+  const auto spool = dir / "points" / "spool.bin";
 
   // Spool: the sources into one binary file, checked, with their box.
   tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
@@ -220,7 +372,7 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
   report.times.push_back({"spool", clock.lap()});
 
   // The blocks: squares holding about blockPoints each on average.
-  BlockGrid grid;
+  BlockGrid& grid = layout.grid;
   grid.x0 = box.x0;
   grid.y0 = box.y0;
   const double w = box.x1 - box.x0, h = box.y1 - box.y0;
@@ -233,21 +385,17 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
   if (!(grid.side > 0)) grid.side = 1;
   grid.nx = static_cast<std::uint32_t>(std::floor(w / grid.side)) + 1;
   grid.ny = static_cast<std::uint32_t>(std::floor(h / grid.side)) + 1;
-  report.gridBlocks = grid.count();
   const double spacing = std::sqrt(std::max(w * h, 0.0) / double(report.inputPoints));
-  report.maxCircumradius = options.maxCircumradius > 0 ? options.maxCircumradius : 8 * spacing;
-  if (!(report.maxCircumradius > 0))
-    throw geometryError("the points lie on one line: no triangle", {}, "give points that span an area");
-  report.blockSide = grid.side;
+  layout.radius = options.maxCircumradius > 0 ? options.maxCircumradius : 8 * spacing;
+  if (!(layout.radius > 0))
+    throw geometryError("the points lie on one line: no triangle", {},
+                        "give points that span an area");
 
   // Bucket: each point into its block's file.
-  const auto bucket = [&](std::size_t b) {
-    return scratch.path() / ("block-" + std::to_string(b) + ".bin");
-  };
   {
     std::vector<std::vector<Point3>> buffers(grid.count());
     const std::size_t flushAt = std::clamp<std::size_t>(
-        (std::size_t{32} << 20) / sizeof(Point3) / grid.count(), 256, 1 << 16);
+        (std::size_t{16} << 20) / sizeof(Point3) / grid.count(), 256, 1 << 16);
     ProgressTicker ticker(progress, "blocks.bucket", "", report.inputPoints);
     std::size_t done = 0;
     forEachChunk(spool, [&](std::span<const Point3> points) {
@@ -255,25 +403,25 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
         const std::size_t b = grid.blockOf(p);
         buffers[b].push_back(p);
         if (buffers[b].size() >= flushAt) {
-          appendPoints(bucket(b), buffers[b]);
+          appendPoints(bucketPath(dir, b), buffers[b]);
           buffers[b].clear();
         }
       }
       ticker.step(done += points.size());
     });
-    for (std::size_t b = 0; b < buffers.size(); ++b) appendPoints(bucket(b), buffers[b]);
+    for (std::size_t b = 0; b < buffers.size(); ++b) appendPoints(bucketPath(dir, b), buffers[b]);
     ticker.finish();
   }
   std::filesystem::remove(spool);
   report.times.push_back({"bucket", clock.lap()});
 
-  // Deduplicate each block; its vertices' first global number.
-  std::vector<std::uint64_t> first(grid.count() + 1, 0);
+  // Deduplicate each block; its vertices' first number in the TIN.
+  layout.first.assign(grid.count() + 1, 0);
   {
     ProgressTicker ticker(progress, "blocks.deduplicate", "", grid.count());
     for (std::size_t b = 0; b < grid.count(); ++b) {
-      std::vector<Point3> points = readPoints(bucket(b));
-      if (!points.empty()) ++report.blocks;
+      std::vector<Point3> points = readPoints(bucketPath(dir, b));
+      if (!points.empty()) layout.tasks.push_back(b);
       std::vector<std::uint32_t> order(points.size());
       std::iota(order.begin(), order.end(), 0u);
       std::stable_sort(order.begin(), order.end(), [&](std::uint32_t i, std::uint32_t j) {
@@ -288,117 +436,170 @@ BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
       if (kept < points.size()) {
         report.duplicates += points.size() - kept;
         points.resize(kept);
-        std::filesystem::remove(bucket(b));
-        appendPoints(bucket(b), points);
+        std::filesystem::remove(bucketPath(dir, b));
+        appendPoints(bucketPath(dir, b), points);
       }
-      first[b + 1] = first[b] + kept;
+      layout.first[b + 1] = layout.first[b] + kept;
       ticker.step(b + 1);
     }
     ticker.finish();
   }
-  report.vertices = first.back();
   report.times.push_back({"deduplicate", clock.lap()});
+  std::filesystem::create_directories(dir / "triangles");
+  writeLayout(dir, layout);
+  return readLayout(dir).report;
+}
 
-  TinStreamWriter writer(output, options.crs);
-  for (std::size_t b = 0; b < grid.count(); ++b) writer.addVertices(readPoints(bucket(b)));
-  report.times.push_back({"write vertices", clock.lap()});
+std::size_t blockTasks(const std::filesystem::path& dir) {
+  return readLayout(dir).tasks.size();
+}
 
-  // Triangulate each block with every point within 2R (and a hair) of it.
-  const double R = report.maxCircumradius;
-  const double reach = 2 * R * (1 + 1e-9) + grid.side * 1e-9;
-  {
-    ProgressTicker ticker(progress, "blocks.triangulate", "", grid.count());
-    std::vector<Point3> points;
-    std::vector<std::uint32_t> global;  // per loaded point: its TIN vertex
-    std::vector<TinData::Triangle> triangles;
-    std::vector<Point3> corners;
-    for (std::uint32_t row = 0; row < grid.ny; ++row) {
-      for (std::uint32_t column = 0; column < grid.nx; ++column) {
-        const std::size_t b = std::size_t{row} * grid.nx + column;
-        ticker.step(b);
-        const std::size_t own = first[b + 1] - first[b];
-        if (own == 0) continue;
-        points = readPoints(bucket(b));
-        global.resize(own);
-        std::iota(global.begin(), global.end(), static_cast<std::uint32_t>(first[b]));
-        const tiles::Rect square{grid.x0 + column * grid.side, grid.y0 + row * grid.side,
-                                 grid.x0 + (column + 1) * grid.side,
-                                 grid.y0 + (row + 1) * grid.side};
-        const tiles::Rect around{square.x0 - reach, square.y0 - reach, square.x1 + reach,
-                                 square.y1 + reach};
-        // The neighbours' blocks the reach meets (one more each way: the
-        // block of a point on a square's side is the rounding's).
-        const std::uint32_t c0 = grid.column(around.x0), c1 = grid.column(around.x1);
-        const std::uint32_t r0 = grid.row(around.y0), r1 = grid.row(around.y1);
-        for (std::uint32_t r = r0 > 0 ? r0 - 1 : 0; r <= std::min(r1 + 1, grid.ny - 1); ++r) {
-          for (std::uint32_t c = c0 > 0 ? c0 - 1 : 0; c <= std::min(c1 + 1, grid.nx - 1); ++c) {
-            const std::size_t o = std::size_t{r} * grid.nx + c;
-            if (o == b || first[o + 1] == first[o]) continue;
-            const std::vector<Point3> theirs = readPoints(bucket(o));
-            for (std::size_t i = 0; i < theirs.size(); ++i) {
-              const Point3& p = theirs[i];
-              if (p.x < around.x0 || p.x > around.x1 || p.y < around.y0 || p.y > around.y1)
-                continue;
-              points.push_back(p);
-              global.push_back(static_cast<std::uint32_t>(first[o] + i));
-            }
-          }
-        }
-        report.triangulated += points.size();
-        report.largestTriangulated = std::max(report.largestTriangulated, points.size());
-        if (collinear(points)) continue;  // no triangle within reach: none of its own
+std::vector<std::size_t> untriangulatedBlocks(const std::filesystem::path& dir) {
+  const std::size_t tasks = blockTasks(dir);
+  std::vector<std::size_t> out;
+  for (std::size_t k = 0; k < tasks; ++k)
+    if (!std::filesystem::exists(trianglesPath(dir, k))) out.push_back(k);
+  return out;
+}
 
-        CdtOptions cdtOptions;
-        cdtOptions.canonicalTies = true;
-        cdtOptions.threads = options.threads;
-        Cdt cdt(cdtOptions);
-        cdt.insertPoints(points);
-        cdt.finalize();
-        const Mesh& mesh = cdt.mesh();
-        std::vector<std::uint32_t> loadedOf(mesh.vertexCount(), 0);
-        for (std::uint32_t i = 0; i < points.size(); ++i)
-          loadedOf[cdt.meshVertex(VertexId(i)).value] = i;
-        triangles.clear();
-        corners.clear();
-        for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
-          const auto v = mesh.vertices(TriangleId(t));
-          std::array<std::uint32_t, 3> loaded{loadedOf[v[0].value], loadedOf[v[1].value],
-                                              loadedOf[v[2].value]};
-          std::uint32_t least = loaded[0];
-          for (const std::uint32_t k : {loaded[1], loaded[2]})
-            if (lessXY(points[k], points[least])) least = k;
-          if (least >= own) continue;  // its least corner's block keeps it
-          const Circle circle =
-              circumcircle(points[loaded[0]].xy(), points[loaded[1]].xy(), points[loaded[2]].xy());
-          if (!(circle.radius <= R)) {
-            ++report.leftOut;
-            continue;
-          }
-          // The proof's premise, checked: the circle is inside what was read.
-          if (circle.center.x - circle.radius < around.x0 ||
-              circle.center.x + circle.radius > around.x1 ||
-              circle.center.y - circle.radius < around.y0 ||
-              circle.center.y + circle.radius > around.y1)
-            throw internalError("a kept triangle's circle leaves its block's surroundings");
-          triangles.push_back({global[loaded[0]], global[loaded[1]], global[loaded[2]]});
-          for (const std::uint32_t k : loaded) corners.push_back(points[k]);
-        }
-        writer.addTriangles(triangles, corners);
+BlockResult triangulateBlock(const std::filesystem::path& dir, std::size_t task, unsigned threads) {
+  const BlockLayout layout = readLayout(dir);
+  if (task >= layout.tasks.size())
+    throw usageError("block task " + std::to_string(task) + " is not one of the " +
+                     std::to_string(layout.tasks.size()) + " of " + dir.string());
+  const LoadedBlock load = loadBlock(layout, dir, layout.tasks[task]);
+  BlockResult result;
+  result.triangulated = load.points.size();
+  std::vector<std::array<std::uint32_t, 3>> kept;
+  if (!collinear(load.points)) {  // collinear: no triangle within reach, none of its own
+    CdtOptions cdtOptions;
+    cdtOptions.canonicalTies = true;
+    cdtOptions.threads = threads;
+    Cdt cdt(cdtOptions);
+    cdt.insertPoints(load.points);
+    cdt.finalize();
+    const Mesh& mesh = cdt.mesh();
+    std::vector<std::uint32_t> loadedOf(mesh.vertexCount(), 0);
+    for (std::uint32_t i = 0; i < load.points.size(); ++i)
+      loadedOf[cdt.meshVertex(VertexId(i)).value] = i;
+    const tiles::Rect& around = load.around;
+    for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+      const auto v = mesh.vertices(TriangleId(t));
+      const std::array<std::uint32_t, 3> corner{loadedOf[v[0].value], loadedOf[v[1].value],
+                                                loadedOf[v[2].value]};
+      std::uint32_t least = corner[0];
+      for (const std::uint32_t k : {corner[1], corner[2]})
+        if (lessXY(load.points[k], load.points[least])) least = k;
+      if (least >= load.own) continue;  // its least corner's block keeps it
+      const Circle circle = circumcircle(load.points[corner[0]].xy(), load.points[corner[1]].xy(),
+                                         load.points[corner[2]].xy());
+      if (!(circle.radius <= layout.radius)) {
+        ++result.leftOut;
+        continue;
       }
+      // The premise of the proof, checked: the circle is inside what was read.
+      if (circle.center.x - circle.radius < around.x0 ||
+          circle.center.x + circle.radius > around.x1 ||
+          circle.center.y - circle.radius < around.y0 ||
+          circle.center.y + circle.radius > around.y1)
+        throw internalError("a kept triangle's circle leaves its block's surroundings");
+      kept.push_back(corner);
     }
-    ticker.finish();
   }
+  result.kept = kept.size();
+  AtomicFile file(trianglesPath(dir, task));
+  file.write(kTriMagic.data(), kTriMagic.size());
+  const std::array<std::uint64_t, 3> counts{result.triangulated, result.leftOut, result.kept};
+  file.write(counts.data(), sizeof counts);
+  file.write(kept.data(), kept.size() * sizeof kept[0]);
+  file.commit();
+  return result;
+}
+
+BlockTinReport assembleBlocks(const std::filesystem::path& dir, const std::filesystem::path& output,
+                              const Progress* progress) {
+  const BlockLayout layout = readLayout(dir);
+  BlockTinReport report = layout.report;
+  for (std::size_t k = 0; k < layout.tasks.size(); ++k)
+    if (!std::filesystem::exists(trianglesPath(dir, k)))
+      throw inputError("block task " + std::to_string(k) + " of " +
+                           std::to_string(layout.tasks.size()) + " has no triangles",
+                       fileLocation(dir.string()),
+                       "run it (tinsmith tin --blocks DIR --block " + std::to_string(k) +
+                           ", or tinsmith slurm-tin … --resume --submit), then assemble again");
+  Stopwatch clock;
+  TinStreamWriter writer(output, layout.crs);
+  for (std::size_t b = 0; b < layout.grid.count(); ++b)
+    if (layout.own(b)) writer.addVertices(readPoints(bucketPath(dir, b)));
+  report.times.push_back({"write vertices", clock.lap()});
+  ProgressTicker ticker(progress, "blocks.assemble", "", layout.tasks.size());
+  std::vector<TinData::Triangle> triangles;
+  std::vector<Point3> corners;
+  for (std::size_t k = 0; k < layout.tasks.size(); ++k) {
+    const auto path = trianglesPath(dir, k);
+    std::ifstream in(path, std::ios::binary);
+    std::array<char, 8> magic{};
+    std::array<std::uint64_t, 3> counts{};
+    in.read(magic.data(), magic.size());
+    in.read(reinterpret_cast<char*>(counts.data()), sizeof counts);
+    std::vector<std::array<std::uint32_t, 3>> kept(in && magic == kTriMagic ? counts[2] : 0);
+    in.read(reinterpret_cast<char*>(kept.data()),
+            static_cast<std::streamsize>(kept.size() * sizeof kept[0]));
+    if (!in || magic != kTriMagic || in.peek() != std::char_traits<char>::eof())
+      throw inputError("block task " + std::to_string(k) + "'s triangles are damaged",
+                       fileLocation(path.string()), "remove the file and run the task again");
+    report.triangulated += counts[0];
+    report.largestTriangulated = std::max<std::size_t>(report.largestTriangulated, counts[0]);
+    report.leftOut += counts[1];
+    if (kept.empty()) continue;
+    const LoadedBlock load = loadBlock(layout, dir, layout.tasks[k]);
+    triangles.clear();
+    corners.clear();
+    for (const auto& t : kept) {
+      if (std::max({t[0], t[1], t[2]}) >= load.points.size())
+        throw inputError("block task " + std::to_string(k) + "'s triangles are damaged",
+                         fileLocation(path.string()), "remove the file and run the task again");
+      triangles.push_back({load.global[t[0]], load.global[t[1]], load.global[t[2]]});
+      for (const std::uint32_t c : t) corners.push_back(load.points[c]);
+    }
+    writer.addTriangles(triangles, corners);
+    ticker.step(k + 1);
+  }
+  ticker.finish();
   report.triangles = writer.triangleCount();
-  if (report.triangles == 0)
+  if (report.triangles == 0) {
+    const double w = report.extent.x1 - report.extent.x0, h = report.extent.y1 - report.extent.y0;
     throw geometryError(
-        "no triangle has a circumradius within " + std::to_string(R) + " m", {},
+        "no triangle has a circumradius within " + std::to_string(layout.radius) + " m", {},
         "give a larger --max-circumradius (the points' mean spacing is " +
-                            std::to_string(spacing) + " m)");
+            std::to_string(std::sqrt(std::max(w * h, 0.0) / double(report.vertices))) + " m)");
+  }
   std::vector<TinFeature> features;
-  for (const PointSource& source : sources) features.push_back({FeatureKind::Other, source.name});
+  for (const auto& source : layout.sources) features.push_back({FeatureKind::Other, source});
   writer.commit(features);
-  report.times.push_back({"triangulate", clock.lap()});
+  report.times.push_back({"assemble", clock.lap()});
+  report.totalSeconds = 0;
   for (const auto& t : report.times) report.totalSeconds += t.seconds;
+  return report;
+}
+
+BlockTinReport buildTinByBlocks(const std::vector<PointSource>& sources,
+                                const std::filesystem::path& output, const BlockTinOptions& options,
+                                const Progress* progress) {
+  const ScratchDir scratch(output);
+  prepareBlocks(sources, scratch.path(), options, progress);
+  Stopwatch clock;
+  const std::size_t tasks = blockTasks(scratch.path());
+  ProgressTicker ticker(progress, "blocks.triangulate", "", tasks);
+  for (std::size_t k = 0; k < tasks; ++k) {
+    triangulateBlock(scratch.path(), k, options.threads);
+    ticker.step(k + 1);
+  }
+  ticker.finish();
+  const double triangulate = clock.lap();
+  BlockTinReport report = assembleBlocks(scratch.path(), output, progress);
+  report.times.insert(report.times.end() - 2, {"triangulate", triangulate});
+  report.totalSeconds += triangulate;
   return report;
 }
 

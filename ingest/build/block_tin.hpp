@@ -17,17 +17,24 @@
 // can vouch for without holding everything: the hull's slivers (what
 // --trim-hull cuts) and triangles across gaps in the data wider than 2R.
 //
-// The passes, each holding at most one block and its surroundings (plus
-// buffers of a few MB):
-//   spool        the sources, chunk by chunk, into one binary file; their box
-//   bucket       each point into its block's file (squares of side B chosen so
-//                that a block holds about `blockPoints` on average)
-//   deduplicate  each block's exact (x, y) duplicates: the first one's z kept
-//   vertices     written block by block (rows of blocks from the south-west),
-//                each block's in the input's order
-//   triangulate  block by block, into the .tin (TinStreamWriter)
-// The scratch files live in a folder next to the output and are removed
-// however the build ends; the output appears only when complete.
+// Three stages, each holding at most one block and its surroundings (plus
+// buffers of a few MB), in a folder:
+//   1 prepare      the sources spooled chunk by chunk into one binary file,
+//                  with their box; each point into its block's file
+//                  (points/block-B.bin; squares of side B chosen so that a
+//                  block holds about `blockPoints` on average); each block's
+//                  exact (x, y) duplicates dropped, the first one's z kept;
+//                  blocks.json says how (the grid, R, each block's first
+//                  vertex, the blocks with points: stage 2's tasks)
+//   2 triangulate  one task per block with points, in any order and process:
+//                  its kept triangles as indices into what it read
+//                  (triangles/TASK.tri, atomically)
+//   3 assemble     the .tin (TinStreamWriter): the vertices block by block
+//                  (rows of blocks from the south-west, each in the input's
+//                  order), then each task's triangles
+// buildTinByBlocks runs all three in one process, its folder next to the
+// output and removed however it ends; tinsmith slurm-tin runs stage 2 as an
+// array job. The output appears only when complete.
 #pragma once
 
 #include <cstddef>
@@ -83,7 +90,38 @@ struct BlockTinReport {
   [[nodiscard]] std::string toJson() const;
 };
 
-/// Builds the TIN of `sources` into `output` (a .tin). Throws inputError for
+/// The three stages apart, for a cluster (tinsmith slurm-tin): stage 1 in
+/// one process, stage 2 one block a task anywhere (any order, each writes its
+/// own file), stage 3 in one process after them all. The .tin has the bytes
+/// buildTinByBlocks writes.
+///
+/// Stage 1: the points spooled, bucketed and deduplicated into `dir` (on a
+/// filesystem the nodes share), with blocks.json saying how. Throws as
+/// buildTinByBlocks.
+BlockTinReport prepareBlocks(const std::vector<PointSource>& sources,
+                             const std::filesystem::path& dir, const BlockTinOptions& options,
+                             const Progress* progress = nullptr);
+/// The blocks with points: stage 2's tasks, 0 … n − 1.
+std::size_t blockTasks(const std::filesystem::path& dir);
+/// The tasks whose triangles are not there yet (failed, cancelled or lost).
+std::vector<std::size_t> untriangulatedBlocks(const std::filesystem::path& dir);
+/// What one block's task did.
+struct BlockResult {
+  std::size_t triangulated = 0;  ///< its points and those within reach
+  std::size_t kept = 0;          ///< its triangles
+  std::size_t leftOut = 0;       ///< its triangles over the circumradius
+};
+/// Stage 2, one task: its block triangulated with the points within reach,
+/// its triangles written to dir/triangles/TASK.tri (atomically).
+BlockResult triangulateBlock(const std::filesystem::path& dir, std::size_t task,
+                             unsigned threads = 1);
+/// Stage 3: the .tin from every task's triangles. Throws inputError naming a
+/// task without triangles (and what to run), or damaged files.
+BlockTinReport assembleBlocks(const std::filesystem::path& dir, const std::filesystem::path& output,
+                              const Progress* progress = nullptr);
+
+/// Builds the TIN of `sources` into `output` (a .tin), the three stages in
+/// one process with the scratch folder next to the output. Throws inputError for
 /// a non-finite coordinate or one out of the triangulation's range (naming
 /// the source and the point), geometryError when no triangle is within R,
 /// usageError for R < 0 or blockPoints < 16, ioError when the scratch files

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <random>
 #include <set>
 #include <tuple>
@@ -203,6 +204,47 @@ TEST(BlockTin, TheDefaultRadiusIsEightMeanSpacings) {
   EXPECT_NEAR(report.maxCircumradius, c.radius, 0.05);
   EXPECT_EQ(triangleSet(readTinFile(dir / "t.tin")),
             triangleSet(wholeTriangulation(c.sources, report.maxCircumradius)));
+}
+
+TEST(BlockTin, StagesRunApartGiveTheSameBytes) {
+  // As a cluster runs them: the tasks in any order, one twice, one missing
+  // at first (the assembly names it), then the .tin of one process.
+  const auto dir = test::scratchDir("block-tin-stages");
+  const std::vector<std::vector<Point3>> sets = {randomPoints(8000, 10, 431000, 4512000, 900),
+                                                 grid(40, 431200, 4512200, 2)};
+  BlockTinOptions options;
+  options.crs = "EPSG:32612";
+  options.blockPoints = 700;
+  options.maxCircumradius = 30;
+  buildTinByBlocks(sourcesOf(sets, 5000), dir / "one.tin", options);
+  const auto work = dir / "work";
+  const auto prepared = prepareBlocks(sourcesOf(sets, 333), work, options);
+  const std::size_t tasks = blockTasks(work);
+  EXPECT_EQ(tasks, prepared.blocks);
+  ASSERT_GT(tasks, 8u);
+  std::vector<std::size_t> order(tasks);
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937(4));
+  const std::size_t missing = order.back();
+  order.pop_back();
+  order.push_back(order.front());
+  for (const std::size_t k : order) triangulateBlock(work, k, 2);
+  EXPECT_EQ(untriangulatedBlocks(work), std::vector<std::size_t>{missing});
+  try {
+    assembleBlocks(work, dir / "staged.tin");
+    ADD_FAILURE() << "assembled without task " << missing;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("block task " + std::to_string(missing) + " of"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "staged.tin"));
+  triangulateBlock(work, missing);
+  const auto report = assembleBlocks(work, dir / "staged.tin");
+  EXPECT_TRUE(untriangulatedBlocks(work).empty());
+  EXPECT_EQ(test::readFile(dir / "staged.tin"), test::readFile(dir / "one.tin"));
+  EXPECT_EQ(report.triangles, readTinFile(dir / "one.tin").triangles.size());
+  EXPECT_GE(report.triangulated, report.vertices);
 }
 
 TEST(BlockTin, BadInputNamesItsSourceAndLeavesNothing) {

@@ -165,7 +165,7 @@ std::vector<ingest::PointSource> pointSources(const TinOptions& o) {
       sources.push_back({file, [file, threads = o.threads](const auto& sink) {
                            ingest::TextPointOptions text;
                            text.threads = threads;
-                           ingest::readTextPointsInChunks(file, text, std::size_t{64} << 20, sink);
+                           ingest::readTextPointsInChunks(file, text, std::size_t{8} << 20, sink);
                          }});
     } else {
       sources.push_back({file, [file](const auto& sink) { sink(readOtherPoints(file)); }});
