@@ -47,14 +47,9 @@
 #include "core/base/point.hpp"
 #include "core/tiles/pyramid.hpp"
 #include "ingest/base/progress.hpp"
+#include "ingest/readers/point_sources.hpp"
 
 namespace tinsmith::ingest {
-
-/// A point source read in chunks: calls `sink` with each chunk, in order.
-struct PointSource {
-  std::string name;  ///< the file, in messages
-  std::function<void(const std::function<void(std::span<const Point3>)>& sink)> read;
-};
 
 struct BlockTinOptions {
   std::string crs;                      ///< recorded in the TIN

@@ -7,16 +7,19 @@
 #
 #   bash tests/slurm/srtm_shards_test.sh TINSMITH HGT WORKDIR      (as root)
 #
-# The cluster first (WORKDIR/cluster), then the TIN (every cell a point,
-# projected by gdaltransform, hull trimmed at 300 m) and the single run
-# (one.3dtiles, every core). Then `tinsmith slurm --shard-zoom 2 --submit
+# The cluster first (WORKDIR/cluster), then the points (every cell a point,
+# projected by gdaltransform) and their TIN built on the cluster by `tinsmith
+# slurm-tin` in blocks of 100 000 points, one block task failing and retried
+# with --resume: the same bytes as `tinsmith tin --block-points` on one
+# machine, each task in at most a third of the memory of the TIN at once.
+# Then the single tiling run (one.3dtiles, every core). Then `tinsmith slurm --shard-zoom 2 --submit
 # --json --sbatch-args=--hold`: the top and the 16 subtrees as an array, the
 # merge after them, both on hold; one subtree's store path is taken by a
 # folder holding a foreign file (tinsmith will not replace it) and the jobs
 # released. That task alone FAILS, the merge is CANCELLED and writes
 # nothing, the 16 other shards are kept. The folder removed, `--resume
 # --submit` runs that task again and a new merge, whose store is the single
-# run's, byte for byte. The waits are bounded by 420 s in all; everything
+# run's, byte for byte. The waits are bounded by 480 s in all; everything
 # stays in WORKDIR. Ends with `N passed, M failed`; exits 1 on any failure.
 set -uo pipefail
 
@@ -31,7 +34,7 @@ mkdir -p "$3"
 work="$(cd "$3" && pwd)"
 cd "$work" || exit 2
 source "$here/local_cluster.sh"
-budget=420
+budget=480
 source "$here/test_steps.sh"
 
 tolerance=10
@@ -54,9 +57,60 @@ awk '{print $1, $2}' "$work/cells.xyz" | gdaltransform -s_srs EPSG:4326 -t_srs E
 paste -d' ' "$work/xy.txt" <(awk '{print $3}' "$work/cells.xyz") | awk '$3 !~ /nan/ && $3 > -1000' \
   >"$work/srtm.xyz"
 rm -f "$work/cells.xyz" "$work/xy.txt"
-"$tinsmith" tin --points "$work/srtm.xyz" --crs EPSG:32619 --trim-hull 300 -o "$work/srtm.tin" -q \
-  >"$work/tin.log" 2>&1 || { show "$work/tin.log"; fatal "tinsmith tin"; }
-phase "SRTM TIN" "$t0"
+phase "SRTM points" "$t0"
+
+# ---------------------------------------------------------------- 0. the TIN by blocks
+# One machine first: the TIN at once (for its memory) and by blocks (for its bytes).
+t0=$(date +%s.%N)
+tin_options=(--points "$work/srtm.xyz" --crs EPSG:32619 --block-points 100000 --max-circumradius 150)
+peak_kb() { python3 -c 'import resource, subprocess, sys
+r = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss if r.returncode == 0 else -1)' "$@"; }
+whole_kb=$(peak_kb "$tinsmith" tin --points "$work/srtm.xyz" --crs EPSG:32619 -o "$work/whole.tin" -q)
+expect "tinsmith tin of every point at once ($whole_kb KB at peak)" test "$whole_kb" -gt 0
+"$tinsmith" tin "${tin_options[@]}" -o "$work/local.tin" -q >"$work/local.log" 2>&1 ||
+  { show "$work/local.log"; fatal "tinsmith tin --block-points"; }
+rm -f "$work/whole.tin"
+phase "SRTM TIN on one machine, at once and by blocks" "$t0"
+# Then on the cluster, one block task failing (its triangles' path taken by
+# a folder holding a foreign file) and retried.
+tin_run="$work/run-tin"
+slurm_tin() {
+  "$tinsmith" slurm-tin "${tin_options[@]}" -o "$work/srtm.tin" --workdir "$tin_run" --submit --json \
+    "$@" >"$tin_run.out" 2>"$tin_run.err"
+}
+t0=$(date +%s.%N)
+slurm_tin --sbatch-args=--hold || { show "$tin_run.out" "$tin_run.err"; fatal "tinsmith slurm-tin --submit --hold"; }
+block_tasks=$(json "$tin_run.out" 'd["blockTasks"]')
+array=$(json "$tin_run.out" 'd["array"]')
+assemble=$(json "$tin_run.out" 'd["assemble"]')
+expect "slurm-tin prepared the points in blocks ($block_tasks tasks)" test "${block_tasks:-0}" -ge 9
+tin_victim=3
+mkdir -p "$tin_run/triangles/$tin_victim.tri"
+echo "not triangles" >"$tin_run/triangles/$tin_victim.tri/notes.txt"
+scontrol release "$array" && scontrol release "$assemble" || fatal "scontrol release $array $assemble"
+assemble_state=$(slurm_wait_job "$assemble" "$(left 120)")
+array_state=$(slurm_wait_job "$array" "$(left 30)")
+expect "block task $tin_victim FAILED and no other ($(failed_tasks "$array"); array: $array_state)" \
+  test "$(failed_tasks "$array")" = "$tin_victim"
+expect "the assembly $assemble CANCELLED ($assemble_state) and wrote no TIN" \
+  test "$assemble_state" = CANCELLED -a ! -e "$work/srtm.tin"
+rm -rf "${tin_run:?}/triangles/$tin_victim.tri"
+slurm_tin --resume || { show "$tin_run.out" "$tin_run.err"; fatal "tinsmith slurm-tin --resume --submit"; }
+expect "--resume resubmitted block task $tin_victim alone ($(json "$tin_run.out" 'd["tasks"]'))" \
+  test "$(json "$tin_run.out" 'd["tasks"]')" = "$tin_victim"
+assemble=$(json "$tin_run.out" 'd["assemble"]')
+assemble_state=$(slurm_wait_job "$assemble" "$(left 120)")
+phase "SRTM TIN by blocks on the cluster (a failed task, its retry, the assembly)" "$t0"
+if ! expect "the assembly $assemble COMPLETED ($assemble_state)" test "$assemble_state" = COMPLETED; then
+  show "$tin_run/logs/assemble.log" "$tin_run.err"
+fi
+expect "the cluster's TIN has the bytes of the one machine's by blocks" cmp -s "$work/srtm.tin" "$work/local.tin"
+block_kb=$(awk '/^  task [0-9]*: CPU / && $8 + 0 > m { m = $8 + 0 } END { printf "%d", m * 1000000 / 1024 }' \
+  "$tin_run/logs/assemble.log")
+expect "each block task took at most a third of the memory of the TIN at once (at most $block_kb KB, at once $whole_kb KB)" \
+  test "${block_kb:-0}" -gt 0 -a "$((3 * ${block_kb:-0}))" -le "$whole_kb"
+[ -e "$work/srtm.tin" ] || fatal "no TIN to tile"
 vertices=$("$tinsmith" info "$work/srtm.tin" --json | python3 -c 'import json, sys; print(json.load(sys.stdin)["vertices"])')
 expect "the SRTM TIN holds over a million vertices ($vertices)" test "${vertices:-0}" -gt 1000000
 

@@ -43,6 +43,7 @@
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/cli/shared_options.hpp"
+#include "tools/cli/slurm_jobs.hpp"
 #include "tools/cli/tile_options.hpp"
 
 namespace tinsmith::cli {
@@ -60,30 +61,6 @@ struct SlurmCliOptions {
   TileFlags flags;
   bool submit = false;
 };
-
-/// `text` quoted for a POSIX shell.
-std::string shellQuote(const std::string& text) {
-  std::string out = "'";
-  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-/// Writes `text` to `path` through a temporary sibling and a rename.
-void writeAtomically(const fs::path& path, const std::string& text, bool executable) {
-  const fs::path temp = path.string() + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out)
-      throw ioError("cannot write '" + temp.string() + "'", fileLocation(temp.string()),
-                    "check that the work folder is writable and has room");
-  }
-  if (executable)
-    fs::permissions(temp, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
-                    fs::perm_options::add);
-  fs::rename(temp, path);
-}
 
 /// The tile options every shard is run with, as `tinsmith tile` arguments
 /// (what the shards' stores record, so the merge sees one job).
@@ -169,24 +146,6 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
   return s.str();
 }
 
-/// Runs `command` (/bin/sh) and returns its stdout; throws ioError naming it
-/// and what it printed on a non-zero exit.
-std::string runForOutput(const std::string& command) {
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) throw ioError("cannot run: " + command, {}, "check that sbatch is on PATH");
-  std::string out;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  if (status != 0)
-    throw ioError("`" + command + "` failed: " + out, {},
-                  "check that Slurm's clients reach the controller (SLURM_CONF, sinfo)");
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  // sbatch --parsable prints "ID" or "ID;CLUSTER".
-  return out.substr(0, out.find(';'));
-}
-
 /// The tasks that have left no store.
 std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
   std::vector<int> out;
@@ -194,17 +153,6 @@ std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
     const fs::path shards = dir / "shards";
     if (!fs::exists(shards / (std::to_string(k) + ".3dtiles"))) out.push_back(k);
   }
-  return out;
-}
-
-/// "0-16" or "3,5,9": sbatch --array's list.
-std::string arrayList(const std::vector<int>& tasks) {
-  bool contiguous = true;
-  for (std::size_t i = 1; i < tasks.size(); ++i) contiguous &= tasks[i] == tasks[i - 1] + 1;
-  if (contiguous && tasks.size() > 1)
-    return std::to_string(tasks.front()) + "-" + std::to_string(tasks.back());
-  std::string out;
-  for (const int t : tasks) out += (out.empty() ? "" : ",") + std::to_string(t);
   return out;
 }
 
@@ -313,12 +261,10 @@ void runSlurm(const SlurmCliOptions& o) {
   const std::string arrayCommand = "sbatch --parsable --array=" + arrayList(todo) + extra + " " +
                                    shellQuote((dir / "shard.sh").string());
   const auto mergeCommand = [&](const std::string& arrayId) {
-    std::string dependency;
-    for (const int t : todo)
-      dependency += (dependency.empty() ? "afterok:" : ":") + arrayId + "_" + std::to_string(t);
     return "sbatch --parsable" +
            (arrayId.empty() ? std::string()
-                            : " --dependency=" + dependency + " --kill-on-invalid-dep=yes") +
+                            : " --dependency=" + afterEveryTask(arrayId, todo) +
+                                  " --kill-on-invalid-dep=yes") +
            extra + " " + shellQuote((dir / "merge.sh").string());
   };
 

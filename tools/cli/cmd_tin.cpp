@@ -2,6 +2,8 @@
 //   tinsmith tin CONFIG.toml -o site.tin [--report r.json] [--strict] [--validate]
 //   tinsmith tin --points FILE... --breaklines FILE... -o OUT.tin [--snap T] [--crs C] [--validate]
 //   tinsmith tin --points FILE... --block-points N [--max-circumradius R] -o OUT.tin
+//   tinsmith tin --blocks DIR --block K     (a task of tinsmith slurm-tin)
+//   tinsmith tin --blocks DIR -o OUT.tin    (its assembly)
 // The first reads every [[layer]] of the config (ingest: read, reproject,
 // clean) and applies the terrain rules (builders.tin); the second triangulates
 // plain inputs as they are: XYZ/CSV points, and break lines as GeoJSON (or any
@@ -34,6 +36,7 @@
 #include "ingest/config/project_config.hpp"
 #include "ingest/pipeline/load_layers.hpp"
 #include "ingest/readers/layer_reader.hpp"
+#include "ingest/readers/point_sources.hpp"
 #include "ingest/readers/synthetic_reader.hpp"
 #include "ingest/readers/text_points.hpp"
 #include "ingest/base/atomic_file.hpp"
@@ -42,6 +45,7 @@
 #include "tools/cli/shared_options.hpp"
 #include "tools/cli/output_paths.hpp"
 #include "tools/cli/progress_bar.hpp"
+#include "tools/cli/slurm_jobs.hpp"
 
 namespace tinsmith::cli {
 
@@ -61,6 +65,8 @@ struct TinOptions {
   std::optional<double> trimHull;
   std::optional<std::size_t> blockPoints;
   std::optional<double> maxCircumradius;
+  std::string blocksDir;
+  std::optional<std::size_t> blockTask;
   unsigned threads = 0;
   bool quiet = false;
 };
@@ -68,19 +74,6 @@ struct TinOptions {
 bool isTextPolylineFile(const std::filesystem::path& p) {
   const auto ext = p.extension().string();
   return ext == ".txt" || ext == ".xyz" || ext == ".pl" || ext == ".poly" || ext == ".lines";
-}
-
-/// A --points file that is not XYZ/CSV text: a synthetic spec or an OGR file.
-std::vector<Point3> readOtherPoints(const std::string& file) {
-  if (ingest::isSyntheticSpec(file))
-    return ingest::readSyntheticLayer(ingest::commandLineLayer(file, file, ingest::LayerKind::Points))
-        .points;
-  const auto name = std::filesystem::path(file).filename().string();
-  auto read = ingest::readOgrLayer(ingest::commandLineLayer(name, file, ingest::LayerKind::Points));
-  if (!read.hasZ)
-    throw inputError("the points have no z", fileLocation(file),
-                     "give 3D points, or use a config with a 'z' attribute");
-  return std::move(read.points);
 }
 
 // Plain mode: every input as it is; points of kind Other, break lines of kind
@@ -106,7 +99,7 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
       text.threads = o.threads;
       layer.points = ingest::readTextPoints(file, text);
     } else {
-      layer.points = readOtherPoints(file);
+      layer.points = ingest::readNonTextPoints(file);
     }
     timeRead(layer);
     layers.push_back(std::move(layer));
@@ -156,22 +149,20 @@ void writeReport(const std::string& path, const ingest::BuildReport& report) {
   file.commit();
 }
 
-/// The --points files as sources read in chunks: XYZ/CSV text a chunk at a
-/// time, the rest (synthetic specs, OGR files) whole.
-std::vector<ingest::PointSource> pointSources(const TinOptions& o) {
-  std::vector<ingest::PointSource> sources;
-  for (const auto& file : o.points) {
-    if (ingest::isTextPointFile(file)) {
-      sources.push_back({file, [file, threads = o.threads](const auto& sink) {
-                           ingest::TextPointOptions text;
-                           text.threads = threads;
-                           ingest::readTextPointsInChunks(file, text, std::size_t{8} << 20, sink);
-                         }});
-    } else {
-      sources.push_back({file, [file](const auto& sink) { sink(readOtherPoints(file)); }});
+/// The report (--report) and the summary of a TIN built by blocks.
+void finishBlockRun(const TinOptions& o, const ingest::BlockTinReport& report) {
+  if (!o.report.empty()) {
+    try {
+      ingest::AtomicFile file(o.report);
+      file.write(report.toJson());
+      file.commit();
+    } catch (...) {
+      std::error_code ec;
+      std::filesystem::remove(o.output, ec);  // both outputs or neither
+      throw;
     }
   }
-  return sources;
+  if (!o.quiet) std::cerr << report.summary() << "wrote " << o.output << "\n";
 }
 
 // --block-points: the TIN built block by block (ingest/build/block_tin.hpp).
@@ -196,23 +187,45 @@ void runByBlocks(const TinOptions& o) {
   options.maxCircumradius = o.maxCircumradius.value_or(0.0);
   options.threads = o.threads;
   auto bar = terminalProgress(o.quiet);
-  const auto report = ingest::buildTinByBlocks(pointSources(o), o.output, options, bar.get());
+  const auto report = ingest::buildTinByBlocks(ingest::pointSources(o.points, o.threads), o.output, options, bar.get());
   bar.bar.reset();
-  if (!o.report.empty()) {
-    try {
-      ingest::AtomicFile file(o.report);
-      file.write(report.toJson());
-      file.commit();
-    } catch (...) {
-      std::error_code ec;
-      std::filesystem::remove(o.output, ec);  // both outputs or neither
-      throw;
-    }
+  finishBlockRun(o, report);
+}
+
+// --blocks DIR: a stage of a TIN built by blocks on a cluster (tinsmith
+// slurm-tin prepared DIR): one block's triangles (--block K), or the .tin.
+void runBlockStage(const TinOptions& o) {
+  if (!o.config.empty() || !o.points.empty() || !o.breaklines.empty() || o.blockPoints ||
+      o.maxCircumradius || o.trimHull || o.snap || o.fullValidation || !o.crs.empty())
+    throw usageError("--blocks runs a stage of points already prepared in blocks: nothing else goes with it",
+                     "prepare them with tinsmith slurm-tin");
+  if (o.blockTask) {
+    if (!o.output.empty()) throw usageError("--block K writes its triangles into --blocks DIR: leave out -o");
+    const std::size_t tasks = ingest::blockTasks(o.blocksDir);
+    const auto result = ingest::triangulateBlock(o.blocksDir, *o.blockTask, o.threads);
+    if (o.quiet) return;
+    const ProcessCost cost = processCost();
+    std::fprintf(stderr,
+                 "block task %zu of %zu: %zu points triangulated (its own and those within reach), "
+                 "%zu triangles kept, %zu over the circumradius left out\n"
+                 "  process: CPU %.2f s, peak memory %.0f MB\n",
+                 *o.blockTask, tasks, result.triangulated, result.kept, result.leftOut,
+                 cost.cpuSeconds, cost.peakMegabytes);
+    return;
   }
-  if (!o.quiet) std::cerr << report.summary() << "wrote " << o.output << "\n";
+  if (o.output.empty()) throw usageError("give -o OUT.tin to assemble the blocks, or --block K to triangulate one");
+  checkOutputDirectory(o.output, "the TIN (-o)");
+  if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
+  auto bar = terminalProgress(o.quiet);
+  const auto report = ingest::assembleBlocks(o.blocksDir, o.output, bar.get());
+  bar.bar.reset();
+  finishBlockRun(o, report);
 }
 
 void run(const TinOptions& o) {
+  if (!o.blocksDir.empty()) return runBlockStage(o);
+  if (o.blockTask) throw usageError("--block K goes with --blocks DIR");
+  if (o.output.empty()) throw usageError("give the .tin to write with -o");
   if (o.blockPoints) return runByBlocks(o);
   if (o.maxCircumradius) throw usageError("--max-circumradius goes with --block-points");
   const bool plain = !o.points.empty() || !o.breaklines.empty();
@@ -301,7 +314,7 @@ void addTinCommand(CLI::App& app) {
                   "polylines (.txt/.xyz: x y z per line, a blank line between polylines), or "
                   "generated lines: 'synthetic:lines?n=..&layout=hatch|cross|star|random', "
                   "'synthetic:rings?n=..&interval=..'");
-  addOutputOption(*cmd, opt->output, "The .tin file to write")->required();
+  addOutputOption(*cmd, opt->output, "The .tin file to write (required but with --blocks DIR --block K)");
   cmd->add_option("--report", opt->report, "Also write the build report as JSON to this file");
   cmd->add_option("--snap", opt->snap, "Plain mode: merge points closer than this (metres; default 0)");
   addCrsOption(*cmd, opt->crs, "Plain mode: the CRS to record in the TIN");
@@ -321,6 +334,11 @@ void addTinCommand(CLI::App& app) {
                   "radius is more than this many metres (the hull's slivers and gaps in the data "
                   "wider than twice it); each block reads the points within twice it. Default: "
                   "8 × the points' mean spacing");
+  cmd->add_option("--blocks", opt->blocksDir,
+                  "A folder of points prepared in blocks by tinsmith slurm-tin: with --block K "
+                  "triangulate its block task K, else assemble the .tin (-o) from every task's "
+                  "triangles (what its Slurm jobs run)");
+  cmd->add_option("--block", opt->blockTask, "With --blocks: the block task to triangulate (0 …)");
   cmd->add_flag("--validate", opt->fullValidation,
                 "Run the full validator on the result (Delaunay property, every input point and "
                 "constraint present); by default only the mesh's structure is checked");

@@ -17,5 +17,6 @@ void addExportCommand(CLI::App& app);
 void addQueryCommand(CLI::App& app);
 void addValidateCommand(CLI::App& app);
 void addSlurmCommand(CLI::App& app);
+void addSlurmTinCommand(CLI::App& app);
 
 }  // namespace tinsmith::cli

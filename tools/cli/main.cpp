@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   addFitCommand(app);
   addTileCommand(app);
   addSlurmCommand(app);
+  addSlurmTinCommand(app);
   addServeCommand(app);
   addInfoCommand(app);
   addExportCommand(app);

@@ -1,12 +1,11 @@
 #include "tools/cli/tile_options.hpp"
 
-#include <sys/resource.h>
-
 #include <iostream>
 
 #include "core/base/error.hpp"
 #include "tools/cli/exit_codes.hpp"
 #include "tools/cli/shared_options.hpp"
+#include "tools/cli/slurm_jobs.hpp"
 #include "tools/cli/tile_summary.hpp"
 
 namespace tinsmith::cli {
@@ -81,14 +80,9 @@ ingest::TileJobOptions withTileFlags(ingest::TileJobOptions o, const TileFlags& 
 
 void reportTileJob(ingest::TileJobSummary summary, const std::string& output, bool json,
                    bool quiet) {
-  ::rusage usage{};
-  if (::getrusage(RUSAGE_SELF, &usage) == 0) {
-    const auto seconds = [](const ::timeval& t) {
-      return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
-    };
-    summary.cpuSeconds = seconds(usage.ru_utime) + seconds(usage.ru_stime);
-    summary.peakMemoryBytes = static_cast<std::size_t>(usage.ru_maxrss) * 1024;  // Linux: KiB
-  }
+  const ProcessCost cost = processCost();
+  summary.cpuSeconds = cost.cpuSeconds;
+  summary.peakMemoryBytes = static_cast<std::size_t>(cost.peakMegabytes * 1e6);
   if (json) {
     std::cout << tileSummaryJson(summary, output);
   } else if (!quiet) {

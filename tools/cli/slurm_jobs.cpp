@@ -1,0 +1,79 @@
+#include "tools/cli/slurm_jobs.hpp"
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::cli {
+
+namespace fs = std::filesystem;
+
+std::string shellQuote(const std::string& text) {
+  std::string out = "'";
+  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+void writeAtomically(const fs::path& path, const std::string& text, bool executable) {
+  const fs::path temp = path.string() + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out)
+      throw ioError("cannot write '" + temp.string() + "'", fileLocation(temp.string()),
+                    "check that the work folder is writable and has room");
+  }
+  if (executable)
+    fs::permissions(temp, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                    fs::perm_options::add);
+  fs::rename(temp, path);
+}
+
+std::string runForOutput(const std::string& command) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) throw ioError("cannot run: " + command, {}, "check that sbatch is on PATH");
+  std::string out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  if (status != 0)
+    throw ioError("`" + command + "` failed: " + out, {},
+                  "check that Slurm's clients reach the controller (SLURM_CONF, sinfo)");
+  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+  return out.substr(0, out.find(';'));
+}
+
+std::string arrayList(const std::vector<int>& tasks) {
+  bool contiguous = true;
+  for (std::size_t i = 1; i < tasks.size(); ++i) contiguous &= tasks[i] == tasks[i - 1] + 1;
+  if (contiguous && tasks.size() > 1)
+    return std::to_string(tasks.front()) + "-" + std::to_string(tasks.back());
+  std::string out;
+  for (const int t : tasks) out += (out.empty() ? "" : ",") + std::to_string(t);
+  return out;
+}
+
+std::string afterEveryTask(const std::string& arrayId, const std::vector<int>& tasks) {
+  std::string dependency;
+  for (const int t : tasks)
+    dependency += (dependency.empty() ? "afterok:" : ":") + arrayId + "_" + std::to_string(t);
+  return dependency;
+}
+
+ProcessCost processCost() {
+  ::rusage usage{};
+  if (::getrusage(RUSAGE_SELF, &usage) != 0) return {};
+  const auto seconds = [](const ::timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
+  // Linux gives ru_maxrss in KiB.
+  return {seconds(usage.ru_utime) + seconds(usage.ru_stime),
+          static_cast<double>(usage.ru_maxrss) * 1024 / 1e6};
+}
+
+}  // namespace tinsmith::cli
