@@ -124,6 +124,68 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
             2);
 }
 
+// tinsmith slurm-tin: the points prepared here, block.sh run for every task
+// and assemble.sh after them, as Slurm would: the .tin of `tinsmith tin
+// --block-points` on one machine, byte for byte. A missing task stops the
+// assembly, naming it and what to run.
+TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
+  const fs::path dir = scratchDir("slurm-cli-tin");
+  const std::string points =
+      " --points 'synthetic:random?n=20000&seed=3&width=2000&height=1500&x0=431000&y0=4512000'"
+      " --crs EPSG:26912 --block-points 1500 --max-circumradius 60";
+  ASSERT_EQ(runTinsmith("tin" + points + " -q -o " + (dir / "one.tin").string()).exitCode, 0);
+  const fs::path work = dir / "work";
+  auto r = runTinsmith("slurm-tin" + points + " --json --workdir " + work.string() + " -o " +
+                       (dir / "cluster.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto out = nlohmann::json::parse(r.out);
+  const int tasks = out.at("blockTasks").get<int>();
+  ASSERT_GE(tasks, 9);
+  EXPECT_NE(out.at("commands")[0].get<std::string>().find("sbatch --parsable --array=0-" +
+                                                          std::to_string(tasks - 1)),
+            std::string::npos);
+  EXPECT_NE(out.at("commands")[1].get<std::string>().find("afterok:ARRAY_ID_0:ARRAY_ID_1"),
+            std::string::npos);
+  const auto runTask = [&](int k) {
+    return runCommand(
+        "{ SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + (work / "block.sh").string() +
+        " >>" + (work / "logs" / ("block-" + std::to_string(k) + ".log")).string() + " 2>&1; }");
+  };
+  const auto assemble = [&] {
+    return runCommand("{ bash " + (work / "assemble.sh").string() + " >" +
+                      (work / "logs" / "assemble.log").string() + " 2>&1; }");
+  };
+  for (int k = 1; k < tasks; ++k) EXPECT_EQ(runTask(k).exitCode, 0) << "task " << k;
+  EXPECT_NE(assemble().exitCode, 0);
+  const std::string failed = readFile(work / "logs" / "assemble.log");
+  EXPECT_NE(failed.find("block task 0 of " + std::to_string(tasks) + " has no triangles"),
+            std::string::npos)
+      << failed;
+  EXPECT_FALSE(fs::exists(dir / "cluster.tin"));
+  // The same job again: refused without --resume (its blocks are there).
+  r = runTinsmith("slurm-tin" + points + " --workdir " + work.string() + " -o " +
+                  (dir / "cluster.tin").string());
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("--resume"), std::string::npos) << r.err;
+  EXPECT_EQ(runTask(0).exitCode, 0);
+  EXPECT_EQ(assemble().exitCode, 0) << readFile(work / "logs" / "assemble.log");
+  EXPECT_EQ(readFile(dir / "cluster.tin"), readFile(dir / "one.tin"));
+  const std::string log = readFile(work / "logs" / "assemble.log");
+  for (int k = 0; k < tasks; ++k)
+    EXPECT_NE(log.find("  task " + std::to_string(k) + ": CPU "), std::string::npos) << log;
+  // Another job's arguments in this folder, and --resume without --submit.
+  std::string other = points;
+  other.replace(other.find("circumradius 60"), 15, "circumradius 70");
+  r = runTinsmith("slurm-tin" + other + " --workdir " + work.string() + " -o " +
+                  (dir / "cluster.tin").string());
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("another job"), std::string::npos) << r.err;
+  EXPECT_EQ(runTinsmith("slurm-tin" + points + " --resume --workdir " + work.string() + " -o " +
+                        (dir / "cluster.tin").string())
+                .exitCode,
+            2);
+}
+
 TEST(SlurmCli, AFormatOneTinIsRefusedWithWhatToDo) {
   // Its shards could not name it as the plan does (by its format 2 bytes).
   const fs::path dir = scratchDir("slurm-cli-format-1");
