@@ -132,17 +132,8 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     << "done\n"
     << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string()) << "\n"
     << shellQuote(tinsmith) << " info " << shellQuote(output.string()) << "\n"
-    // What each shard cost, from the last run in its log (tinsmith tile's
-    // "process:" line), and in all.
-    << "echo \"the shards, from the last run in each log:\"\n"
-    << "for task in $(seq 0 " << tasks - 1 << "); do\n"
-    << "  log=" << shellQuote((dir / "logs").string()) << "/shard-$task.log\n"
-    << "  [ -e \"$log\" ] || { echo \"  shard $task: no log\"; continue; }\n"
-    << "  awk -v t=\"$task\" '/^  process: CPU / { cpu = $3; mem = $7 }\n"
-    << "    END { if (cpu != \"\") printf \"  shard %d: CPU %s s, peak memory %s MB\\n\", t, cpu, mem;\n"
-    << "          else printf \"  shard %d: no summary in its log\\n\", t }' \"$log\"\n"
-    << "done | awk '{ print } $3 == \"CPU\" { cpu += $4; if ($8 + 0 > peak) peak = $8 + 0 }\n"
-    << "  END { printf \"  all: CPU %.1f s; the largest peak memory %.0f MB\\n\", cpu, peak }'\n";
+    // What each shard cost, from tinsmith tile's "process:" line in its log.
+    << taskCostLines(dir / "logs", "shard", "shard", static_cast<std::size_t>(tasks));
   return s.str();
 }
 
@@ -257,24 +248,13 @@ void runSlurm(const SlurmCliOptions& o) {
   } else {
     for (int k = 0; k < tasks; ++k) todo.push_back(k);
   }
-  const std::string extra = o.sbatchArgs.empty() ? "" : " " + o.sbatchArgs;
-  const std::string arrayCommand = "sbatch --parsable --array=" + arrayList(todo) + extra + " " +
-                                   shellQuote((dir / "shard.sh").string());
-  const auto mergeCommand = [&](const std::string& arrayId) {
-    return "sbatch --parsable" +
-           (arrayId.empty() ? std::string()
-                            : " --dependency=" + afterEveryTask(arrayId, todo) +
-                                  " --kill-on-invalid-dep=yes") +
-           extra + " " + shellQuote((dir / "merge.sh").string());
-  };
-
+  ArrayThenJob jobs{todo, dir / "shard.sh", dir / "merge.sh", o.sbatchArgs, {}, {}};
   nlohmann::ordered_json submission;
   submission["tasks"] = todo;
   if (o.submit) {
-    const std::string arrayId = todo.empty() ? "" : runForOutput(arrayCommand);
-    const std::string mergeId = runForOutput(mergeCommand(arrayId));
-    submission["array"] = arrayId;
-    submission["merge"] = mergeId;
+    jobs.submit();
+    submission["array"] = jobs.arrayId;
+    submission["merge"] = jobs.afterId;
   }
   plan["submissions"] = previous.is_object() && previous.contains("submissions")
                             ? previous["submissions"]
@@ -285,7 +265,7 @@ void runSlurm(const SlurmCliOptions& o) {
   if (f.json) {
     nlohmann::ordered_json out = submission;
     out["workdir"] = dir.string();
-    if (!o.submit) out["commands"] = {arrayCommand, mergeCommand("ARRAY_ID")};
+    if (!o.submit) out["commands"] = {jobs.arrayCommand(), jobs.afterCommand("ARRAY_ID")};
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -295,7 +275,7 @@ void runSlurm(const SlurmCliOptions& o) {
             << " subtrees) and merge.sh; logs in " << (dir / "logs").string() << "\n";
   if (!o.submit) {
     // The commands on stdout, to be saved and run: `tinsmith slurm … > submit.sh`.
-    std::cout << "A=$(" << arrayCommand << ")\n" << mergeCommand("${A}") << "\n";
+    std::cout << "A=$(" << jobs.arrayCommand() << ")\n" << jobs.afterCommand("${A}") << "\n";
     std::cerr << "submit with the two commands above (or run tinsmith slurm again with --submit)\n";
     return;
   }

@@ -86,17 +86,8 @@ std::string assembleScript(const std::string& tinsmith, const fs::path& dir, con
     << shellQuote(output.string()) << "\n"
     << shellQuote(tinsmith) << " info " << shellQuote(output.string())
     << "\n"
-    // What each task cost, from the last run in its log ("process:" line).
-    << "echo \"the block tasks, from the last run in each log:\"\n"
-    << "for task in $(seq 0 " << tasks - 1 << "); do\n"
-    << "  log=" << shellQuote((dir / "logs").string()) << "/block-$task.log\n"
-    << "  [ -e \"$log\" ] || { echo \"  task $task: no log\"; continue; }\n"
-    << "  awk -v t=\"$task\" '/^  process: CPU / { cpu = $3; mem = $7 }\n"
-    << "    END { if (cpu != \"\") printf \"  task %d: CPU %s s, peak memory %s MB\\n\", t, cpu, "
-       "mem;\n"
-    << "          else printf \"  task %d: no summary in its log\\n\", t }' \"$log\"\n"
-    << "done | awk '{ print } $3 == \"CPU\" { cpu += $4; if ($8 + 0 > peak) peak = $8 + 0 }\n"
-    << "  END { printf \"  all: CPU %.1f s; the largest peak memory %.0f MB\\n\", cpu, peak }'\n";
+    // What each task cost, from tinsmith tin's "process:" line in its log.
+    << taskCostLines(dir / "logs", "block", "task", tasks);
   return s.str();
 }
 
@@ -180,22 +171,13 @@ void runSlurmTin(const SlurmTinOptions& o) {
   } else {
     for (std::size_t k = 0; k < tasks; ++k) todo.push_back(static_cast<int>(k));
   }
-  const std::string extra = o.sbatchArgs.empty() ? "" : " " + o.sbatchArgs;
-  const std::string arrayCommand = "sbatch --parsable --array=" + arrayList(todo) + extra + " " +
-                                   shellQuote((dir / "block.sh").string());
-  const auto assembleCommand = [&](const std::string& arrayId) {
-    return "sbatch --parsable" +
-           (arrayId.empty()
-                ? std::string()
-                : " --dependency=" + afterEveryTask(arrayId, todo) + " --kill-on-invalid-dep=yes") +
-           extra + " " + shellQuote((dir / "assemble.sh").string());
-  };
+  ArrayThenJob jobs{todo, dir / "block.sh", dir / "assemble.sh", o.sbatchArgs, {}, {}};
   nlohmann::ordered_json submission;
   submission["tasks"] = todo;
   if (o.submit) {
-    const std::string arrayId = todo.empty() ? "" : runForOutput(arrayCommand);
-    submission["array"] = arrayId;
-    submission["assemble"] = runForOutput(assembleCommand(arrayId));
+    jobs.submit();
+    submission["array"] = jobs.arrayId;
+    submission["assemble"] = jobs.afterId;
   }
   plan["submissions"] = previous.is_object() && previous.contains("submissions")
                             ? previous["submissions"]
@@ -207,7 +189,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
     nlohmann::ordered_json out = submission;
     out["workdir"] = dir.string();
     out["blockTasks"] = tasks;
-    if (!o.submit) out["commands"] = {arrayCommand, assembleCommand("ARRAY_ID")};
+    if (!o.submit) out["commands"] = {jobs.arrayCommand(), jobs.afterCommand("ARRAY_ID")};
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -215,7 +197,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
   std::cerr << "wrote " << (dir / "block.sh").string() << " (" << tasks
             << " block tasks) and assemble.sh; logs in " << (dir / "logs").string() << "\n";
   if (!o.submit) {
-    std::cout << "A=$(" << arrayCommand << ")\n" << assembleCommand("${A}") << "\n";
+    std::cout << "A=$(" << jobs.arrayCommand() << ")\n" << jobs.afterCommand("${A}") << "\n";
     std::cerr << "submit with the two commands above (or run tinsmith slurm-tin again with "
                  "--resume --submit)\n";
     return;

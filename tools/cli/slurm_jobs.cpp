@@ -65,6 +65,48 @@ std::string afterEveryTask(const std::string& arrayId, const std::vector<int>& t
   return dependency;
 }
 
+std::string taskCostLines(const fs::path& logs, const std::string& prefix, const std::string& label,
+                          std::size_t tasks) {
+  return "echo \"the " + label +
+         "s, from the last run in each log:\"\n"
+         "for task in $(seq 0 " +
+         std::to_string(tasks - 1) +
+         "); do\n"
+         "  log=" +
+         shellQuote(logs.string()) + "/" + prefix +
+         "-$task.log\n"
+         "  [ -e \"$log\" ] || { echo \"  " +
+         label +
+         " $task: no log\"; continue; }\n"
+         "  awk -v t=\"$task\" '/^  process: CPU / { cpu = $3; mem = $7 }\n"
+         "    END { if (cpu != \"\") printf \"  " +
+         label +
+         " %d: CPU %s s, peak memory %s MB\\n\", t, cpu, mem;\n"
+         "          else printf \"  " +
+         label +
+         " %d: no summary in its log\\n\", t }' \"$log\"\n"
+         "done | awk '{ print } $3 == \"CPU\" { cpu += $4; if ($8 + 0 > peak) peak = $8 + 0 }\n"
+         "  END { printf \"  all: CPU %.1f s; the largest peak memory %.0f MB\\n\", cpu, peak }'\n";
+}
+
+std::string ArrayThenJob::arrayCommand() const {
+  return "sbatch --parsable --array=" + arrayList(tasks) +
+         (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(arrayScript.string());
+}
+
+std::string ArrayThenJob::afterCommand(const std::string& id) const {
+  return "sbatch --parsable" +
+         (tasks.empty()
+              ? std::string()
+              : " --dependency=" + afterEveryTask(id, tasks) + " --kill-on-invalid-dep=yes") +
+         (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(afterScript.string());
+}
+
+void ArrayThenJob::submit() {
+  arrayId = tasks.empty() ? "" : runForOutput(arrayCommand());
+  afterId = runForOutput(afterCommand(arrayId));
+}
+
 ProcessCost processCost() {
   ::rusage usage{};
   if (::getrusage(RUSAGE_SELF, &usage) != 0) return {};

@@ -4,6 +4,7 @@
 // end with.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -22,6 +23,28 @@ std::string runForOutput(const std::string& command);
 std::string arrayList(const std::vector<int>& tasks);
 /// "afterok:A_3:A_5…": every listed task of array job `arrayId`.
 std::string afterEveryTask(const std::string& arrayId, const std::vector<int>& tasks);
+
+/// Bash lines that print, for tasks 0 … tasks − 1, what each cost — from the
+/// last "  process: CPU …" line of its log LOGS/PREFIX-TASK.log — as
+/// "  LABEL TASK: CPU S s, peak memory M MB", then "  all: …".
+std::string taskCostLines(const std::filesystem::path& logs, const std::string& prefix,
+                          const std::string& label, std::size_t tasks);
+
+/// An sbatch array of `tasks` and a job after every one of them (afterok;
+/// none with no task): the commands, and the job ids once submitted.
+struct ArrayThenJob {
+  std::vector<int> tasks;
+  std::filesystem::path arrayScript, afterScript;
+  std::string sbatchArgs;  ///< more arguments for both, as one string
+  std::string arrayId, afterId;
+
+  [[nodiscard]] std::string arrayCommand() const;
+  /// The job after the array whose id is `id` (a shell variable or a
+  /// placeholder, for the printed commands).
+  [[nodiscard]] std::string afterCommand(const std::string& id) const;
+  /// Runs both with sbatch --parsable; throws ioError as runForOutput.
+  void submit();
+};
 
 /// This process's CPU time (user + system) and peak memory so far.
 struct ProcessCost {

@@ -3,8 +3,9 @@
 # `tinsmith tin` on all the points at once against `tinsmith tin
 # --block-points N` for a few N, side by side in one run, each timed by
 # /usr/bin/time (wall, CPU, peak memory). Both with the same CRS; the one run
-# trims the hull's slivers with --trim-hull, the blocks leave them out by
-# --max-circumradius (the two differ only there).
+# trims the hull's slivers with --trim-hull (and once more without: the mesh
+# written as built, no copy), the blocks leave them out by --max-circumradius
+# (the two differ only there). The ratios are against the trimmed run.
 #
 #   bash tests/bench/ingest/block_tin.sh TINSMITH POINTS.xyz CRS TRIM_HULL RADIUS "N1 N2 ..." [WORKDIR]
 # e.g. the SRTM N44W072 points of tests/slurm/srtm_shards_test.sh:
@@ -18,6 +19,8 @@ cd "$work"
 rm -f times.txt
 /usr/bin/time -f "one-run %e %U %S %M" -a -o times.txt "$tinsmith" tin --points "$points" --crs "$crs" \
   --trim-hull "$trim" -q -o one.tin
+/usr/bin/time -f "untrimmed %e %U %S %M" -a -o times.txt "$tinsmith" tin --points "$points" \
+  --crs "$crs" -q -o untrimmed.tin
 for n in $sizes; do
   /usr/bin/time -f "blocks-$n %e %U %S %M" -a -o times.txt "$tinsmith" tin --points "$points" \
     --crs "$crs" --block-points "$n" --max-circumradius "$radius" --report "blocks-$n.json" -q \
@@ -29,7 +32,9 @@ echo "|---|---|---|---|---|---|---|---|---|"
 while read -r name wall user sys kb; do
   if [ "$name" = one-run ]; then
     one_kb=$kb
-    echo "| tinsmith tin (all at once) | 1 | - | ${one_v% *} | ${one_v#* } | $wall | $(echo "$user $sys" | awk '{printf "%.2f", $1 + $2}') | $((kb / 1024)) | 1.00 |"
+    echo "| tinsmith tin --trim-hull $trim (all at once) | 1 | - | ${one_v% *} | ${one_v#* } | $wall | $(echo "$user $sys" | awk '{printf "%.2f", $1 + $2}') | $((kb / 1024)) | 1.00 |"
+  elif [ "$name" = untrimmed ]; then
+    echo "| tinsmith tin (all at once, untrimmed: the mesh written as built) | 1 | - | | | $wall | $(echo "$user $sys" | awk '{printf "%.2f", $1 + $2}') | $((kb / 1024)) | $(awk -v a="$kb" -v b="$one_kb" 'BEGIN { printf "%.2f", a / b }') |"
   else
     n=${name#blocks-}
     python3 - "$n" "$wall" "$user" "$sys" "$kb" "$one_kb" <<'EOF'
