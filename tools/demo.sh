@@ -48,13 +48,10 @@ gdaldem hillshade -q -multidirectional -compute_edges out/red-butte.tif out/red-
 gdal_translate -q -of PNG out/red-butte-hillshade.tif out/red-butte-hillshade.png
 echo "-- query the TIN at the middle of the area"
 "$tinsmith" query out/red-butte.tin 434000 4516000
-echo "-- the DEM's cells as a TIN built block by block, as for more points than memory holds:"
-echo "   each block triangulated with the points within 2 × 80 m of it; triangles with a"
-echo "   circumradius over 80 m (the hull's slivers) left out"
-gdal_translate -q -of XYZ "$data/dem.tif" out/red-butte-dem-cells.xyz
-awk '$3 != "nan"' out/red-butte-dem-cells.xyz >out/red-butte-dem.xyz
-rm -f out/red-butte-dem-cells.xyz
-"$tinsmith" tin --points out/red-butte-dem.xyz --crs EPSG:26912 --block-points 4000 \
+echo "-- the DEM's cells as a TIN built block by block, as for more points than memory holds"
+echo "   (the raster read in strips; each block triangulated with the cells within 2 × 80 m of"
+echo "   it; triangles with a circumradius over 80 m, the hull's slivers, left out)"
+"$tinsmith" tin --points "$data/dem.tif" --crs EPSG:26912 --block-points 4000 \
   --max-circumradius 80 -o out/red-butte-dem.tin
 "$tinsmith" validate out/red-butte-dem.tin
 

@@ -230,7 +230,7 @@ BlockLayout readLayout(const std::filesystem::path& dir) {
   if (!in)
     throw inputError("no blocks.json: not a folder of points prepared in blocks",
                      fileLocation(dir.string()), "prepare it with tinsmith slurm-tin");
-  const auto j = nlohmann::json::parse(in, nullptr, false);
+  const auto j = nlohmann::ordered_json::parse(in, nullptr, false);
   if (!j.is_object() || j.value("format", "") != kBlocksFormat)
     throw inputError(
         "not a blocks.json this tinsmith reads (format " + std::string(kBlocksFormat) + ")",

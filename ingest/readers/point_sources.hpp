@@ -3,6 +3,7 @@
 // synthetic specs, OGR point files — whole, as one chunk.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <span>
 #include <string>
@@ -18,13 +19,17 @@ struct PointSource {
   std::function<void(const std::function<void(std::span<const Point3>)>& sink)> read;
 };
 
-/// A points file that is not XYZ/CSV text, read whole: a synthetic spec
-/// (readers/synthetic_reader.hpp) or an OGR file with 3D points. Throws
-/// inputError naming the file when its points have no z.
+/// Whether `path` is read as a DEM raster, every valid cell a point at its
+/// centre (by extension: .tif .tiff .vrt .img .asc .hgt .dem .bil .exr).
+bool isRasterPointFile(const std::filesystem::path& path);
+
+/// A points file that is not XYZ/CSV text, read whole: a DEM raster, a
+/// synthetic spec (readers/synthetic_reader.hpp) or an OGR file with 3D
+/// points. Throws inputError naming the file when its points have no z.
 std::vector<Point3> readNonTextPoints(const std::string& file);
 
-/// The files as sources; text is parsed on `threads` (0: every core), a
-/// chunk of 8 MB at a time.
+/// The files as sources: text parsed on `threads` (0: every core) a chunk
+/// of 8 MB at a time, rasters read in strips of about 4 M cells.
 std::vector<PointSource> pointSources(const std::vector<std::string>& files, unsigned threads);
 
 }  // namespace tinsmith::ingest

@@ -12,6 +12,7 @@
 #include <ogr_spatialref.h>
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -46,6 +47,28 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
     }
     return grid;
   }
+  HeightGrid grid;
+  readHeightGridInStrips(path, options, std::numeric_limits<std::size_t>::max(),
+                         [&grid](const HeightGrid& frame, int, std::span<const float> z) {
+                           grid = frame;
+                           grid.z.assign(z.begin(), z.end());
+                         });
+  return grid;
+}
+
+void readHeightGridInStrips(
+    const std::filesystem::path& path, const RasterReadOptions& options, std::size_t stripCells,
+    const std::function<void(const HeightGrid&, int, std::span<const float>)>& strip) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw inputError("raster file not found", fileLocation(path), "check the path");
+  if (isExr(path)) {
+    HeightGrid grid = readHeightGrid(path, options);
+    std::vector<float> z = std::move(grid.z);
+    grid.z.clear();
+    strip(grid, 0, z);
+    return;
+  }
   ensureGdalReady();
   CPLErrorReset();
   std::unique_ptr<GDALDataset> ds(GDALDataset::Open(
@@ -79,12 +102,6 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
     }
   }
   auto* band = ds->GetRasterBand(options.band);
-  grid.z.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height));
-  if (band->RasterIO(GF_Read, 0, 0, grid.width, grid.height, grid.z.data(), grid.width, grid.height,
-                     GDT_Float32, 0, 0, nullptr) != CE_None) {
-    throw inputError("cannot read the raster's cells" + lastGdalError(), fileLocation(path),
-                     "the file may be damaged");
-  }
   int hasNodata = 0;
   double nodata = band->GetNoDataValue(&hasNodata);
   if (options.nodata) {
@@ -92,16 +109,44 @@ HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOpt
     nodata = *options.nodata;
   }
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  if (hasNodata && !std::isnan(nodata)) {
-    const float nd = static_cast<float>(nodata);
-    for (auto& v : grid.z) {
-      if (v == nd) v = nan;
+  const int rows = static_cast<int>(std::clamp<std::size_t>(
+      stripCells / static_cast<std::size_t>(std::max(1, grid.width)), 1,
+      static_cast<std::size_t>(std::max(1, grid.height))));
+  std::vector<float> z;
+  for (int first = 0; first < grid.height; first += rows) {
+    const int n = std::min(rows, grid.height - first);
+    z.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(n));
+    if (band->RasterIO(GF_Read, 0, first, grid.width, n, z.data(), grid.width, n, GDT_Float32, 0,
+                       0, nullptr) != CE_None) {
+      throw inputError("cannot read the raster's cells" + lastGdalError(), fileLocation(path),
+                       "the file may be damaged");
+    }
+    if (hasNodata && !std::isnan(nodata)) {
+      const float nd = static_cast<float>(nodata);
+      for (auto& v : z) {
+        if (v == nd) v = nan;
+      }
+    }
+    for (auto& v : z) {
+      if (!std::isfinite(v)) v = nan;  // infinities are never heights
+    }
+    strip(grid, first, z);
+  }
+}
+
+std::vector<Point3> stripToPoints(const HeightGrid& frame, int firstRow, std::span<const float> z) {
+  std::vector<Point3> points;
+  const int rows = frame.width > 0 ? static_cast<int>(z.size() / static_cast<std::size_t>(frame.width)) : 0;
+  for (int row = 0; row < rows; ++row) {
+    for (int col = 0; col < frame.width; ++col) {
+      const float v = z[static_cast<std::size_t>(row) * static_cast<std::size_t>(frame.width) +
+                        static_cast<std::size_t>(col)];
+      if (std::isnan(v)) continue;
+      const auto c = frame.cellCentre(col, firstRow + row);
+      points.push_back({c.x, c.y, static_cast<double>(v)});
     }
   }
-  for (auto& v : grid.z) {
-    if (!std::isfinite(v)) v = nan;  // infinities are never heights
-  }
-  return grid;
+  return points;
 }
 
 HeightGrid readExr(const std::filesystem::path& path) {

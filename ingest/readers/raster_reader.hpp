@@ -5,7 +5,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -23,6 +25,19 @@ struct RasterReadOptions {
 /// Throws tinsmith::Error (Input) naming the file: missing, unreadable, no
 /// such band, no georeferencing (a raster without a geotransform).
 HeightGrid readHeightGrid(const std::filesystem::path& path, const RasterReadOptions& options = {});
+
+/// Reads the raster as readHeightGrid does, about `stripCells` cells (whole
+/// rows, at least one) at a time: `strip`
+/// gets the grid's frame (size, geotransform, CRS; no cells), the strip's
+/// first row and its cells (NaN = nodata). An EXR heightmap comes whole, in
+/// one strip.
+void readHeightGridInStrips(const std::filesystem::path& path, const RasterReadOptions& options,
+                            std::size_t stripCells,
+                            const std::function<void(const HeightGrid& frame, int firstRow,
+                                                     std::span<const float> z)>& strip);
+/// A strip's valid cells as points at cell centres: gridToPoints's points of
+/// those rows.
+std::vector<Point3> stripToPoints(const HeightGrid& frame, int firstRow, std::span<const float> z);
 
 /// Reads an EXR heightmap written by writeExr (or any single-channel float
 /// EXR; georeferencing defaults to the identity with y down when absent).

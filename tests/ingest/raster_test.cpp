@@ -202,6 +202,30 @@ TEST(RasterIo, RedButteDem) {
   expectSameGrid(grid, readExr(dir / "dem.exr"));
 }
 
+TEST(RasterIo, StripsGiveTheWholeGridsPoints) {
+  // The Red Butte DEM (nodata around its edges) in strips of one row, of a
+  // few rows that do not divide its 268, and whole: gridToPoints's points.
+  const auto path = kData / "red-butte/dem.tif";
+  const auto whole = gridToPoints(readHeightGrid(path));
+  ASSERT_GT(whole.size(), 30000u);
+  for (const std::size_t cells : {std::size_t{1}, std::size_t{260 * 7}, std::size_t{1} << 30}) {
+    std::vector<Point3> points;
+    int strips = 0, next = 0;
+    readHeightGridInStrips(path, {}, cells,
+                           [&](const HeightGrid& frame, int first, std::span<const float> z) {
+                             EXPECT_EQ(first, next);
+                             EXPECT_TRUE(frame.z.empty());
+                             next = first + static_cast<int>(z.size()) / frame.width;
+                             ++strips;
+                             const auto strip = stripToPoints(frame, first, z);
+                             points.insert(points.end(), strip.begin(), strip.end());
+                           });
+    EXPECT_EQ(next, 268);
+    EXPECT_EQ(strips, cells == 1 ? 268 : cells == 260 * 7 ? 39 : 1);
+    EXPECT_EQ(points, whole) << cells << " cells a strip";
+  }
+}
+
 TEST(RasterIo, SrtmHgt) {
   const auto grid = readHeightGrid(kData / "srtm/N44W072.hgt");
   EXPECT_EQ(grid.width, 1201);

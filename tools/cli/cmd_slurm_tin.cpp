@@ -221,7 +221,9 @@ void addSlurmTinCommand(CLI::App& app) {
       "slurm-tin",
       "Build a TIN of more points than one machine holds as Slurm jobs: the points prepared in "
       "blocks here, an sbatch array of block tasks and an assembly after them");
-  cmd->add_option("--points", opt->points, "XYZ/CSV point file(s) (read a chunk at a time)")
+  cmd->add_option("--points", opt->points,
+                  "XYZ/CSV point files (read a chunk at a time), DEM rasters (read in strips) or "
+                  "3D point layers")
       ->required();
   addOutputOption(*cmd, opt->output, "The .tin file to write (on a filesystem the nodes share)")
       ->required();

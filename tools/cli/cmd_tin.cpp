@@ -306,7 +306,9 @@ void addTinCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("tin", "Build a constrained Delaunay TIN from points and break lines");
   cmd->add_option("config", opt->config, "Project config (TOML); or give --points/--breaklines");
   cmd->add_option("--points", opt->points,
-                  "XYZ/CSV point file(s) (plain mode), or generated points: "
+                  "XYZ/CSV point file(s) (plain mode), DEM rasters (.tif .vrt .img .asc .hgt "
+                  ".exr …: every valid cell a point at its centre), 3D point layers (OGR), or "
+                  "generated points: "
                   "'synthetic:grid?nx=..&ny=..&spacing=..&surface=plane|flat|franke|hill|cone', "
                   "'synthetic:random?n=..&seed=..', 'synthetic:raster?…' (see config/README.md)");
   cmd->add_option("--breaklines", opt->breaklines,
