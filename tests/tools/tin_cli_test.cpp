@@ -483,6 +483,23 @@ TEST(TinCli, ByBlocksEveryPointStaysAndTheValidatorAccepts) {
   EXPECT_NE(r.err.find("bad.xyz"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("line 1603"), std::string::npos) << r.err;
   EXPECT_EQ(test::filesIn(dir / "out"), 0u);
+
+  // A DEM raster, read in strips by blocks and whole at once: the same
+  // vertices (every valid cell).
+  const fs::path dem = kShared / "red-butte" / "dem.tif", rasters = dir / "raster";
+  fs::create_directories(rasters);
+  r = runTinsmith("tin -q --points " + dem.string() + " --crs EPSG:26912 --block-points 4000 " +
+                  "--max-circumradius 80 -o " + (rasters / "blocks.tin").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  ASSERT_EQ(runTinsmith("tin -q --points " + dem.string() + " --crs EPSG:26912 -o " +
+                        (rasters / "whole.tin").string())
+                .exitCode,
+            0);
+  const auto blocks = nlohmann::json::parse(runTinsmith("info --json " + (rasters / "blocks.tin").string()).out);
+  const auto whole = nlohmann::json::parse(runTinsmith("info --json " + (rasters / "whole.tin").string()).out);
+  EXPECT_EQ(blocks["vertices"], 31732);
+  EXPECT_EQ(blocks["vertices"], whole["vertices"]);
+  EXPECT_EQ(runTinsmith("validate " + (rasters / "blocks.tin").string()).exitCode, 0);
 }
 
 TEST(TinCli, AFailedRunKeepsTheOldOutputAndAMissingDirectoryIsAnIoError) {
