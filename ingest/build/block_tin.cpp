@@ -1,5 +1,5 @@
-// The block-by-block TIN (block_tin.hpp): spool, bucket, deduplicate, write
-// the vertices, triangulate each block with its surroundings.
+// The block-by-block TIN (block_tin.hpp): prepare (spool, bucket,
+// deduplicate), triangulate each block with its surroundings, assemble.
 #include "ingest/build/block_tin.hpp"
 
 #include <stdlib.h>
@@ -64,11 +64,10 @@ class ScratchDir {
 void appendPoints(const std::filesystem::path& path, std::span<const Point3> points) {
   if (points.empty()) return;
   std::FILE* f = std::fopen(path.c_str(), "ab");
-  const bool ok =
+  const bool written =
       f && std::fwrite(points.data(), sizeof(Point3), points.size(), f) == points.size();
-  if (f && std::fclose(f) != 0 && ok)
-    throw ioError("cannot write a scratch file", fileLocation(path.string()), "is the disk full?");
-  if (!ok)
+  const bool closed = f && std::fclose(f) == 0;
+  if (!written || !closed)
     throw ioError("cannot write a scratch file", fileLocation(path.string()), "is the disk full?");
 }
 
@@ -166,14 +165,6 @@ class Stopwatch {
  private:
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
-
-}  // namespace
-
-double circumradius(Point2 a, Point2 b, Point2 c) {
-  return circumcircle(a, b, c).radius;
-}
-
-namespace {
 
 constexpr const char* kBlocksFormat = "tinsmith-blocks/1";
 constexpr std::array<char, 8> kTriMagic = {'T', 'I', 'N', 'B', 'L', 'K', '1', '\0'};
@@ -318,6 +309,10 @@ LoadedBlock loadBlock(const BlockLayout& layout, const std::filesystem::path& di
 }
 
 }  // namespace
+
+double circumradius(Point2 a, Point2 b, Point2 c) {
+  return circumcircle(a, b, c).radius;
+}
 
 BlockTinReport prepareBlocks(const std::vector<PointSource>& sources,
                              const std::filesystem::path& dir, const BlockTinOptions& options,
