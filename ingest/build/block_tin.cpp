@@ -71,16 +71,22 @@ void appendPoints(const std::filesystem::path& path, std::span<const Point3> poi
     throw ioError("cannot write a scratch file", fileLocation(path.string()), "is the disk full?");
 }
 
-std::vector<Point3> readPoints(const std::filesystem::path& path) {
-  std::vector<Point3> points;
+/// Reads the file into `points`, whose memory is reused from call to call
+/// (a block reads many).
+void readPoints(const std::filesystem::path& path, std::vector<Point3>& points) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
-  if (ec) return points;  // a block without points has no file
-  points.resize(size / sizeof(Point3));
+  points.resize(ec ? 0 : size / sizeof(Point3));  // a block without points has no file
+  if (points.empty()) return;
   std::FILE* f = std::fopen(path.c_str(), "rb");
   const bool ok = f && std::fread(points.data(), sizeof(Point3), points.size(), f) == points.size();
   if (f) std::fclose(f);
   if (!ok) throw ioError("cannot read a scratch file", fileLocation(path.string()));
+}
+
+std::vector<Point3> readPoints(const std::filesystem::path& path) {
+  std::vector<Point3> points;
+  readPoints(path, points);
   return points;
 }
 
@@ -270,11 +276,13 @@ struct LoadedBlock {
   tiles::Rect around;  // what was read: the square grown by 2R and a hair
 };
 
-LoadedBlock loadBlock(const BlockLayout& layout, const std::filesystem::path& dir, std::size_t b) {
+/// Fills `load` with block b's points and those within reach; its vectors'
+/// memory, and `theirs`, are reused from block to block.
+void loadBlock(const BlockLayout& layout, const std::filesystem::path& dir, std::size_t b,
+               LoadedBlock& load, std::vector<Point3>& theirs) {
   const BlockGrid& grid = layout.grid;
-  LoadedBlock load;
   load.own = layout.own(b);
-  load.points = readPoints(bucketPath(dir, b));
+  readPoints(bucketPath(dir, b), load.points);
   if (load.points.size() != load.own)
     throw inputError("block " + std::to_string(b) + " holds " + std::to_string(load.points.size()) +
                          " points where blocks.json says " + std::to_string(load.own),
@@ -296,7 +304,7 @@ LoadedBlock loadBlock(const BlockLayout& layout, const std::filesystem::path& di
     for (std::uint32_t c = c0 > 0 ? c0 - 1 : 0; c <= std::min(c1 + 1, grid.nx - 1); ++c) {
       const std::size_t o = std::size_t{r} * grid.nx + c;
       if (o == b || layout.own(o) == 0) continue;
-      const std::vector<Point3> theirs = readPoints(bucketPath(dir, o));
+      readPoints(bucketPath(dir, o), theirs);
       for (std::size_t i = 0; i < theirs.size(); ++i) {
         const Point3& p = theirs[i];
         if (p.x < around.x0 || p.x > around.x1 || p.y < around.y0 || p.y > around.y1) continue;
@@ -305,7 +313,6 @@ LoadedBlock loadBlock(const BlockLayout& layout, const std::filesystem::path& di
       }
     }
   }
-  return load;
 }
 
 }  // namespace
@@ -462,7 +469,9 @@ BlockResult triangulateBlock(const std::filesystem::path& dir, std::size_t task,
   if (task >= layout.tasks.size())
     throw usageError("block task " + std::to_string(task) + " is not one of the " +
                      std::to_string(layout.tasks.size()) + " of " + dir.string());
-  const LoadedBlock load = loadBlock(layout, dir, layout.tasks[task]);
+  LoadedBlock load;
+  std::vector<Point3> theirs;
+  loadBlock(layout, dir, layout.tasks[task], load, theirs);
   BlockResult result;
   result.triangulated = load.points.size();
   std::vector<std::array<std::uint32_t, 3>> kept;
@@ -524,8 +533,13 @@ BlockTinReport assembleBlocks(const std::filesystem::path& dir, const std::files
                            ", or tinsmith slurm-tin … --resume --submit), then assemble again");
   Stopwatch clock;
   TinStreamWriter writer(output, layout.crs);
-  for (std::size_t b = 0; b < layout.grid.count(); ++b)
-    if (layout.own(b)) writer.addVertices(readPoints(bucketPath(dir, b)));
+  LoadedBlock load;
+  std::vector<Point3> theirs;
+  for (std::size_t b = 0; b < layout.grid.count(); ++b) {
+    if (layout.own(b) == 0) continue;
+    readPoints(bucketPath(dir, b), theirs);
+    writer.addVertices(theirs);
+  }
   report.times.push_back({"write vertices", clock.lap()});
   ProgressTicker ticker(progress, "blocks.assemble", "", layout.tasks.size());
   std::vector<TinData::Triangle> triangles;
@@ -547,7 +561,7 @@ BlockTinReport assembleBlocks(const std::filesystem::path& dir, const std::files
     report.largestTriangulated = std::max<std::size_t>(report.largestTriangulated, counts[0]);
     report.leftOut += counts[1];
     if (kept.empty()) continue;
-    const LoadedBlock load = loadBlock(layout, dir, layout.tasks[k]);
+    loadBlock(layout, dir, layout.tasks[k], load, theirs);
     triangles.clear();
     corners.clear();
     for (const auto& t : kept) {
