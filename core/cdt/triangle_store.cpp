@@ -64,7 +64,9 @@ void TriangleStore::lopAround(VertexId v) {
 namespace {
 
 /// (x, y) order: the rank of the symbolic lift.
-bool lessXY(const Point2& a, const Point2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
+bool lessXY(const Point2& a, const Point2& b) {
+  return a.x < b.x || (a.x == b.x && a.y < b.y);
+}
 
 }  // namespace
 
@@ -94,11 +96,12 @@ void TriangleStore::settleTies() {
     for (const VertexId v : {q, c, d})
       if (lessXY(xy[v], xy[least])) least = v;
     if (least != p && least != q) continue;
-    if (++flips > 64 + 64 * xy.size()) throw internalError("settling cocircular ties did not terminate");
+    if (++flips > 64 + 64 * xy.size())
+      throw internalError("settling cocircular ties did not terminate");
     flip(h);
     const TriangleId t0 = triangleOf(h), t1 = triangleOf(g);
-    for (const HalfedgeId e : {halfedgeOf(t0, 0), halfedgeOf(t0, 1), halfedgeOf(t1, 0),
-                               halfedgeOf(t1, 1)})
+    for (const HalfedgeId e :
+         {halfedgeOf(t0, 0), halfedgeOf(t0, 1), halfedgeOf(t1, 0), halfedgeOf(t1, 1)})
       todo.push_back(e);
   }
 }

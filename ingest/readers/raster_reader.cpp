@@ -12,8 +12,8 @@
 #include <ogr_spatialref.h>
 
 #include <algorithm>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -109,15 +109,15 @@ void readHeightGridInStrips(
     nodata = *options.nodata;
   }
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const int rows = static_cast<int>(std::clamp<std::size_t>(
-      stripCells / static_cast<std::size_t>(std::max(1, grid.width)), 1,
-      static_cast<std::size_t>(std::max(1, grid.height))));
+  const int rows = static_cast<int>(
+      std::clamp<std::size_t>(stripCells / static_cast<std::size_t>(std::max(1, grid.width)), 1,
+                              static_cast<std::size_t>(std::max(1, grid.height))));
   std::vector<float> z;
   for (int first = 0; first < grid.height; first += rows) {
     const int n = std::min(rows, grid.height - first);
     z.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(n));
-    if (band->RasterIO(GF_Read, 0, first, grid.width, n, z.data(), grid.width, n, GDT_Float32, 0,
-                       0, nullptr) != CE_None) {
+    if (band->RasterIO(GF_Read, 0, first, grid.width, n, z.data(), grid.width, n, GDT_Float32, 0, 0,
+                       nullptr) != CE_None) {
       throw inputError("cannot read the raster's cells" + lastGdalError(), fileLocation(path),
                        "the file may be damaged");
     }
@@ -136,7 +136,8 @@ void readHeightGridInStrips(
 
 std::vector<Point3> stripToPoints(const HeightGrid& frame, int firstRow, std::span<const float> z) {
   std::vector<Point3> points;
-  const int rows = frame.width > 0 ? static_cast<int>(z.size() / static_cast<std::size_t>(frame.width)) : 0;
+  const int rows =
+      frame.width > 0 ? static_cast<int>(z.size() / static_cast<std::size_t>(frame.width)) : 0;
   for (int row = 0; row < rows; ++row) {
     for (int col = 0; col < frame.width; ++col) {
       const float v = z[static_cast<std::size_t>(row) * static_cast<std::size_t>(frame.width) +

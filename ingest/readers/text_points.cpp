@@ -380,22 +380,22 @@ struct TextChunkParser {
     };
     const unsigned pieces = data.size() < kParallelBytes ? 1 : kPieces;
     std::vector<Piece> parts(pieces);
-    parallelParts(data.size(), pieces, resolveThreads(options.threads),
-                  [&](std::size_t b, std::size_t e, unsigned k) {
-                    Piece& piece = parts[k];
-                    piece.begin = nextLineStart(data, b);
-                    piece.end = std::max(piece.begin, nextLineStart(data, e));
-                    const std::string_view slice = data.substr(piece.begin, piece.end - piece.begin);
-                    piece.points.reserve(slice.size() / 24);
-                    piece.lines.reserve(slice.size() / 24);
-                    try {
-                      piece.lineCount = parseDataLines(slice, 1, sourceName, options,
-                                                       table.delimiter, columns, piece.points,
-                                                       piece.lines);
-                    } catch (const Error&) {
-                      piece.failed = true;
-                    }
-                  });
+    parallelParts(
+        data.size(), pieces, resolveThreads(options.threads),
+        [&](std::size_t b, std::size_t e, unsigned k) {
+          Piece& piece = parts[k];
+          piece.begin = nextLineStart(data, b);
+          piece.end = std::max(piece.begin, nextLineStart(data, e));
+          const std::string_view slice = data.substr(piece.begin, piece.end - piece.begin);
+          piece.points.reserve(slice.size() / 24);
+          piece.lines.reserve(slice.size() / 24);
+          try {
+            piece.lineCount = parseDataLines(slice, 1, sourceName, options, table.delimiter,
+                                             columns, piece.points, piece.lines);
+          } catch (const Error&) {
+            piece.failed = true;
+          }
+        });
     std::size_t total = 0;
     for (const Piece& piece : parts) total += piece.points.size();
     table.points.reserve(table.points.size() + total);

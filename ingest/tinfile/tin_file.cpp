@@ -600,8 +600,12 @@ TinStreamWriter::TinStreamWriter(const std::filesystem::path& path, std::string 
 
 TinStreamWriter::~TinStreamWriter() = default;
 
-std::uint64_t TinStreamWriter::vertexCount() const { return state_->vertices; }
-std::uint64_t TinStreamWriter::triangleCount() const { return state_->triangles; }
+std::uint64_t TinStreamWriter::vertexCount() const {
+  return state_->vertices;
+}
+std::uint64_t TinStreamWriter::triangleCount() const {
+  return state_->triangles;
+}
 
 void TinStreamWriter::addVertices(std::span<const Point3> vertices) {
   State& s = *state_;
@@ -633,8 +637,8 @@ void TinStreamWriter::addTriangles(std::span<const TinData::Triangle> triangles,
   s.bytes.resize(12 * triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const auto& tri = triangles[t];
-    if (std::max({tri[0], tri[1], tri[2]}) >= s.vertices || tri[0] == tri[1] ||
-        tri[1] == tri[2] || tri[0] == tri[2])
+    if (std::max({tri[0], tri[1], tri[2]}) >= s.vertices || tri[0] == tri[1] || tri[1] == tri[2] ||
+        tri[0] == tri[2])
       throw internalError("TinStreamWriter: a triangle's corner is out of range or repeated");
     std::uint8_t* record = s.bytes.data() + 12 * t;
     for (int i = 0; i < 3; ++i) {
@@ -678,8 +682,8 @@ void TinStreamWriter::commit(const std::vector<TinFeature>& features) {
   crc = crc32Combine(crc, crc32(count.bytes), 8);
   crc = crc32Combine(crc, s.triangleCrc, 12 * s.triangles);
   crc = crc32Combine(crc, crc32(tail.bytes), tail.bytes.size());
-  const std::uint64_t payload = s.headBytes + 24 * s.vertices + 8 + 12 * s.triangles +
-                                tail.bytes.size();
+  const std::uint64_t payload =
+      s.headBytes + 24 * s.vertices + 8 + 12 * s.triangles + tail.bytes.size();
   s.file.writeAt(s.vertexCountAt, head.bytes.data() + head.bytes.size() - 8, 8);
   s.file.writeAt(s.triangleCountAt, count.bytes.data(), 8);
   const auto header = makeHeader(payload, crc);

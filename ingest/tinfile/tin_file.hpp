@@ -83,8 +83,7 @@ class TinStreamWriter {
   void addVertices(std::span<const Point3> vertices);
   /// `corners` holds the points of each triangle's corners, three per
   /// triangle. Throws internalError for an index out of range or repeated.
-  void addTriangles(std::span<const TinData::Triangle> triangles,
-                    std::span<const Point3> corners);
+  void addTriangles(std::span<const TinData::Triangle> triangles, std::span<const Point3> corners);
   [[nodiscard]] std::uint64_t vertexCount() const;
   [[nodiscard]] std::uint64_t triangleCount() const;
   /// Writes the features, the block index and the header, and renames the

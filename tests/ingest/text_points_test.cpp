@@ -223,7 +223,8 @@ TEST(TextPoints, ChunksGiveTheWholeFilesPointsAndErrors) {
   text += "431999,4511000,1499";
   const auto path = writeText("text_points_chunks", "p.csv", text);
   const auto whole = readTextPoints(path);
-  for (const std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{64}, std::size_t{1} << 20}) {
+  for (const std::size_t chunk :
+       {std::size_t{1}, std::size_t{7}, std::size_t{64}, std::size_t{1} << 20}) {
     std::vector<Point3> read;
     std::size_t calls = 0;
     readTextPointsInChunks(path, {}, chunk, [&](std::span<const Point3> points) {
@@ -236,13 +237,18 @@ TEST(TextPoints, ChunksGiveTheWholeFilesPointsAndErrors) {
     }
   }
   // The error names the file's line, not the chunk's.
-  const auto bad = writeText("text_points_chunks", "bad.csv", text.substr(0, text.find("431200")) + "431200,x,1\n");
-  const std::int64_t badLine = std::count(text.begin(), text.begin() + text.find("431200"), '\n') + 1;
-  const auto e = expectError([&] { readTextPointsInChunks(bad, {}, 100, [](std::span<const Point3>) {}); });
+  const auto bad = writeText("text_points_chunks", "bad.csv",
+                             text.substr(0, text.find("431200")) + "431200,x,1\n");
+  const std::int64_t badLine =
+      std::count(text.begin(), text.begin() + text.find("431200"), '\n') + 1;
+  const auto e =
+      expectError([&] { readTextPointsInChunks(bad, {}, 100, [](std::span<const Point3>) {}); });
   EXPECT_EQ(e.where().line, badLine) << e.what();
   EXPECT_EQ(expectError([&] { readTextPoints(bad); }).where().line, badLine);
   const auto empty = writeText("text_points_chunks", "empty.csv", "# nothing\n\n");
-  EXPECT_NE(std::string(expectError([&] { readTextPointsInChunks(empty, {}, 4, [](std::span<const Point3>) {}); }).what())
+  EXPECT_NE(std::string(expectError([&] {
+                          readTextPointsInChunks(empty, {}, 4, [](std::span<const Point3>) {});
+                        }).what())
                 .find("holds no points"),
             std::string::npos);
 }

@@ -261,7 +261,8 @@ TEST(TinFile, AStreamWrittenTinHasTheWholeTinsBytes) {
   tin.constrainedEdges.clear();
   for (const std::uint32_t perBlock : {kTinBlockRecords, 7u, 1u}) {
     for (const std::size_t piece : {std::size_t{1}, std::size_t{333}, std::size_t{100000}}) {
-      const auto path = dir / ("stream-" + std::to_string(perBlock) + "-" + std::to_string(piece) + ".tin");
+      const auto path =
+          dir / ("stream-" + std::to_string(perBlock) + "-" + std::to_string(piece) + ".tin");
       TinStreamWriter writer(path, tin.crs, perBlock);
       for (std::size_t i = 0; i < tin.vertices.size(); i += piece) {
         const std::size_t n = std::min(piece, tin.vertices.size() - i);
@@ -279,7 +280,8 @@ TEST(TinFile, AStreamWrittenTinHasTheWholeTinsBytes) {
       EXPECT_EQ(writer.triangleCount(), tin.triangles.size());
       EXPECT_FALSE(std::filesystem::exists(path)) << "visible before commit";
       writer.commit(tin.features);
-      EXPECT_EQ(test::readFile(path), encodeTin(tin, perBlock)) << perBlock << " records a block, pieces of " << piece;
+      EXPECT_EQ(test::readFile(path), encodeTin(tin, perBlock))
+          << perBlock << " records a block, pieces of " << piece;
     }
   }
   // No triangles at all, and a writer never committed leaves nothing.

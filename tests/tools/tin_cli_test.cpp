@@ -459,12 +459,15 @@ TEST(TinCli, ByBlocksEveryPointStaysAndTheValidatorAccepts) {
 
   const std::string points = " --points " + (dir / "grid.xyz").string();
   const std::vector<BadCase> cases = {
-      {"with break lines", points + " --breaklines " + (dir / "grid.xyz").string() + " --block-points 100", 2, "--points only"},
+      {"with break lines",
+       points + " --breaklines " + (dir / "grid.xyz").string() + " --block-points 100", 2,
+       "--points only"},
       {"with --trim-hull", points + " --block-points 100 --trim-hull 200", 2, "--max-circumradius"},
       {"radius alone", points + " --max-circumradius 100", 2, "--block-points"},
       {"radius 0", points + " --block-points 100 --max-circumradius 0", 2, "greater than 0"},
       {"tiny blocks", points + " --block-points 3", 2, "block-points"},
-      {"radius under every cell", points + " --block-points 100 --max-circumradius 40", 4, "circumradius"},
+      {"radius under every cell", points + " --block-points 100 --max-circumradius 40", 4,
+       "circumradius"},
   };
   for (const auto& c : cases) {
     const fs::path out = dir / "out" / (std::string(c.name) + ".tin");
@@ -495,8 +498,10 @@ TEST(TinCli, ByBlocksEveryPointStaysAndTheValidatorAccepts) {
                         (rasters / "whole.tin").string())
                 .exitCode,
             0);
-  const auto blocks = nlohmann::json::parse(runTinsmith("info --json " + (rasters / "blocks.tin").string()).out);
-  const auto whole = nlohmann::json::parse(runTinsmith("info --json " + (rasters / "whole.tin").string()).out);
+  const auto blocks =
+      nlohmann::json::parse(runTinsmith("info --json " + (rasters / "blocks.tin").string()).out);
+  const auto whole =
+      nlohmann::json::parse(runTinsmith("info --json " + (rasters / "whole.tin").string()).out);
   EXPECT_EQ(blocks["vertices"], 31732);
   EXPECT_EQ(blocks["vertices"], whole["vertices"]);
   EXPECT_EQ(runTinsmith("validate " + (rasters / "blocks.tin").string()).exitCode, 0);

@@ -131,7 +131,8 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     << "  stores+=(\"$shards/$task.3dtiles\")\n"
     << "done\n"
     << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string()) << "\n"
-    << shellQuote(tinsmith) << " info " << shellQuote(output.string()) << "\n"
+    << shellQuote(tinsmith) << " info " << shellQuote(output.string())
+    << "\n"
     // What each shard cost, from tinsmith tile's "process:" line in its log.
     << taskCostLines(dir / "logs", "shard", "shard", static_cast<std::size_t>(tasks));
   return s.str();

@@ -28,10 +28,10 @@
 
 #include "core/base/error.hpp"
 #include "core/tin/hull_trim.hpp"
+#include "ingest/base/atomic_file.hpp"
 #include "ingest/base/progress.hpp"
 #include "ingest/build/block_tin.hpp"
 #include "ingest/build/from_ingest.hpp"
-#include "ingest/readers/text_polylines.hpp"
 #include "ingest/build/tin_builder.hpp"
 #include "ingest/config/project_config.hpp"
 #include "ingest/pipeline/load_layers.hpp"
@@ -39,12 +39,12 @@
 #include "ingest/readers/point_sources.hpp"
 #include "ingest/readers/synthetic_reader.hpp"
 #include "ingest/readers/text_points.hpp"
-#include "ingest/base/atomic_file.hpp"
+#include "ingest/readers/text_polylines.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
-#include "tools/cli/shared_options.hpp"
 #include "tools/cli/output_paths.hpp"
 #include "tools/cli/progress_bar.hpp"
+#include "tools/cli/shared_options.hpp"
 #include "tools/cli/slurm_jobs.hpp"
 
 namespace tinsmith::cli {
@@ -90,7 +90,8 @@ std::vector<ingest::BuildLayer> plainLayers(const TinOptions& o,
   };
   for (const auto& file : o.points) {
     ingest::BuildLayer layer;
-    layer.name = ingest::isSyntheticSpec(file) ? file : std::filesystem::path(file).filename().string();
+    layer.name =
+        ingest::isSyntheticSpec(file) ? file : std::filesystem::path(file).filename().string();
     layer.kindName = "points";
     layer.kind = FeatureKind::Other;
     layer.source = file;
@@ -171,8 +172,11 @@ void runByBlocks(const TinOptions& o) {
     throw usageError("--block-points builds a TIN of --points only",
                      "give the points with --points; break lines need the whole TIN");
   if (o.trimHull)
-    throw usageError("--trim-hull needs the whole TIN; with --block-points the hull's slivers go by --max-circumradius");
-  if (o.snap && *o.snap != 0) throw usageError("--block-points merges exact duplicates only: leave out --snap");
+    throw usageError(
+        "--trim-hull needs the whole TIN; with --block-points the hull's slivers go by "
+        "--max-circumradius");
+  if (o.snap && *o.snap != 0)
+    throw usageError("--block-points merges exact duplicates only: leave out --snap");
   if (o.fullValidation)
     throw usageError("--validate needs the whole TIN in memory",
                      "run `tinsmith validate` on the .tin where it fits");
@@ -187,7 +191,8 @@ void runByBlocks(const TinOptions& o) {
   options.maxCircumradius = o.maxCircumradius.value_or(0.0);
   options.threads = o.threads;
   auto bar = terminalProgress(o.quiet);
-  const auto report = ingest::buildTinByBlocks(ingest::pointSources(o.points, o.threads), o.output, options, bar.get());
+  const auto report = ingest::buildTinByBlocks(ingest::pointSources(o.points, o.threads), o.output,
+                                               options, bar.get());
   bar.bar.reset();
   finishBlockRun(o, report);
 }
@@ -197,10 +202,12 @@ void runByBlocks(const TinOptions& o) {
 void runBlockStage(const TinOptions& o) {
   if (!o.config.empty() || !o.points.empty() || !o.breaklines.empty() || o.blockPoints ||
       o.maxCircumradius || o.trimHull || o.snap || o.fullValidation || !o.crs.empty())
-    throw usageError("--blocks runs a stage of points already prepared in blocks: nothing else goes with it",
-                     "prepare them with tinsmith slurm-tin");
+    throw usageError(
+        "--blocks runs a stage of points already prepared in blocks: nothing else goes with it",
+        "prepare them with tinsmith slurm-tin");
   if (o.blockTask) {
-    if (!o.output.empty()) throw usageError("--block K writes its triangles into --blocks DIR: leave out -o");
+    if (!o.output.empty())
+      throw usageError("--block K writes its triangles into --blocks DIR: leave out -o");
     const std::size_t tasks = ingest::blockTasks(o.blocksDir);
     const auto result = ingest::triangulateBlock(o.blocksDir, *o.blockTask, o.threads);
     if (o.quiet) return;
@@ -213,7 +220,8 @@ void runBlockStage(const TinOptions& o) {
                  cost.cpuSeconds, cost.peakMegabytes);
     return;
   }
-  if (o.output.empty()) throw usageError("give -o OUT.tin to assemble the blocks, or --block K to triangulate one");
+  if (o.output.empty())
+    throw usageError("give -o OUT.tin to assemble the blocks, or --block K to triangulate one");
   checkOutputDirectory(o.output, "the TIN (-o)");
   if (!o.report.empty()) checkOutputDirectory(o.report, "the report (--report)");
   auto bar = terminalProgress(o.quiet);
@@ -316,7 +324,8 @@ void addTinCommand(CLI::App& app) {
                   "polylines (.txt/.xyz: x y z per line, a blank line between polylines), or "
                   "generated lines: 'synthetic:lines?n=..&layout=hatch|cross|star|random', "
                   "'synthetic:rings?n=..&interval=..'");
-  addOutputOption(*cmd, opt->output, "The .tin file to write (required but with --blocks DIR --block K)");
+  addOutputOption(*cmd, opt->output,
+                  "The .tin file to write (required but with --blocks DIR --block K)");
   cmd->add_option("--report", opt->report, "Also write the build report as JSON to this file");
   cmd->add_option("--snap", opt->snap, "Plain mode: merge points closer than this (metres; default 0)");
   addCrsOption(*cmd, opt->crs, "Plain mode: the CRS to record in the TIN");
