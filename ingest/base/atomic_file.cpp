@@ -1,16 +1,54 @@
 #include "ingest/base/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "core/base/error.hpp"
 
 namespace tinsmith::ingest {
+
+namespace {
+
+std::string hostName() {
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) != 0 || host[0] == '\0') return "host";
+  return host;
+}
+
+/// Removes the temps of `name` in `dir` whose writer ran on `host` and is
+/// gone: ".NAME.HOST-PID.XXXXXX.part" with no process PID.
+void removeDeadWritersTemps(const std::filesystem::path& dir, const std::string& name,
+                            const std::string& host) {
+  const std::string prefix = "." + name + "." + host + "-", suffix = ".part";
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string entry = it->path().filename().string();
+    if (entry.size() <= prefix.size() + suffix.size() + 7 || entry.rfind(prefix, 0) != 0 ||
+        entry.compare(entry.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    // PID.XXXXXX between the prefix and the suffix.
+    const std::string middle =
+        entry.substr(prefix.size(), entry.size() - prefix.size() - suffix.size());
+    const std::size_t dot = middle.find('.');
+    if (dot == std::string::npos || dot == 0 || middle.size() - dot != 7) continue;
+    const std::string pidText = middle.substr(0, dot);
+    if (pidText.find_first_not_of("0123456789") != std::string::npos || pidText.size() > 9)
+      continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(pidText));
+    if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to ask
+    std::error_code removed;
+    std::filesystem::remove(it->path(), removed);
+  }
+}
+
+}  // namespace
 
 AtomicPath::AtomicPath(std::filesystem::path target) : target_(std::move(target)) {
   const std::filesystem::path dir =
@@ -22,7 +60,11 @@ AtomicPath::AtomicPath(std::filesystem::path target) : target_(std::move(target)
   if (!std::filesystem::is_directory(dir, ec))
     throw ioError("the output directory '" + dir.string() + "' does not exist",
                   fileLocation(target_), "create it first or choose another output path");
-  std::string pattern = (dir / ("." + target_.filename().string() + ".XXXXXX.part")).string();
+  const std::string host = hostName();
+  removeDeadWritersTemps(dir, target_.filename().string(), host);
+  std::string pattern = (dir / ("." + target_.filename().string() + "." + host + "-" +
+                                std::to_string(::getpid()) + ".XXXXXX.part"))
+                            .string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
   fd_ = ::mkostemps(name.data(), 5, O_CLOEXEC);  // not inherited by child processes

@@ -1,9 +1,13 @@
 // Output files that appear all at once or not at all. Bytes go to a temp
-// file in the target's directory (".NAME.XXXXXX.part", a name made unique by
-// mkstemps, so two writers of one target never share it); commit() fsyncs it
-// and renames it over the target. If commit() is never reached (an
-// exception, a failed write), the destructor removes the temp file, so a
-// failed run leaves neither a partial file nor a stale temp behind.
+// file in the target's directory (".NAME.HOST-PID.XXXXXX.part", a name made
+// unique by mkstemps, so two writers of one target never share it);
+// commit() fsyncs it and renames it over the target. If commit() is never
+// reached (an exception, a failed write), the destructor removes the temp
+// file, so a failed run leaves neither a partial file nor a stale temp
+// behind. A killed run (SIGKILL, a lost node) runs no destructor: the next
+// writer of the same target removes the temps of writers on its host whose
+// process is gone (a temp from another host, or an older one without a
+// host and process, is left: its writer may still be running).
 //
 //   AtomicFile  writes the bytes itself (.tin, OBJ, PLY, JSON reports);
 //   AtomicPath  hands out the temp path to a library that writes by name

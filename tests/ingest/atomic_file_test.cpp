@@ -4,8 +4,12 @@
 #include "ingest/base/atomic_file.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <fstream>
+#include <set>
 
 #include "core/base/error.hpp"
 #include "tests/support/run_command.hpp"
@@ -58,6 +62,40 @@ TEST(AtomicPath, TwoWritersOfOneTargetDoNotCollide) {
   first.commit();  // the last to finish wins, whole
   EXPECT_EQ(test::readFile(target), "first");
   EXPECT_EQ(test::filesIn(dir), 1u);
+}
+
+TEST(AtomicPath, AKilledWritersTempIsRemovedByTheNextWriterOnItsHost) {
+  const auto dir = test::scratchDir("atomic_path_killed");
+  const auto target = dir / "site.tin";
+  // A writer killed halfway (SIGKILL: no destructor runs).
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    AtomicFile file(target);
+    file.write("half a tin");
+    ::kill(::getpid(), SIGKILL);
+    ::_exit(1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  ASSERT_EQ(test::filesIn(dir), 1u) << "the killed writer's temp";
+  // What the next writer must leave: a temp from another host, one named the
+  // old way (its writer unknown), and the temps of other targets.
+  std::ofstream(dir / ".site.tin.other-host-1.a1b2c3.part") << "x";
+  std::ofstream(dir / ".site.tin.q1w2e3.part") << "x";
+  std::ofstream(dir / (".other.tin." + std::string("x-") + std::to_string(child) + ".a1b2c3.part")) << "x";
+  AtomicPath next(target);
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  EXPECT_EQ(names.size(), 4u);
+  EXPECT_TRUE(names.count(next.temp().filename().string()));
+  EXPECT_TRUE(names.count(".site.tin.other-host-1.a1b2c3.part"));
+  EXPECT_TRUE(names.count(".site.tin.q1w2e3.part"));
+  // A live writer's temp (this process's) is kept by the writer after it.
+  AtomicPath after(target);
+  EXPECT_TRUE(fs::exists(next.temp()));
+  EXPECT_TRUE(fs::exists(after.temp()));
 }
 
 TEST(AtomicPath, ARenameThatFailsRemovesTheTempFile) {
