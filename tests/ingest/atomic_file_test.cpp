@@ -84,7 +84,8 @@ TEST(AtomicPath, AKilledWritersTempIsRemovedByTheNextWriterOnItsHost) {
   // old way (its writer unknown), and the temps of other targets.
   std::ofstream(dir / ".site.tin.other-host-1.a1b2c3.part") << "x";
   std::ofstream(dir / ".site.tin.q1w2e3.part") << "x";
-  std::ofstream(dir / (".other.tin." + std::string("x-") + std::to_string(child) + ".a1b2c3.part")) << "x";
+  std::ofstream(dir / (".other.tin." + std::string("x-") + std::to_string(child) + ".a1b2c3.part"))
+      << "x";
   AtomicPath next(target);
   std::set<std::string> names;
   for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
