@@ -346,6 +346,9 @@ void checkTileJobOptions(const TileJobOptions& o) {
                      "the pyramid");
   if (o.subtree && o.untilZoom)
     throw usageError("--subtree and --until-zoom make different shards: give one");
+  if (o.writePlan && (!o.untilZoom || o.plan))
+    throw usageError("--write-plan goes with --until-zoom, without --plan",
+                     "the top of a sharded job writes the plan its subtrees take");
   if (o.storeUntilZoom && *o.storeUntilZoom < 1)
     throw usageError("--store-until-zoom must be 1 or more (the root is always stored)");
   if (o.storeUntilZoom && (o.subtree || o.untilZoom))
@@ -377,14 +380,17 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   const bool holdsRoot = root.z == 0;
   std::string tinBytes;
   TinIdentity identity;
+  const auto encodeWhole = [&] {
+    tinBytes = encodeTin(tin);
+    identity = {crc32(tinBytes), tin.vertices.size(), tin.triangles.size()};
+  };
   if (options.partOf) {
     if (!options.plan || !options.uncheckedAncestors || holdsRoot)
       throw usageError("part of a TIN is tiled only as a subtree below the root, with the job's "
                        "plan and --unchecked-ancestors");
     identity = *options.partOf;
-  } else {
-    tinBytes = encodeTin(tin);
-    identity = {crc32(tinBytes), tin.vertices.size(), tin.triangles.size()};
+  } else if (options.plan || !tiles3d) {
+    encodeWhole();
   }
   if (options.plan) {
     if (identity != options.plan->tin)
@@ -405,6 +411,9 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     reportProgress(progress, "tiles.plan", "", 0, 0);
     tiler.emplace(tin, tilerOptions);
     reportProgress(progress, "tiles.plan", "", 1, 1);
+    // Encoded after the planning fit, in the memory it has given back: the
+    // TIN's bytes and the fit's working data are not held at once.
+    if (!options.partOf && !options.plan) encodeWhole();
     const Point2 o = tiler->geometry().origin();
     const double half = 0.5 * tiler->geometry().size();
     const Point3 centre{o.x + half, o.y + half, 0.0};
@@ -421,6 +430,11 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
       }
     } else {
       tiles::requireInPyramid(*tiler, content, root);
+    }
+    if (options.writePlan) {
+      const int cornerZoom = std::min(*options.untilZoom + 4, tiles::kMaxCornerZoom);
+      writeTilingPlan(*options.writePlan,
+                      makeTilingPlan(*tiler, tilerOptions, cornerZoom, identity));
     }
   }
   std::optional<tiles::GeographicTin> geographic;  // Cesium terrain's working frame

@@ -64,6 +64,13 @@ struct TileJobOptions {
   /// terrain), and merge leaves it out when an ancestor does not refine.
   bool uncheckedAncestors = false;
   std::optional<int> untilZoom;  ///< only tiles above this zoom
+  /// With untilZoom and no plan (the top task of a sharded job): the plan
+  /// this run makes of the whole TIN is written here (writeTilingPlan,
+  /// atomically) before any tile, with the corners off the TIN to
+  /// min(untilZoom + 4, tiles::kMaxCornerZoom) — the plan the job's subtree
+  /// shards take (tinsmith slurm's tiler.plan), so the whole TIN is read and
+  /// planned once, by the task that tiles what lies above the subtrees.
+  std::optional<std::filesystem::path> writePlan;
   /// Tiles at this zoom and below are built (their records make
   /// tileset.json) but not stored: the server's --on-demand builds them
   /// again from the store's TIN when asked (ingest/tiles/tile_rebuild.hpp).

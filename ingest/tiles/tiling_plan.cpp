@@ -64,14 +64,20 @@ class Reader {
 
 TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
                           int cornerZoom, std::optional<std::uint32_t> fileCrc) {
+  const TinIdentity identity{fileCrc ? *fileCrc : crc32(encodeTin(tin)), tin.vertices.size(),
+                             tin.triangles.size()};
+  return makeTilingPlan(tiles::Tiler(tin, options), options, cornerZoom, identity);
+}
+
+TilingPlan makeTilingPlan(const tiles::Tiler& tiler, const tiles::TilerOptions& options,
+                          int cornerZoom, const TinIdentity& tin) {
   TilingPlan plan;
-  plan.tin = {fileCrc ? *fileCrc : crc32(encodeTin(tin)), tin.vertices.size(),
-              tin.triangles.size()};
+  plan.tin = tin;
   plan.options.tolerance = options.tolerance;
   plan.options.maxTriangles = options.maxTriangles;
   plan.options.maxZoom = options.maxZoom;
   plan.options.lambdaFactor = options.lambdaFactor;
-  plan.tiler = tiles::Tiler(tin, options).plan(cornerZoom);
+  plan.tiler = tiler.plan(cornerZoom);
   return plan;
 }
 
@@ -197,8 +203,10 @@ void writeTilingPlan(const std::filesystem::path& path, const TilingPlan& plan) 
 TilingPlan readTilingPlan(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in)
-    throw inputError("cannot read the tiling plan", fileLocation(path.string()),
-                     "give the tiler.plan in the job's --workdir (tinsmith slurm writes it)");
+    throw inputError(
+        "cannot read the tiling plan", fileLocation(path.string()),
+        "give the tiler.plan in the job's --workdir (task 0 of tinsmith slurm's shard.sh "
+        "writes it: the subtrees run after it)");
   std::ostringstream bytes;
   bytes << in.rdbuf();
   return decodeTilingPlan(bytes.str(), path.string());

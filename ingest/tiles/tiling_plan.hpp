@@ -53,6 +53,11 @@ struct TilingPlan {
 /// (ingest::readTinFileHeader), else crc32(encodeTin(tin)) is taken.
 TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
                           int cornerZoom = -1, std::optional<std::uint32_t> fileCrc = {});
+/// The plan `tiler` (made of the whole TIN `tin` names, with `options`,
+/// and no plan) holds: what a run that plans and tiles at once writes for
+/// the shards that follow it.
+TilingPlan makeTilingPlan(const tiles::Tiler& tiler, const tiles::TilerOptions& options,
+                          int cornerZoom, const TinIdentity& tin);
 
 std::string encodeTilingPlan(const TilingPlan& plan);
 /// Throws inputError naming `name` for bytes that are not a whole plan of

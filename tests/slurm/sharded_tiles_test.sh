@@ -8,12 +8,13 @@
 # The cluster first (WORKDIR/cluster), then a small TIN, a 1200 m × 600 m
 # hill, so that half of the 16 subtrees at zoom 2 hold no terrain, tiled
 # once with `tinsmith tile` (one.3dtiles). Then:
-# - without --submit the command prints two sbatch commands that work as
+# - without --submit the command prints three sbatch commands that work as
 #   printed (run by bash with a stand-in sbatch) and submits nothing;
-# - `--shard-zoom 2 --submit --json`: an array of 17 tasks (the top, then the
-#   16 subtrees, a store each, built without their ancestors) and a merge
-#   after them, which leaves out the subtrees not in the pyramid; the merged
-#   store holds the same bytes under every key as one.3dtiles;
+# - `--shard-zoom 2 --submit --json`: task 0 (the plan and the top), then an
+#   array of the 16 subtrees after it (a store each, built without their
+#   ancestors, with task 0's plan) and a merge after them all, which leaves
+#   out the subtrees not in the pyramid; the merged store holds the same
+#   bytes under every key as one.3dtiles;
 # - into a fresh workdir, the jobs submitted on hold, one shard's store path
 #   then taken by a folder holding a foreign file (tinsmith will not replace
 #   it) and the jobs released: that task fails, the merge is CANCELLED
@@ -83,21 +84,24 @@ rc=0
 run_slurm "$work/plan" "$work/plan.3dtiles" || rc=$?
 if [ "$rc" -eq 0 ]; then
   printed=$(cat "$work/plan.out" "$work/plan.err" | grep 'sbatch ')
-  expect "without --submit: two sbatch commands printed" test "$(grep -c 'sbatch ' <<<"$printed")" -eq 2
-  # Run as printed, with a stand-in sbatch that answers 4242 for the
-  # array: the merge must wait for each of the array's tasks.
-  wanted="--dependency=afterok:$(seq -s: 0 "$subtrees" | sed 's/[0-9][0-9]*/4242_&/g') "
-  stand_in=$(bash -c 'sbatch() { case " $* " in *" --array="*) echo 4242 ;; *) echo "sbatch $*" ;; esac; }
+  expect "without --submit: three sbatch commands printed" test "$(grep -c 'sbatch ' <<<"$printed")" -eq 3
+  # Run as printed, with a stand-in sbatch that answers 4241 for task 0's
+  # array and 4242 for the subtrees': they must wait for task 0, and the
+  # merge for every task.
+  wanted="--dependency=afterok:4241_0:$(seq -s: 1 "$subtrees" | sed 's/[0-9][0-9]*/4242_&/g') "
+  stand_in=$(bash -c 'sbatch() { case " $* " in *" --array=0 "*) echo 4241 ;;
+    *" --array="*" --dependency=afterok:4241_0 "*) echo 4242 ;; *) echo "sbatch $*" ;; esac; }
 '"$printed" 2>&1)
-  if ! expect "without --submit: the printed commands, run as printed, make the merge wait for the $((subtrees + 1)) tasks" \
+  if ! expect "without --submit: the printed commands, run as printed, make the subtrees wait for task 0 and the merge for the $((subtrees + 1)) tasks" \
     grep -qF -- "$wanted" <<<"$stand_in"; then
     echo "      printed:"
     sed 's/^/        /' <<<"$printed"
-    echo "      run with a stand-in sbatch (the array's id 4242):"
+    echo "      run with a stand-in sbatch (task 0's id 4241, the subtrees' 4242):"
     sed 's/^/        /' <<<"$stand_in"
   fi
-  expect "without --submit: plan.json, shard.sh and merge.sh written" \
-    test -s "$work/plan/plan.json" -a -s "$work/plan/shard.sh" -a -s "$work/plan/merge.sh"
+  expect "without --submit: plan.json, shard.sh and merge.sh written, and no tiler.plan (task 0 plans)" \
+    test -s "$work/plan/plan.json" -a -s "$work/plan/shard.sh" -a -s "$work/plan/merge.sh" \
+    -a ! -e "$work/plan/tiler.plan"
   expect "without --submit: nothing submitted" test -z "$(squeue -h -o %i)"
 else
   bad "tinsmith slurm without --submit (exit $rc)"
@@ -114,11 +118,13 @@ if [ "$rc" -ne 0 ]; then
   fatal "tinsmith slurm --submit (exit $rc)"
 fi
 submission "$run.out"
-expect "--submit --json: the array holds the top and the $subtrees subtrees (tasks: $tasks)" \
-  test "$tasks" = "$(seq -s ' ' 0 "$subtrees")"
+expect "--submit --json: the top and the $subtrees subtrees (tasks: $tasks), the top a job of its own ($top)" \
+  test "$tasks" = "$(seq -s ' ' 0 "$subtrees")" -a -n "$top"
 merge_state=$(slurm_wait_job "$merge" "$(left 240)")
 phase "sharded run (submit → merge done)" "$t0"
+top_state=$(slurm_wait_job "$top" "$(left 30)")
 array_state=$(slurm_wait_job "$array" "$(left 30)")
+expect "the top job $top COMPLETED ($top_state), and tiler.plan is there" test "$top_state" = COMPLETED -a -s "$run/tiler.plan"
 expect "array job $array: every task COMPLETED ($array_state)" test "$array_state" = COMPLETED
 if ! expect "merge job $merge COMPLETED ($merge_state)" test "$merge_state" = COMPLETED; then
   show "$run/logs/merge.log" "$run.err"
@@ -159,8 +165,9 @@ if [ "$rc" -ne 0 ]; then
 fi
 submission "$again.out"
 held=$(scontrol -o show job "$array" 2>/dev/null | grep -o 'Reason=[A-Za-z]*' | sort -u | paste -sd, -)
-expect "--sbatch-args=--hold reaches the array job $array ($held) and the merge job $merge ($(job_field "$merge" Reason))" \
-  test "$held" = Reason=JobHeldUser -a "$(job_field "$merge" Reason)" = JobHeldUser
+expect "--sbatch-args=--hold reaches the top job $top ($(job_field "$top" Reason)), the array job $array ($held) and the merge job $merge ($(job_field "$merge" Reason))" \
+  test "$held" = Reason=JobHeldUser -a "$(job_field "$merge" Reason)" = JobHeldUser \
+  -a "$(job_field "$top" Reason)" = JobHeldUser
 fail_one_shard "$again" "$array" "$merge" "$victim" 240
 phase "failing run (release → merge cancelled)" "$t0"
 expect_failed_shard "$again" "$array" "$merge" "$victim" "$work/merged-again.3dtiles"
@@ -181,7 +188,7 @@ if [ "$rc" -ne 0 ]; then
   fatal "tinsmith slurm --resume --submit (exit $rc)"
 fi
 submission "$again.out"
-expect "--resume resubmitted task $victim alone (tasks: $tasks)" test "$tasks" = "$victim"
+expect "--resume resubmitted task $victim alone (tasks: $tasks; top: '$top')" test "$tasks" = "$victim" -a -z "$top"
 merge_state=$(slurm_wait_job "$merge" "$(left 120)")
 array_state=$(slurm_wait_job "$array" "$(left 30)")
 phase "resume (submit → merge done)" "$t0"
@@ -207,8 +214,8 @@ if [ "$rc" -ne 0 ]; then
 fi
 submission "$again.out"
 dependency=$(job_field "$merge" Dependency)
-expect "--resume with every shard done: no tasks, no array, a merge with no dependency (tasks: '$tasks', array: '$array', $dependency)" \
-  test -z "$tasks" -a -z "$array" -a "$dependency" = "(null)"
+expect "--resume with every shard done: no tasks, no top, no array, a merge with no dependency (tasks: '$tasks', top: '$top', array: '$array', $dependency)" \
+  test -z "$tasks" -a -z "$top" -a -z "$array" -a "$dependency" = "(null)"
 merge_state=$(slurm_wait_job "$merge" "$(left 60)")
 phase "resume with nothing missing" "$t0"
 expect "that merge job $merge COMPLETED ($merge_state)" test "$merge_state" = COMPLETED

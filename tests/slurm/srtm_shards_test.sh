@@ -13,8 +13,9 @@
 # with --resume: the same bytes as `tinsmith tin --block-points` on one
 # machine, each task in at most a third of the memory of the TIN at once.
 # Then the single tiling run (one.3dtiles, every core). Then `tinsmith slurm --shard-zoom 2 --submit
-# --json --sbatch-args=--hold`: the top and the 16 subtrees as an array, the
-# merge after them, both on hold; one subtree's store path is taken by a
+# --json --sbatch-args=--hold`: the top (task 0, which plans the pyramid
+# once), the 16 subtrees as an array after it and the merge after them all,
+# every job on hold; one subtree's store path is taken by a
 # folder holding a foreign file (tinsmith will not replace it) and the jobs
 # released. That task alone FAILS, the merge is CANCELLED and writes
 # nothing, the 16 other shards are kept. The folder removed, `--resume
@@ -139,12 +140,13 @@ slurm_run() {
 }
 t0=$(date +%s.%N)
 slurm_run --sbatch-args=--hold || { show "$run.out" "$run.err"; fatal "tinsmith slurm --submit --hold"; }
-phase "plan (tinsmith slurm)" "$t0"
+phase "tinsmith slurm (the scripts, submitted)" "$t0"
 submission "$run.out"
-expect "17 tasks: the top and the $subtrees subtrees ($tasks)" test "$tasks" = "$(seq -s ' ' 0 "$subtrees")"
+expect "17 tasks: the top (which plans, job $top) and the $subtrees subtrees after it ($tasks)" \
+  test "$tasks" = "$(seq -s ' ' 0 "$subtrees")" -a -n "$top"
 t0=$(date +%s.%N)
 fail_one_shard "$run" "$array" "$merge" "$victim" 300
-phase "17 shards on the cluster (release → merge cancelled)" "$t0"
+phase "the plan and the top, then the 16 subtrees, on the cluster (release → merge cancelled)" "$t0"
 expect_failed_shard "$run" "$array" "$merge" "$victim" "$work/merged.3dtiles"
 kept=$(find "$run/shards" -maxdepth 1 -name '*.3dtiles' -type f | wc -l)
 expect "the $subtrees other shards left their stores ($kept)" test "$kept" -eq "$subtrees"
@@ -154,7 +156,7 @@ rm -rf "${run:?}/shards/$victim.3dtiles"
 t0=$(date +%s.%N)
 slurm_run --resume || { show "$run.out" "$run.err"; fatal "tinsmith slurm --resume --submit"; }
 submission "$run.out"
-expect "--resume resubmitted task $victim alone (tasks: $tasks)" test "$tasks" = "$victim"
+expect "--resume resubmitted task $victim alone (tasks: $tasks; top: '$top')" test "$tasks" = "$victim" -a -z "$top"
 merge_state=$(slurm_wait_job "$merge" "$(left 120)")
 array_state=$(slurm_wait_job "$array" "$(left 30)")
 phase "retry of task $victim and merge" "$t0"

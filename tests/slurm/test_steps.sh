@@ -77,9 +77,11 @@ same_keys() {
 }
 
 # submission FILE: the jobs of a `tinsmith slurm --submit --json` (its stdout
-# in FILE): sets array (empty when no shard was submitted), merge and tasks
-# (the array's task ids, space-separated).
+# in FILE): sets top (task 0 alone, which plans: empty when not submitted),
+# array (the other tasks: empty when none was submitted), merge and tasks
+# (every task id submitted, space-separated).
 submission() {
+  top=$(json "$1" 'd.get("top") or ""')
   array=$(json "$1" 'd.get("array") or ""')
   merge=$(json "$1" 'd["merge"]')
   tasks=$(json "$1" 'd["tasks"]')
@@ -100,15 +102,18 @@ failed_tasks() {
 
 
 # fail_one_shard WORKDIR ARRAY MERGE TASK SECONDS: the held jobs of a
-# `tinsmith slurm --sbatch-args=--hold` released after TASK's store path is
-# taken by a folder holding a foreign file (tinsmith tile will not replace
-# it), then waited for: the merge at most SECONDS, the array 30 s more (or
-# what is left of the budget). Sets merge_state and array_state.
+# `tinsmith slurm --sbatch-args=--hold` (and the top job $top, when set)
+# released after TASK's store path is taken by a folder holding a foreign
+# file (tinsmith tile will not replace it), then waited for: the merge at
+# most SECONDS, the array 30 s more (or what is left of the budget). Sets
+# merge_state and array_state.
 fail_one_shard() {
-  local dir="$1" array="$2" merge="$3" task="$4"
+  local dir="$1" array="$2" merge="$3" task="$4" job
   mkdir -p "$dir/shards/$task.3dtiles"
   echo "not a tile store" >"$dir/shards/$task.3dtiles/notes.txt"
-  scontrol release "$array" && scontrol release "$merge" || fatal "scontrol release $array $merge"
+  for job in ${top:-} "$array" "$merge"; do
+    scontrol release "$job" || fatal "scontrol release $job"
+  done
   merge_state=$(slurm_wait_job "$merge" "$(left "$5")")
   array_state=$(slurm_wait_job "$array" "$(left 30)")
 }

@@ -69,10 +69,23 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   ASSERT_EQ(planned.exitCode, 0) << planned.err;
   const auto out = nlohmann::json::parse(planned.out);
   EXPECT_EQ(out.at("tasks").size(), 17u);
-  EXPECT_NE(out.at("commands")[0].get<std::string>().find("sbatch --parsable --array=0-16"),
-            std::string::npos);
-  EXPECT_NE(out.at("commands")[1].get<std::string>().find("afterok:ARRAY_ID_0:ARRAY_ID_1"),
-            std::string::npos);
+  // Task 0 (the plan and the top) alone, the subtrees after it, the merge
+  // after every task.
+  const auto commands = out.at("commands").get<std::vector<std::string>>();
+  ASSERT_EQ(commands.size(), 3u) << planned.out;
+  EXPECT_EQ(commands[0].rfind("H=$(sbatch --parsable --array=0 '", 0), 0u) << commands[0];
+  EXPECT_NE(commands[1].find("--array=1-16 --dependency=afterok:${H}_0 --kill-on-invalid-dep=yes"),
+            std::string::npos)
+      << commands[1];
+  EXPECT_NE(commands[2].find("--dependency=afterok:${H}_0:${A}_1:${A}_2:"), std::string::npos)
+      << commands[2];
+  // tinsmith slurm only writes the scripts: task 0 plans.
+  EXPECT_FALSE(fs::exists(work / "tiler.plan"));
+  // A subtree run before task 0 finds no plan and says so.
+  const auto early = runCommand("SLURM_ARRAY_TASK_ID=1 bash " + (work / "shard.sh").string());
+  EXPECT_NE(early.exitCode, 0);
+  EXPECT_NE(early.err.find("tiler.plan"), std::string::npos) << early.err;
+  EXPECT_FALSE(fs::exists(work / "shards" / "1.3dtiles"));
   // Every subtree is built (without its ancestors); the merge leaves out the
   // 8 that hold no terrain, as one run never builds them.
   runAsSlurmWould(work, 17);
@@ -94,13 +107,16 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
         store::openStoreForReading(work / "shards" / (std::to_string(k) + ".3dtiles"));
     EXPECT_EQ(shard->contains("tinsmith/terrain.tin"), k == 0) << "shard " << k;
   }
-  const auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
-  // Every shard takes the job's tiling plan (its finest zoom is plan.json's).
+  // Task 0 wrote the job's tiling plan, which every subtree took: the
+  // pyramid of the one run.
+  const auto one =
+      nlohmann::json::parse(runTinsmith("info --json " + (dir / "one.3dtiles").string()).out);
   EXPECT_EQ(ingest::readTilingPlan(work / "tiler.plan").tiler.finestZoom,
-            plan.at("finestZoom").get<int>());
+            one.at("finestZoom").get<int>());
   const std::string script = readFile(work / "shard.sh");
-  EXPECT_NE(script.find("'--plan' '"), std::string::npos);
-  EXPECT_NE(script.find("/tiler.plan'"), std::string::npos);
+  EXPECT_NE(script.find("--write-plan '" + (work / "tiler.plan").string() + "'"), std::string::npos)
+      << script;
+  EXPECT_NE(script.find("--plan '" + (work / "tiler.plan").string() + "'"), std::string::npos);
 
   // The same folder for another job, or a folder of other files: refused.
   auto r = runTinsmith("slurm " + tin.string() + " --tolerance 0.5 --shard-zoom 2 --workdir " +
@@ -144,7 +160,7 @@ TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
   EXPECT_NE(out.at("commands")[0].get<std::string>().find("sbatch --parsable --array=0-" +
                                                           std::to_string(tasks - 1)),
             std::string::npos);
-  EXPECT_NE(out.at("commands")[1].get<std::string>().find("afterok:ARRAY_ID_0:ARRAY_ID_1"),
+  EXPECT_NE(out.at("commands")[1].get<std::string>().find("afterok:${A}_0:${A}_1"),
             std::string::npos);
   const auto runTask = [&](int k) {
     return runCommand(
@@ -238,32 +254,39 @@ TEST(SlurmCli, ASubtreeOutsideThePyramidIsAnErrorUnlessEmptyIsOk) {
             2);  // --empty-ok goes with --subtree
 }
 
-TEST(SlurmCli, APlanningCutShortIsPlannedAgainByTheRerun) {
-  const fs::path dir = scratchDir("slurm-killed");
-  // 360 k vertices: the planning takes a second or more, time for the kill.
-  const fs::path tin = dir / "big.tin";
-  ASSERT_EQ(makeHillTin(tin, "nx=600&ny=600&spacing=2&noise=0.5").exitCode, 0);
+TEST(SlurmCli, TheTopTaskWritesThePlanAndARerunWritesTheSameBytes) {
+  const fs::path dir = scratchDir("slurm-top");
+  const fs::path tin = dir / "site.tin";
+  ASSERT_EQ(makeHillTin(tin, "nx=101&ny=101&spacing=10&noise=0.5").exitCode, 0);
   const fs::path work = dir / "work";
-  const std::string slurm = std::string(TINSMITH_BINARY) + " slurm " + tin.string() +
-                            " --tolerance 0.2 --shard-zoom 1 --threads 1 -q --workdir " +
-                            work.string() + " -o " + (dir / "merged.3dtiles").string();
-  // Killed (SIGKILL: nothing of its own runs) once plan.json is there; the
-  // wait for it is bounded (20 s).
-  const auto killed = runCommand(slurm + " & pid=$!; for i in $(seq 2000); do [ -e " +
-                                 (work / "plan.json").string() +
-                                 " ] && break; sleep 0.01; done; kill -9 $pid; wait $pid");
-  EXPECT_EQ(killed.exitCode, 128 + 9) << "not killed while planning: " << killed.err;
-  ASSERT_TRUE(fs::exists(work / "plan.json"));
-  EXPECT_FALSE(nlohmann::json::parse(readFile(work / "plan.json")).contains("finestZoom"));
-  EXPECT_FALSE(fs::exists(work / "shard.sh"));
-  // The same job again: planned in the same folder, not refused.
-  const auto again = runCommand(slurm);
-  ASSERT_EQ(again.exitCode, 0) << again.err;
-  const auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
-  ASSERT_TRUE(plan.contains("finestZoom"));
-  EXPECT_EQ(ingest::readTilingPlan(work / "tiler.plan").tiler.finestZoom,
-            plan.at("finestZoom").get<int>());
-  EXPECT_TRUE(fs::exists(work / "shard.sh"));
+  const auto planned = runTinsmith("slurm " + tin.string() +
+                                   " --tolerance 0.2 --shard-zoom 1 --threads 1 -q --workdir " +
+                                   work.string() + " -o " + (dir / "merged.3dtiles").string());
+  ASSERT_EQ(planned.exitCode, 0) << planned.err;
+  // Task 0 plans and tiles; run again (a resubmitted top: its subtrees may
+  // have read the first plan), it writes the same plan, byte for byte.
+  const std::string top = "SLURM_ARRAY_TASK_ID=0 bash " + (work / "shard.sh").string();
+  const auto first = runCommand(top);
+  ASSERT_EQ(first.exitCode, 0) << first.err;
+  const std::string plan = readFile(work / "tiler.plan");
+  ASSERT_FALSE(plan.empty());
+  EXPECT_NO_THROW((void)ingest::readTilingPlan(work / "tiler.plan"));
+  fs::remove_all(work / "shards" / "0.3dtiles");
+  const auto second = runCommand(top);
+  ASSERT_EQ(second.exitCode, 0) << second.err;
+  EXPECT_EQ(readFile(work / "tiler.plan"), plan);
+  // --write-plan is for the top (--until-zoom), without a plan given.
+  EXPECT_EQ(runTinsmith("tile " + tin.string() + " --tolerance 0.2 --write-plan " +
+                        (dir / "p.plan").string() + " -o " + (dir / "t.3dtiles").string())
+                .exitCode,
+            2);
+  EXPECT_EQ(runTinsmith("tile " + tin.string() + " --tolerance 0.2 --until-zoom 1 --plan " +
+                        (work / "tiler.plan").string() + " --write-plan " +
+                        (dir / "p.plan").string() + " -o " + (dir / "t.3dtiles").string())
+                .exitCode,
+            2);
+  EXPECT_FALSE(fs::exists(dir / "p.plan"));
+  EXPECT_FALSE(fs::exists(dir / "t.3dtiles"));
 }
 
 TEST(SlurmCli, MergeLeavesOutSubtreesUnderATileThatDoesNotRefine) {

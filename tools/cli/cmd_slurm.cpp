@@ -3,28 +3,29 @@
 //   tinsmith slurm SITE.tin -o SITE.3dtiles --shard-zoom Z --workdir DIR [tile options]
 //       [--submit] [--resume] [--sbatch-args 'ARGS'] [--json]
 // writes into DIR
-//   plan.json   what the job is (TIN, output, options, shard zoom, the
-//               planned finest zoom) and every submission made of it;
-//   tiler.plan  what every shard takes from the whole TIN (ingest/tiles/
-//               tiling_plan.hpp): the pyramid, the finest zoom, the fit
-//               sampling, the lines simplified for each zoom;
-//   shard.sh    an sbatch array script: task 0 tiles the top of the pyramid
-//               (tinsmith tile --until-zoom Z), task k ≥ 1 the subtree
-//               Z/x/y with k − 1 = y · 2^Z + x (--subtree
-//               --unchecked-ancestors: a subtree under a tile that does not
-//               refine, or without terrain, is written all the same, and the
-//               merge leaves it out); shards/k.3dtiles, logs/shard-k.log;
+//   plan.json   what the job is (TIN, output, options, shard zoom) and every
+//               submission made of it;
+//   shard.sh    an sbatch array script: task 0 reads the whole TIN once,
+//               plans the pyramid (the planning fit, which chooses the
+//               finest zoom; the lines simplified for each zoom) into
+//               tiler.plan (ingest/tiles/tiling_plan.hpp) and tiles the top
+//               of the pyramid (tinsmith tile --until-zoom Z --write-plan);
+//               task k ≥ 1 the subtree Z/x/y with k − 1 = y · 2^Z + x, given
+//               the plan (--plan: it reads only its square of the TIN) and
+//               --subtree --unchecked-ancestors (a subtree under a tile that
+//               does not refine, or without terrain, is written all the
+//               same, and the merge leaves it out); shards/k.3dtiles,
+//               logs/shard-k.log;
 //   merge.sh    tinsmith merge of every shard into the output, then info,
 //               then what each shard cost, from the "process:" line of
 //               tinsmith tile's summary in its log (logs/merge.log);
-// and with --submit runs `sbatch --array` of the shards and `sbatch` of the
-// merge with afterok on each task. --resume resubmits only the tasks that
-// left no store (a failed, cancelled or lost shard), and a new merge after
-// them. Shards are built exactly as `tinsmith tile --subtree` builds them, so
-// the merged store has the bytes of one run.
-// The planning (the planning fit, which chooses the finest zoom, and the
-// lines' simplification) runs once, here; every shard is given the plan
-// (--plan), and a subtree shard reads only its square of the TIN.
+// and with --submit runs `sbatch --array=0` (the top), `sbatch --array` of
+// the subtrees after it and `sbatch` of the merge after every task (afterok).
+// Nothing heavy runs where tinsmith slurm runs (a login node): it reads the
+// TIN's header only. --resume resubmits only the tasks that left no store
+// (a failed, cancelled or lost shard; the top too when tiler.plan is gone),
+// and a new merge after them. Shards are built exactly as `tinsmith tile
+// --subtree` builds them, so the merged store has the bytes of one run.
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -37,9 +38,7 @@
 #include <vector>
 
 #include "core/base/error.hpp"
-#include "core/tiles/tiler.hpp"
 #include "ingest/tiles/tile_job.hpp"
-#include "ingest/tiles/tiling_plan.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/cli/shared_options.hpp"
@@ -52,7 +51,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kPlanFormat = "tinsmith-slurm/1";
+constexpr const char* kPlanFormat = "tinsmith-slurm/2";  // 2: the top task plans
 constexpr int kMaxShardZoom = 6;  // 4096 subtrees: as many as an array usually may hold
 
 struct SlurmCliOptions {
@@ -83,13 +82,15 @@ std::vector<std::string> tileArguments(const TileFlags& f) {
 
 std::string shardScript(const std::string& tinsmith, const fs::path& tin, const fs::path& dir,
                         const std::vector<std::string>& args, int shardZoom, int cpus) {
+  const std::string plan = shellQuote((dir / "tiler.plan").string());
   std::string quoted;
   for (const auto& a : args) quoted += " " + shellQuote(a);
   std::ostringstream s;
   s << "#!/usr/bin/env bash\n"
     << "# One shard of a tinsmith tiling job (written by tinsmith slurm; see plan.json).\n"
-    << "# Task 0: the tiles above zoom " << shardZoom << "; task k >= 1: the subtree " << shardZoom
-    << "/x/y, k - 1 = y * " << (1 << shardZoom) << " + x.\n"
+    << "# Task 0: the job's plan (tiler.plan) and the tiles above zoom " << shardZoom
+    << "; task k >= 1, after it: the subtree " << shardZoom << "/x/y, k - 1 = y * "
+    << (1 << shardZoom) << " + x.\n"
     << "#SBATCH --job-name=tinsmith-shard\n"
     << "#SBATCH --cpus-per-task=" << cpus << "\n"
     << "#SBATCH --output=" << (dir / "logs" / "shard-%a.log").string() << "\n"
@@ -101,12 +102,13 @@ std::string shardScript(const std::string& tinsmith, const fs::path& tin, const 
     << " --threads \"${SLURM_CPUS_PER_TASK:-1}\")\n"
     << "echo \"tinsmith shard $task on $(hostname) at $(date -u +%FT%TZ)\"\n"
     << "if [ \"$task\" -eq 0 ]; then\n"
-    << "  \"${tile[@]}\" --until-zoom " << shardZoom << " -o \"$shards/0.3dtiles\"\n"
+    << "  \"${tile[@]}\" --until-zoom " << shardZoom << " --write-plan " << plan
+    << " -o \"$shards/0.3dtiles\"\n"
     << "  exit 0\n"
     << "fi\n"
     << "n=" << (1 << shardZoom) << "\n"
     << "x=$(( (task - 1) % n )); y=$(( (task - 1) / n ))\n"
-    << "\"${tile[@]}\" --subtree \"" << shardZoom
+    << "\"${tile[@]}\" --plan " << plan << " --subtree \"" << shardZoom
     << "/$x/$y\" --unchecked-ancestors -o \"$shards/$task.3dtiles\"\n";
   return s.str();
 }
@@ -138,12 +140,15 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
   return s.str();
 }
 
-/// The tasks that have left no store.
+/// The tasks that have left no store, and the top when the plan it wrote is
+/// gone (the subtrees read it).
 std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
   std::vector<int> out;
   for (int k = 0; k < tasks; ++k) {
     const fs::path shards = dir / "shards";
-    if (!fs::exists(shards / (std::to_string(k) + ".3dtiles"))) out.push_back(k);
+    if (!fs::exists(shards / (std::to_string(k) + ".3dtiles")) ||
+        (k == 0 && !fs::exists(dir / "tiler.plan")))
+      out.push_back(k);
   }
   return out;
 }
@@ -159,7 +164,7 @@ void runSlurm(const SlurmCliOptions& o) {
                      "tile it with tinsmith tile, and shard the 3D Tiles here");
   if (f.resume && !o.submit) throw usageError("--resume goes with --submit");
   // The options every shard will run with, checked here once.
-  const ingest::TileJobOptions jobOptions = withTileFlags(ingest::TileJobOptions{}, f);
+  (void)withTileFlags(ingest::TileJobOptions{}, f);
   const fs::path tin = fs::absolute(o.tin).lexically_normal();
   if (!fs::is_regular_file(tin))
     throw inputError("no TIN at '" + o.tin + "'", fileLocation(o.tin), "give a .tin file");
@@ -182,10 +187,7 @@ void runSlurm(const SlurmCliOptions& o) {
     std::ifstream in(planPath);
     previous = nlohmann::ordered_json::parse(in, nullptr, false);
     nlohmann::ordered_json same = previous;
-    if (same.is_object()) {
-      same.erase("submissions");
-      same.erase("finestZoom");
-    }
+    if (same.is_object()) same.erase("submissions");
     if (same != plan)
       throw usageError("'" + dir.string() + "' holds the plan of another job (plan.json)",
                        "choose another --workdir, or give the arguments that job was planned with");
@@ -207,36 +209,6 @@ void runSlurm(const SlurmCliOptions& o) {
                      fileLocation(tin.string()),
                      "build it again with this tinsmith's `tinsmith tin` (it writes format 2), "
                      "then tile it in shards");
-  // The plan of the whole TIN, made once for the job (a resumed job keeps
-  // its plan, which its shards were built with): the pyramid, the finest
-  // zoom, the fit sampling and the simplified lines. Every shard takes it,
-  // and a subtree shard reads only its square of the TIN.
-  const fs::path tilerPlanPath = dir / "tiler.plan";
-  int finestZoom = 0;
-  if (previous.is_object() && previous.contains("finestZoom") && fs::exists(tilerPlanPath)) {
-    finestZoom = ingest::readTilingPlan(tilerPlanPath).tiler.finestZoom;
-  } else {
-    // plan.json first, without the finest zoom: a planning cut short (^C, a
-    // killed login shell) leaves a folder that this job's rerun plans again.
-    nlohmann::ordered_json unplanned = plan;
-    if (previous.is_object() && previous.contains("submissions"))
-      unplanned["submissions"] = previous["submissions"];
-    fs::create_directories(dir);
-    writeAtomically(planPath, unplanned.dump(2) + "\n", false);
-    if (!f.quiet && !f.json) std::cerr << "planning the pyramid of " << tin.string() << "\n";
-    tiles::TilerOptions tilerOptions = jobOptions.tiler;
-    tilerOptions.threads = jobOptions.threads;
-    // The corners off the TIN of a shard's top four zooms come with the plan:
-    // a shard then reads the vertices only within 4 tile widths of the fifth
-    // zoom around its square (1/8 of its width; tiles::tilerVertexRegion).
-    const int cornerZoom = std::min(o.shardZoom + 4, tiles::kMaxCornerZoom);
-    const ingest::TilingPlan tilingPlan =
-        ingest::makeTilingPlan(ingest::readTinFile(tin), tilerOptions, cornerZoom, header.fileCrc);
-    finestZoom = tilingPlan.tiler.finestZoom;
-    ingest::writeTilingPlan(tilerPlanPath, tilingPlan);
-  }
-  plan["finestZoom"] = finestZoom;
-  args.insert(args.end(), {"--plan", tilerPlanPath.string()});
   fs::create_directories(dir / "shards");
   fs::create_directories(dir / "logs");
   const int cpus = std::max(1, f.threads);
@@ -249,12 +221,15 @@ void runSlurm(const SlurmCliOptions& o) {
   } else {
     for (int k = 0; k < tasks; ++k) todo.push_back(k);
   }
-  ArrayThenJob jobs{todo, dir / "shard.sh", dir / "merge.sh", o.sbatchArgs, {}, {}};
+  // The top (task 0) writes the plan the subtrees read: they wait for it.
+  ArrayThenJob jobs{{}, dir / "shard.sh", dir / "merge.sh", o.sbatchArgs, {}, {}, {}, {}};
+  for (const int k : todo) (k == 0 ? jobs.headTasks : jobs.tasks).push_back(k);
   nlohmann::ordered_json submission;
   submission["tasks"] = todo;
   if (o.submit) {
     jobs.submit();
-    submission["array"] = jobs.arrayId;
+    if (!jobs.headId.empty()) submission["top"] = jobs.headId;
+    if (!jobs.arrayId.empty()) submission["array"] = jobs.arrayId;
     submission["merge"] = jobs.afterId;
   }
   plan["submissions"] = previous.is_object() && previous.contains("submissions")
@@ -266,29 +241,35 @@ void runSlurm(const SlurmCliOptions& o) {
   if (f.json) {
     nlohmann::ordered_json out = submission;
     out["workdir"] = dir.string();
-    if (!o.submit) out["commands"] = {jobs.arrayCommand(), jobs.afterCommand("ARRAY_ID")};
+    if (!o.submit) out["commands"] = jobs.shellLines();
     std::cout << out.dump(2) << "\n";
     return;
   }
   if (f.quiet) return;
   std::cerr << "wrote " << (dir / "shard.sh").string() << " (" << tasks
-            << " tasks: the top above zoom " << o.shardZoom << " and " << tasks - 1
+            << " tasks: the plan and the top above zoom " << o.shardZoom << ", then " << tasks - 1
             << " subtrees) and merge.sh; logs in " << (dir / "logs").string() << "\n";
   if (!o.submit) {
     // The commands on stdout, to be saved and run: `tinsmith slurm … > submit.sh`.
-    std::cout << "A=$(" << jobs.arrayCommand() << ")\n" << jobs.afterCommand("${A}") << "\n";
-    std::cerr << "submit with the two commands above (or run tinsmith slurm again with --submit)\n";
+    for (const auto& line : jobs.shellLines()) std::cout << line << "\n";
+    std::cerr << "submit with the commands above (or run tinsmith slurm again with --submit)\n";
     return;
   }
-  if (todo.empty())
-    std::cerr << "every shard is there: submitted the merge alone, job "
-              << submission["merge"].get<std::string>() << "\n";
+  if (todo.empty()) {
+    std::cerr << "every shard is there: submitted the merge alone, job " << jobs.afterId << "\n";
+    return;
+  }
+  if (!jobs.headId.empty())
+    std::cerr << "submitted the plan and the top as job " << jobs.headId
+              << (jobs.tasks.empty() ? "" : ", the subtrees after it");
   else
-    std::cerr << "submitted the shards as array job " << submission["array"].get<std::string>()
-              << " (tasks " << arrayList(todo) << ") and the merge as job "
-              << submission["merge"].get<std::string>() << " after every one of them\n"
-              << "follow with: squeue; the merged store is " << output.string()
-              << "; a failed shard: tinsmith slurm … --resume --submit\n";
+    std::cerr << "submitted the subtrees";
+  if (!jobs.tasks.empty())
+    std::cerr << (jobs.headId.empty() ? "" : " ") << "as array job " << jobs.arrayId << " (tasks "
+              << arrayList(jobs.tasks) << ")";
+  std::cerr << ", and the merge as job " << jobs.afterId << " after every one of them\n"
+            << "follow with: squeue; the merged store is " << output.string()
+            << "; a failed shard: tinsmith slurm … --resume --submit\n";
 }
 
 }  // namespace

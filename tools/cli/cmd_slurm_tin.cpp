@@ -171,7 +171,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
   } else {
     for (std::size_t k = 0; k < tasks; ++k) todo.push_back(static_cast<int>(k));
   }
-  ArrayThenJob jobs{todo, dir / "block.sh", dir / "assemble.sh", o.sbatchArgs, {}, {}};
+  ArrayThenJob jobs{todo, dir / "block.sh", dir / "assemble.sh", o.sbatchArgs, {}, {}, {}, {}};
   nlohmann::ordered_json submission;
   submission["tasks"] = todo;
   if (o.submit) {
@@ -189,7 +189,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
     nlohmann::ordered_json out = submission;
     out["workdir"] = dir.string();
     out["blockTasks"] = tasks;
-    if (!o.submit) out["commands"] = {jobs.arrayCommand(), jobs.afterCommand("ARRAY_ID")};
+    if (!o.submit) out["commands"] = jobs.shellLines();
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -197,7 +197,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
   std::cerr << "wrote " << (dir / "block.sh").string() << " (" << tasks
             << " block tasks) and assemble.sh; logs in " << (dir / "logs").string() << "\n";
   if (!o.submit) {
-    std::cout << "A=$(" << jobs.arrayCommand() << ")\n" << jobs.afterCommand("${A}") << "\n";
+    for (const auto& line : jobs.shellLines()) std::cout << line << "\n";
     std::cerr << "submit with the two commands above (or run tinsmith slurm-tin again with "
                  "--resume --submit)\n";
     return;

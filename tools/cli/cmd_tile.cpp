@@ -3,6 +3,7 @@
 //   tinsmith tile SITE.tin -o PART.3dtiles --subtree Z/X/Y     (one shard)
 //       [--plan tiler.plan --unchecked-ancestors]   (reads only its square of the TIN)
 //   tinsmith tile SITE.tin -o TOP.3dtiles --until-zoom Z       (the tiles above the shards)
+//       [--write-plan tiler.plan]          (and the plan the subtree shards take)
 //   tinsmith merge TOP.3dtiles PART*.3dtiles -o SITE.3dtiles
 //   tinsmith tile SITE.tin -o SITE.3dtiles --store-until-zoom Z (deeper tiles
 //                                                 for serve --on-demand)
@@ -40,6 +41,7 @@ struct TileCliOptions {
   bool emptyOk = false;
   bool uncheckedAncestors = false;
   std::string plan;
+  std::string writePlan;
 };
 
 struct MergeCliOptions {
@@ -79,12 +81,16 @@ void addTileCommand(CLI::App& app) {
                   "The job's tiling plan (tiler.plan in tinsmith slurm's --workdir): the pyramid, "
                   "the finest zoom and the simplified lines are taken from it, and with --subtree "
                   "--unchecked-ancestors only the subtree's part of the TIN is read");
+  cmd->add_option("--write-plan", opt->writePlan,
+                  "With --until-zoom: also write the job's tiling plan here, before the tiles "
+                  "(what tinsmith slurm's subtree shards read with --plan)");
   cmd->callback([opt] {
     ingest::TileJobOptions o;
     o.tiler.plannedFinestZoom = opt->finestZoom;
     o.storeUntilZoom = opt->storeUntilZoom;
     if (!opt->subtree.empty()) o.subtree = tiles::parseTileId(opt->subtree, "--subtree");
     o.untilZoom = opt->untilZoom;
+    if (!opt->writePlan.empty()) o.writePlan = opt->writePlan;
     if (opt->emptyOk && !o.subtree) throw usageError("--empty-ok goes with --subtree");
     o.subtreeMayBeEmpty = opt->emptyOk;
     o.uncheckedAncestors = opt->uncheckedAncestors;

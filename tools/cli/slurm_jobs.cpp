@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <utility>
 
 #include "core/base/error.hpp"
 
@@ -89,22 +90,49 @@ std::string taskCostLines(const fs::path& logs, const std::string& prefix, const
          "  END { printf \"  all: CPU %.1f s; the largest peak memory %.0f MB\\n\", cpu, peak }'\n";
 }
 
-std::string ArrayThenJob::arrayCommand() const {
-  return "sbatch --parsable --array=" + arrayList(tasks) +
+namespace {
+
+/// " --dependency=afterok:…" on every listed task of each (id, tasks), or "".
+std::string afterEvery(const std::vector<std::pair<std::string, std::vector<int>>>& arrays) {
+  std::string dependency;
+  for (const auto& [id, tasks] : arrays) {
+    if (tasks.empty()) continue;
+    const std::string each = afterEveryTask(id, tasks);
+    dependency += dependency.empty() ? each : each.substr(each.find(':'));
+  }
+  return dependency.empty() ? "" : " --dependency=" + dependency + " --kill-on-invalid-dep=yes";
+}
+
+}  // namespace
+
+std::string ArrayThenJob::headCommand() const {
+  if (headTasks.empty()) return "";
+  return "sbatch --parsable --array=" + arrayList(headTasks) +
          (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(arrayScript.string());
 }
 
-std::string ArrayThenJob::afterCommand(const std::string& id) const {
-  return "sbatch --parsable" +
-         (tasks.empty()
-              ? std::string()
-              : " --dependency=" + afterEveryTask(id, tasks) + " --kill-on-invalid-dep=yes") +
+std::string ArrayThenJob::arrayCommand(const std::string& head) const {
+  return "sbatch --parsable --array=" + arrayList(tasks) + afterEvery({{head, headTasks}}) +
+         (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(arrayScript.string());
+}
+
+std::string ArrayThenJob::afterCommand(const std::string& id, const std::string& head) const {
+  return "sbatch --parsable" + afterEvery({{head, headTasks}, {id, tasks}}) +
          (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(afterScript.string());
 }
 
+std::vector<std::string> ArrayThenJob::shellLines() const {
+  std::vector<std::string> lines;
+  if (!headTasks.empty()) lines.push_back("H=$(" + headCommand() + ")");
+  if (!tasks.empty()) lines.push_back("A=$(" + arrayCommand("${H}") + ")");
+  lines.push_back(afterCommand("${A}", "${H}"));
+  return lines;
+}
+
 void ArrayThenJob::submit() {
-  arrayId = tasks.empty() ? "" : runForOutput(arrayCommand());
-  afterId = runForOutput(afterCommand(arrayId));
+  headId = headTasks.empty() ? "" : runForOutput(headCommand());
+  arrayId = tasks.empty() ? "" : runForOutput(arrayCommand(headId));
+  afterId = runForOutput(afterCommand(arrayId, headId));
 }
 
 ProcessCost processCost() {

@@ -31,18 +31,28 @@ std::string taskCostLines(const std::filesystem::path& logs, const std::string& 
                           const std::string& label, std::size_t tasks);
 
 /// An sbatch array of `tasks` and a job after every one of them (afterok;
-/// none with no task): the commands, and the job ids once submitted.
+/// none with no task): the commands, and the job ids once submitted. With
+/// `headTasks`, those tasks of the same script run first, as an array of
+/// their own, and `tasks` and the job after wait for every one of them too
+/// (a task that makes what the others read).
 struct ArrayThenJob {
   std::vector<int> tasks;
   std::filesystem::path arrayScript, afterScript;
-  std::string sbatchArgs;  ///< more arguments for both, as one string
-  std::string arrayId, afterId;
+  std::string sbatchArgs;  ///< more arguments for every job, as one string
+  std::vector<int> headTasks;
+  std::string headId, arrayId, afterId;
 
-  [[nodiscard]] std::string arrayCommand() const;
-  /// The job after the array whose id is `id` (a shell variable or a
-  /// placeholder, for the printed commands).
-  [[nodiscard]] std::string afterCommand(const std::string& id) const;
-  /// Runs both with sbatch --parsable; throws ioError as runForOutput.
+  /// The head array (none without head tasks: "").
+  [[nodiscard]] std::string headCommand() const;
+  /// The array after the head array whose id is `head` (a shell variable or
+  /// a placeholder, for the printed commands; unused without head tasks).
+  [[nodiscard]] std::string arrayCommand(const std::string& head = {}) const;
+  /// The job after the array whose id is `id` and the head array `head`.
+  [[nodiscard]] std::string afterCommand(const std::string& id, const std::string& head = {}) const;
+  /// The commands to run in order, as shell lines that keep each id in a
+  /// variable (H, A) for the next.
+  [[nodiscard]] std::vector<std::string> shellLines() const;
+  /// Runs them with sbatch --parsable; throws ioError as runForOutput.
   void submit();
 };
 

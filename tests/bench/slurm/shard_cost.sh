@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # What sharding costs today (issue 24's benchmark, without a cluster): one
-# `tinsmith tile` run against the 1 + 4^Z shards `tinsmith slurm` plans, each
-# run as its array task would run (one thread), timed by /usr/bin/time —
+# `tinsmith tile` run against the 1 + 4^Z shards `tinsmith slurm` writes,
+# each run as its array task would run (one thread), timed by /usr/bin/time —
 # per-shard peak memory and the shards' total CPU against the one run's —
-# then their merge, checked byte for byte against the one run. The plan
-# (`tinsmith slurm`, which runs the planning fit once) counts in the total.
+# then their merge, checked byte for byte against the one run. Task 0 plans
+# (the planning fit, once) and tiles the top; `tinsmith slurm` itself only
+# writes the scripts, and counts in the total too.
 #
 #   bash tests/bench/slurm/shard_cost.sh TINSMITH TIN TOLERANCE SHARD_ZOOM [WORKDIR]
 # e.g. the Red Butte DEM-TIN of tests/bench/tiles/vs_martini.sh (KEEP=DIR keeps it)
@@ -34,14 +35,16 @@ awk -v ow="$ow" -v oc="$(echo "$ou $os" | awk '{print $1 + $2}')" -v om="$om" \
     -v mc="$(echo "$mu $ms" | awk '{print $1 + $2}')" -v mm="$mm" -v tasks="$tasks" -v same="$same" \
     -v pc="$(echo "$pu $ps" | awk '{print $1 + $2}')" -v pm="$pm" '
   { c = $3 + $4; cpu += c; if ($5 > peak) peak = $5; if (min == "" || $5 < min) min = $5
-    if ($1 > 0 && $5 > subtree) subtree = $5 }
+    if ($1 > 0 && $5 > subtree) subtree = $5
+    if ($1 == 0) { top = c; topm = $5 } }
   END {
     printf "| run | CPU s | peak MB |\n|---|---|---|\n"
     printf "| one tinsmith tile | %.2f | %.0f |\n", oc, om / 1024
-    printf "| plan (tinsmith slurm) | %.2f | %.0f |\n", pc, pm / 1024
+    printf "| tinsmith slurm (the scripts) | %.2f | %.0f |\n", pc, pm / 1024
     printf "| %d shards (sum of CPU; largest and smallest peak) | %.2f | %.0f (%.2f×), smallest %.0f |\n", tasks, cpu, peak / 1024, peak / om, min / 1024
+    printf "| task 0: the plan and the top | %.2f | %.0f |\n", top, topm / 1024
     printf "| the largest subtree shard | | %.0f (%.2f×) |\n", subtree / 1024, subtree / om
-    printf "| plan + shards | %.2f (%.2f×) | |\n", pc + cpu, (pc + cpu) / oc
+    printf "| scripts + shards | %.2f (%.2f×) | |\n", pc + cpu, (pc + cpu) / oc
     printf "| merge | %.2f | %.0f |\n", mc, mm / 1024
     printf "\nThe merged store and the one run: %s.\n", same
   }' times.txt
