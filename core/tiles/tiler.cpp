@@ -56,9 +56,10 @@ constexpr double kSideSagShare = 0.1;
 /// tile mesh (fitTile) uses it all.
 struct FitData {
   std::vector<Point3> all;
-  std::vector<Point3> tileFit;
-  double spacing = 0;          // TilerPlan::fitSpacing
-  bool tileFitAll = false;     // TilerPlan::tileFitAllData
+  std::vector<Point3> tileFit;  // empty when it would be `all` (tileFitIsAll)
+  double spacing = 0;           // TilerPlan::fitSpacing
+  bool tileFitAll = false;      // TilerPlan::tileFitAllData
+  bool tileFitIsAll = false;    // tileFitAll, or no break line leaves anything out
 };
 
 /// The longest of a triangle's edges in x, y.
@@ -111,10 +112,12 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
     if (e.feature < tin.features.size() && isBreakLineKind(tin.features[e.feature].kind))
       held[e.a] = held[e.b] = 1;
   }
+  // Without break lines (a DEM) the two are the same points: kept once.
+  const bool anyHeld = std::find(held.begin(), held.end(), 1) != held.end();
   for (std::size_t v = 0; v < tin.vertices.size(); ++v) {
     if (!within.contains(tin.vertices[v].xy())) continue;
     data.all.push_back(tin.vertices[v]);
-    if (!held[v]) data.tileFit.push_back(tin.vertices[v]);
+    if (anyHeld && !held[v]) data.tileFit.push_back(tin.vertices[v]);
   }
   data.spacing = plan ? plan->fitSpacing : fitSpacing(tin);
   const double spacing = data.spacing;
@@ -137,13 +140,16 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
         const Point3 p{w * a.x + u * b.x + v * c.x, w * a.y + u * b.y + v * c.y,
                        w * a.z + u * b.z + v * c.z};
         data.all.push_back(p);
-        if (!nearHeld) data.tileFit.push_back(p);
+        if (anyHeld && !nearHeld) data.tileFit.push_back(p);
       }
     }
   }
   // A TIN that is all break lines still needs something to fit.
-  data.tileFitAll = plan ? plan->tileFitAllData : data.tileFit.size() < 3;
-  if (data.tileFitAll) data.tileFit = data.all;
+  data.tileFitAll = plan ? plan->tileFitAllData : (anyHeld ? data.tileFit : data.all).size() < 3;
+  data.tileFitIsAll = data.tileFitAll || !anyHeld;
+  if (data.tileFitIsAll) std::vector<Point3>().swap(data.tileFit);
+  data.all.shrink_to_fit();  // grown by doubling: up to half of it unused
+  data.tileFit.shrink_to_fit();
   return data;
 }
 
@@ -328,6 +334,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   FitData data = fitData(tin, plan, within_);
   data_ = std::move(data.all);
   tileFitData_ = std::move(data.tileFit);
+  tileFitIsData_ = data.tileFitIsAll;
   fitSpacing_ = data.spacing;
   tileFitAllData_ = data.tileFitAll;
   // The grids only speed up finding the data in a square (what is found is
@@ -342,7 +349,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
     return grid;
   };
   dataGrid_ = gridOf(data_);
-  tileFitGrid_ = gridOf(tileFitData_);
+  if (!tileFitIsData_) tileFitGrid_ = gridOf(tileFitData_);
   if (!plan) lines_ = extractTerrainLines(tin);
   finestZoom_ = plan             ? plan->finestZoom
                 : options_.fixed ? options_.fixed->finestZoom
@@ -404,8 +411,8 @@ int Tiler::planFinestZoom() const {
   const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
                            fit::BinaryTriangulation::kMaxGridLevels - 1);
   const auto planning = fit::fitMultilevel(
-      tileFitData_, binaryFitOptions(options_, geometry_.origin(), geometry_.size(), options_.tolerance,
-                                cap, options_.threads));
+      tileFitData(), binaryFitOptions(options_, geometry_.origin(), geometry_.size(),
+                                      options_.tolerance, cap, options_.threads));
   const double finestTriangles = static_cast<double>(planning.levels().back().triangles);
   const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
   int zmax = 0;
@@ -514,14 +521,16 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
 std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolerance) const {
   const Rect rect = geometry_.bounds(id);
   std::vector<std::uint32_t> inTile;
-  tileFitGrid_.forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
-    if (rect.contains(tileFitData_[i].xy())) inTile.push_back(i);
-  });
+  const std::vector<Point3>& data = tileFitData();
+  (tileFitIsData_ ? dataGrid_ : tileFitGrid_)
+      .forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
+        if (rect.contains(data[i].xy())) inTile.push_back(i);
+      });
   if (inTile.size() < 3) return std::nullopt;
   std::sort(inTile.begin(), inTile.end());  // the data's order, whatever the grid's
   std::vector<Point3> points;
   points.reserve(inTile.size());
-  for (const std::uint32_t i : inTile) points.push_back(tileFitData_[i]);
+  for (const std::uint32_t i : inTile) points.push_back(data[i]);
   // Thin-plate smoothing leaves planes free: data on one line (a raster's
   // row along the tile's side, straight or nearly) cannot fix the slope
   // across it, and the system is singular.

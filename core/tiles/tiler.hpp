@@ -257,14 +257,20 @@ class Tiler {
                                             const TileInput& input,
                                             const std::vector<TerrainLine>& zoomLines) const;
   void fitTile(TileSurface& tile, const fit::MultilevelFit* fit) const;
+  [[nodiscard]] const std::vector<Point3>& tileFitData() const {
+    return tileFitIsData_ ? data_ : tileFitData_;
+  }
 
   const TinData& tin_;
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
   std::vector<Point3> data_;          // TIN vertices and points sampled from its triangles
-  std::vector<Point3> tileFitData_;      // the part of data_ the tile fits refine for
-  CellGrid dataGrid_{0, 0, 0, 0, 1};  // data_ by position
-  CellGrid tileFitGrid_{0, 0, 0, 0, 1};  // tileFitData_ by position
+  // The part of data_ the tile fits refine for: data_ itself when
+  // tileFitIsData_ (no break line leaves a point out), else tileFitData_.
+  std::vector<Point3> tileFitData_;
+  bool tileFitIsData_ = false;
+  CellGrid dataGrid_{0, 0, 0, 0, 1};     // data_ by position
+  CellGrid tileFitGrid_{0, 0, 0, 0, 1};  // tileFitData_ by position, unless tileFitIsData_
   std::vector<TerrainLine> lines_;    // empty with a plan, which has them simplified
   // The plane, or with a region the part of it the TIN was read in.
   Rect within_{-HUGE_VAL, -HUGE_VAL, HUGE_VAL, HUGE_VAL};
