@@ -156,7 +156,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
     // The smoothing matrix first: its temporaries are gone before the
-    // per-part moments are allocated (lower peak memory).
+    // moments are summed (lower peak memory).
     std::optional<SparseMatrix> energy;
     if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
     const std::vector<TriangleMoments>& moments =

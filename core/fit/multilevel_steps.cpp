@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <unordered_map>
 #include <utility>
 
 #include "core/base/error.hpp"
@@ -194,48 +195,61 @@ const std::vector<TriangleMoments>& levelMoments(
       fresh[remap[t]] = 0;
     }
   }
+  // Every point's triangle first (a point in a triangle kept from Δ_{k−1}
+  // is only renumbered).
+  forEachPart(pts.size(), threads, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t i = b; i < e; ++i) {
+      const std::uint32_t old =
+          level == 1 ? static_cast<std::uint32_t>(mesh.rootIndex(pts[i].xy())) : triOf[i];
+      triOf[i] = remap[old] != KeyIndexMap::kNone
+                     ? remap[old]
+                     : locator.locate(locatorRoot[old], mesh.toGrid(pts[i].xy()));
+    }
+  });
+  // Then the sums. A new triangle's points are summed into `moments` by the
+  // first part that holds one of them; a later part that holds some too
+  // (a triangle across the parts' boundary: few) sums them aside, merged in
+  // part order after. The same sums in the same order as a whole array of
+  // sums per part merged in part order, without holding an array per part.
+  const std::size_t chunk = (pts.size() + kParts - 1) / kParts;  // parallelParts' split
+  static_assert(kParts < 255);
+  std::vector<std::uint8_t> firstPart(tris.size(), kParts);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const std::uint32_t t = triOf[i];
+    if (fresh[t] && firstPart[t] == kParts) firstPart[t] = static_cast<std::uint8_t>(i / chunk);
+  }
   // Barycentric coordinates in triangle (v0, v1, v2) as an affine map of
   // p − v0: b1 = m[0]·dx + m[1]·dy, b2 = m[2]·dx + m[3]·dy, b0 = 1 − b1 − b2.
+  // Made as the points come (in Morton order a triangle's points are mostly
+  // one run), not held for every triangle.
   struct Affine {
     double x0, y0;
     std::array<double, 4> m;
   };
-  std::vector<Affine> affine(tris.size());
-  for (std::size_t t = 0; t < tris.size(); ++t) {
+  const auto affineOf = [&](std::uint32_t t) {
     const Triangle& tv = triVerts[t];
     const Point2 &p0 = positions[tv[0]], &p1 = positions[tv[1]], &p2 = positions[tv[2]];
     const double ax = p1.x - p0.x, ay = p1.y - p0.y, bx = p2.x - p0.x, by = p2.y - p0.y;
     const double det = ax * by - bx * ay;
-    affine[t] = {p0.x, p0.y, {by / det, -bx / det, -ay / det, ax / det}};
-  }
-  std::vector<std::vector<TriangleMoments>> partMoments(kParts);
+    return Affine{p0.x, p0.y, {by / det, -bx / det, -ay / det, ax / det}};
+  };
+  std::vector<std::unordered_map<std::uint32_t, TriangleMoments>> aside(kParts);
   forEachPart(pts.size(), threads, [&](std::size_t b, std::size_t e, unsigned part) {
-    auto& mine = partMoments[part];
+    std::uint32_t affineTriangle = std::numeric_limits<std::uint32_t>::max();
+    Affine af{};
     for (std::size_t i = b; i < e; ++i) {
-      const std::uint32_t old = level == 1 ? static_cast<std::uint32_t>(mesh.rootIndex(pts[i].xy())) : triOf[i];
-      if (remap[old] != KeyIndexMap::kNone) {
-        triOf[i] = remap[old];
-        continue;
-      }
-      const std::uint32_t t = locator.locate(locatorRoot[old], mesh.toGrid(pts[i].xy()));
-      triOf[i] = t;
-      const Affine& af = affine[t];
+      const std::uint32_t t = triOf[i];
+      if (!fresh[t]) continue;
+      if (t != affineTriangle) af = affineOf(affineTriangle = t);
       const double dx = pts[i].x - af.x0, dy = pts[i].y - af.y0;
       const double b1 = af.m[0] * dx + af.m[1] * dy, b2 = af.m[2] * dx + af.m[3] * dy;
       const std::array<double, 3> bc{1.0 - b1 - b2, b1, b2};
-      if (mine.empty()) mine.assign(tris.size(), TriangleMoments{});
-      mine[t].add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
+      TriangleMoments& sums = firstPart[t] == part ? moments[t] : aside[part][t];
+      sums.add(bc, pts[i].z, weights.empty() ? 1.0 : weights[i]);
     }
   });
-  for (std::size_t t = 0; t < tris.size(); ++t) {
-    if (!fresh[t]) continue;
-    bool first = true;
-    for (const auto& part : partMoments) {
-      if (part.empty()) continue;
-      if (first) moments[t] = part[t];
-      else moments[t].merge(part[t]);
-      first = false;
-    }
+  for (const auto& sums : aside) {
+    for (const auto& [t, m] : sums) moments[t].merge(m);
   }
   previousTris.assign(tris.begin(), tris.end());
   previousMoments = std::move(moments);
@@ -247,30 +261,40 @@ LevelErrors levelErrors(const SortedData& data, std::span<const std::uint32_t> t
                         const Vector& coefficients, int level, int gridLevels, unsigned threads) {
   // f on each triangle as a plane through its vertex l:
   // f(p) = c_l + g_x (x − x_l) + g_y (y − y_l) with the gradient of 8.1.
+  // Made as the points come (in Morton order a triangle's points are mostly
+  // one run), not held for every triangle: at the finest levels that was
+  // 40 bytes a triangle, more than the points themselves.
   struct Plane {
     double x0, y0, z0, gx, gy;
   };
-  std::vector<Plane> planes(triVerts.size());
-  for (std::size_t t = 0; t < triVerts.size(); ++t) {
+  const auto planeOf = [&](std::uint32_t t) {
     const Triangle& tv = triVerts[t];
     const Point2 &pa = positions[tv[0]], &pb = positions[tv[1]], &pc = positions[tv[2]];
     const double ca = coefficients[tv[0]], cb = coefficients[tv[1]], cc = coefficients[tv[2]];
     const double area2 = geometry::orient2dInexact(pa, pb, pc);
     const double gx = ((pb.y - pc.y) * ca + (pc.y - pa.y) * cb + (pa.y - pb.y) * cc) / area2;
     const double gy = ((pc.x - pb.x) * ca + (pa.x - pc.x) * cb + (pb.x - pa.x) * cc) / area2;
-    planes[t] = {pa.x, pa.y, ca, gx, gy};
-  }
+    return Plane{pa.x, pa.y, ca, gx, gy};
+  };
   // The points of a cell are one contiguous run (Morton order): per part a
   // list of runs, joined across the part boundaries.
   const auto& pts = data.points;
   const int shift = 2 * (gridLevels - level);
+  // A part has at most one record a point. The first part's room holds
+  // every part's records, which are then appended to it in place: no record
+  // is copied twice or held in a vector grown by doubling (at the finest
+  // levels a cell holds about one point, and the records are the data's
+  // size). Room not written to is address space only.
   std::vector<std::vector<CellRecord>> records(kParts);
   std::vector<double> maxErr(kParts, 0.0), sumSq(kParts, 0.0);
   forEachPart(pts.size(), threads, [&](std::size_t b, std::size_t e, unsigned part) {
     auto& rec = records[part];
+    rec.reserve(part == 0 ? pts.size() : e - b);
     double mx = 0.0, ss = 0.0;
+    std::uint32_t planeTriangle = std::numeric_limits<std::uint32_t>::max();
+    Plane pl{};
     for (std::size_t i = b; i < e; ++i) {
-      const Plane& pl = planes[triOf[i]];
+      if (triOf[i] != planeTriangle) pl = planeOf(planeTriangle = triOf[i]);
       const double f = pl.z0 + pl.gx * (pts[i].x - pl.x0) + pl.gy * (pts[i].y - pl.y0);
       const double err = std::abs(f - pts[i].z);
       mx = std::max(mx, err);
@@ -284,15 +308,17 @@ LevelErrors levelErrors(const SortedData& data, std::span<const std::uint32_t> t
     sumSq[part] = ss;
   });
   LevelErrors out;
-  for (auto& rec : records) {
-    for (const auto& r : rec) {
-      if (!out.cells.empty() && out.cells.back().cell == r.cell) {
-        out.cells.back().count += r.count;
-        out.cells.back().maxError = std::max(out.cells.back().maxError, r.maxError);
-      } else {
-        out.cells.push_back(r);
-      }
+  out.cells = std::move(records[0]);
+  for (unsigned part = 1; part < kParts; ++part) {
+    auto& rec = records[part];
+    auto from = rec.begin();
+    if (from != rec.end() && !out.cells.empty() && out.cells.back().cell == from->cell) {
+      out.cells.back().count += from->count;  // a cell across the parts' boundary
+      out.cells.back().maxError = std::max(out.cells.back().maxError, from->maxError);
+      ++from;
     }
+    out.cells.insert(out.cells.end(), from, rec.end());
+    std::vector<CellRecord>().swap(rec);
   }
   out.maxError = *std::max_element(maxErr.begin(), maxErr.end());
   out.rmsError = std::sqrt(std::accumulate(sumSq.begin(), sumSq.end(), 0.0) / static_cast<double>(pts.size()));
