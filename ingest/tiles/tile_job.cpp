@@ -25,7 +25,6 @@ using tiles::TileRecord;
 namespace {
 
 constexpr const char* kBuildKey = "tinsmith/build.json";
-constexpr const char* kTinKey = "tinsmith/terrain.tin";
 /// A shard's part of the pyramid: {"subtree": "Z/X/Y"} or {"untilZoom": Z}.
 /// Only shard stores hold it; merge reads it to know which tiles a shard
 /// answers for (a refined tile's child missing from its shard is empty).
@@ -92,7 +91,7 @@ std::vector<std::string> canonicalKeys(const store::TileStore& stage,
                                        std::vector<std::string> tilesetKeys, bool shard = false,
                                        const std::vector<std::string>& terrainKeys = {}) {
   std::vector<std::string> out{kBuildKey};
-  if (stage.contains(kTinKey)) out.push_back(kTinKey);
+  for (auto& key : store::storedTinKeys(stage)) out.push_back(std::move(key));
   if (shard) out.push_back(kShardKey);
   for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
   std::sort(tilesetKeys.begin(), tilesetKeys.end());
@@ -458,7 +457,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   stage->put(kBuildKey, build);
   // The TIN goes with the pyramid's root (the whole run, or the top shard):
   // a subtree shard would copy the whole TIN for its part of the tiles.
-  if (holdsRoot && !stage->contains(kTinKey)) stage->put(kTinKey, tinBytes);
+  if (holdsRoot && !store::holdsTin(*stage)) store::putTin(*stage, tinBytes, options.tinPieceBytes);
   if (!shard.empty()) {
     stage->put(kShardKey, shard);
   } else if (store::storeKindFor(out) == store::StoreKind::Directory) {
@@ -600,8 +599,7 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     std::vector<TileRecord> found;
     for (std::size_t i = 0; i < shards.size(); ++i) {
       const auto& in = shards[i];
-      if (!stage->contains(kTinKey))
-        if (auto tin = in->get(kTinKey)) stage->put(kTinKey, *tin);
+      if (!store::holdsTin(*stage)) store::copyTin(*in, *stage);  // a piece at a time
       for (const auto& key : in->keys()) {
         if (key.rfind("tiles/", 0) != 0) continue;
         const auto bytes = in->get(key);

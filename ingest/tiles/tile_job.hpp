@@ -3,7 +3,9 @@
 //   tinsmith/build.json   what was built from what (TIN checksum, options)
 //   tinsmith/terrain.tin  the TIN itself (the server answers elevations from it;
 //                         not in a shard of a subtree below the root, whose
-//                         merge takes it from the top shard)
+//                         merge takes it from the top shard); in pieces
+//                         terrain.tin.0000, … when it is larger than one
+//                         (ingest/store/stored_tin.hpp)
 //   tiles/{z}/{x}/{y}.glb one per tile; asset.extras carries the tile's record
 //   tileset.json (+ tilesets/…) written last, from the records; its
 //                         extras.tinsmith holds the CRS, the tolerance and,
@@ -23,6 +25,7 @@
 // pyramid it answers for.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -36,6 +39,7 @@
 #include "core/tiles/tiler.hpp"
 #include "core/tin/tin_data.hpp"
 #include "ingest/base/progress.hpp"
+#include "ingest/store/stored_tin.hpp"
 #include "ingest/tiles/tiling_plan.hpp"
 
 namespace tinsmith::ingest {
@@ -86,6 +90,9 @@ struct TileJobOptions {
   /// the TIN this names (TinPart's fileCrc and counts): for a subtree below
   /// the root whose ancestors are unchecked, with the plan of that TIN.
   std::optional<TinIdentity> partOf;
+  /// The store's copy of the TIN goes in pieces of this size when larger
+  /// (store::putTin; tests make it small).
+  std::size_t tinPieceBytes = store::kTinPieceBytes;
 };
 
 /// The names `tinsmith tile` and the config's [tiles] use: "draco" | "none",

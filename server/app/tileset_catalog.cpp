@@ -11,6 +11,7 @@
 
 #include "core/base/error.hpp"
 #include "core/tiles/tileset_json.hpp"
+#include "ingest/store/stored_tin.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "server/http/route.hpp"
 
@@ -21,7 +22,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kBuildKey = "tinsmith/build.json";
-constexpr const char* kTinKey = "tinsmith/terrain.tin";
 
 nlohmann::json parseStoredJson(const store::TileStore& s, const std::string& key) {
   const auto text = s.get(key);
@@ -223,7 +223,7 @@ Tileset::Tileset(std::string id, const fs::path& path)
                        {"pyramidMax", maxZoom_}};
   summary_["tileCount"] = tiles;
   if (const auto tolerance = number(build, "/options/tolerance")) summary_["tolerance"] = *tolerance;
-  hasTin_ = store_->contains(kTinKey);
+  hasTin_ = store::holdsTin(*store_);
   summary_["elevation"] = hasTin_;
   auto& links = summary_["links"];
   if (hasTiles3D_) links["tileset"] = "/tilesets/" + id_ + "/tileset.json";
@@ -242,12 +242,13 @@ Tileset::~Tileset() {
 
 const Surface& Tileset::surface() const {
   std::call_once(surfaceOnce_, [this] {
-    const auto bytes = store_->get(kTinKey);
+    const auto bytes = store::getTin(*store_);
     if (!bytes)
       throw inputError("tileset '" + id_ + "' carries no TIN, so it has no elevations", {},
                        "rebuild it with tinsmith tile, which stores the TIN");
     try {
-      surface_ = std::make_unique<Surface>(ingest::decodeTin(*bytes, id_ + ":" + kTinKey));
+      surface_ = std::make_unique<Surface>(
+          ingest::decodeTin(*bytes, id_ + ":" + std::string(store::kTinKey)));
     } catch (const Error& e) {
       throw ioError("the TIN in tileset '" + id_ + "' cannot be read: " + e.what(), {},
                     "rebuild the store with tinsmith tile");
@@ -297,9 +298,10 @@ const ingest::TileRebuilder& Tileset::rebuilder() const {
   std::call_once(rebuilderOnce_, [this] {
     try {
       const auto build = store_->get(kBuildKey);
-      const auto tin = store_->get(kTinKey);
+      const auto tin = store::getTin(*store_);
       if (!build || !tin) {
-        rebuilderError_ = std::string("the store has no ") + (build ? kTinKey : kBuildKey);
+        rebuilderError_ =
+            "the store has no " + std::string(build ? store::kTinKey : std::string_view(kBuildKey));
         return;
       }
       rebuilder_ = std::make_unique<ingest::TileRebuilder>(*build, *tin, store_->path().string());

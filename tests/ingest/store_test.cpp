@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "core/base/error.hpp"
+#include "ingest/store/stored_tin.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "tests/support/run_command.hpp"
 
@@ -328,6 +329,53 @@ TEST_P(TileStoreTest, WriteStoreWithAMissingKeyIsAnInputErrorAndLeavesNoTarget) 
   EXPECT_EQ(thrownBy([&] { writeStore(*openStoreForReading(source), twice, target); }).kind,
             ErrorKind::Input);
   EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"s", "s/here.glb"}));
+}
+
+TEST_P(TileStoreTest, ATinLargerThanAPieceIsStoredInPiecesAndReadWhole) {
+  const fs::path dir = scratch("tin-pieces");
+  const std::string small = tileBytes(7, 4096), large = tileBytes(8, 10000);
+  auto store = openStoreForWriting(dir / nameFor(GetParam()), false);
+  EXPECT_FALSE(holdsTin(*store));
+  EXPECT_FALSE(getTin(*store));
+  EXPECT_TRUE(storedTinKeys(*store).empty());
+  // Within a piece: one value under its own key, as every store had it.
+  putTin(*store, small, 4096);
+  EXPECT_EQ(store->keys(), std::vector<std::string>{"tinsmith/terrain.tin"});
+  EXPECT_EQ(getTin(*store), small);
+
+  auto pieces = openStoreForWriting(dir / ("p-" + nameFor(GetParam())), false);
+  putTin(*pieces, large, 4096);
+  const std::vector<std::string> keys{"tinsmith/terrain.tin.0000", "tinsmith/terrain.tin.0001",
+                                      "tinsmith/terrain.tin.0002"};
+  EXPECT_EQ(pieces->keys(), keys);
+  EXPECT_EQ(storedTinKeys(*pieces), keys);
+  EXPECT_EQ(pieces->get(keys[0]), large.substr(0, 4096));
+  EXPECT_EQ(pieces->get(keys[2]), large.substr(8192));
+  EXPECT_TRUE(holdsTin(*pieces));
+  EXPECT_EQ(getTin(*pieces), large);
+
+  // Copied as stored, into the other kind too.
+  for (const std::string name : {"c.3dtiles", "c"}) {
+    auto copy = openStoreForWriting(dir / name, false);
+    EXPECT_TRUE(copyTin(*pieces, *copy));
+    EXPECT_EQ(copy->keys(), keys) << name;
+    EXPECT_EQ(getTin(*copy), large) << name;
+    EXPECT_FALSE(copyTin(*openStoreForWriting(dir / ("empty-" + name), false), *copy));
+  }
+}
+
+TEST_P(TileStoreTest, ATinWhosePieceZeroIsMissingIsNoTin) {
+  // Piece 0 is written last: a put cut short before it leaves pieces that
+  // do not count, and the next put writes them all again.
+  const std::string large = tileBytes(9, 9000);
+  auto store = openStoreForWriting(scratch("tin-cut") / nameFor(GetParam()), false);
+  store->put("tinsmith/terrain.tin.0001", large.substr(4096, 4096));
+  store->put("tinsmith/terrain.tin.0002", large.substr(8192));
+  EXPECT_FALSE(holdsTin(*store));
+  EXPECT_FALSE(getTin(*store));
+  EXPECT_TRUE(storedTinKeys(*store).empty());
+  putTin(*store, large, 4096);
+  EXPECT_EQ(getTin(*store), large);
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, TileStoreTest,

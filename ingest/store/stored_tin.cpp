@@ -1,0 +1,64 @@
+#include "ingest/store/stored_tin.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::store {
+
+std::string tinPieceKey(std::size_t k) {
+  char suffix[24];
+  std::snprintf(suffix, sizeof suffix, ".%04zu", k);
+  return std::string(kTinKey) + suffix;
+}
+
+bool holdsTin(const TileStore& store) {
+  return store.contains(kTinKey) || store.contains(tinPieceKey(0));
+}
+
+std::vector<std::string> storedTinKeys(const TileStore& store) {
+  if (store.contains(kTinKey)) return {std::string(kTinKey)};
+  std::vector<std::string> keys;
+  for (std::size_t k = 0; store.contains(tinPieceKey(k)); ++k) keys.push_back(tinPieceKey(k));
+  return keys;
+}
+
+void putTin(TileStore& store, std::string_view bytes, std::size_t pieceBytes) {
+  if (pieceBytes == 0) throw internalError("putTin: a piece of 0 bytes");
+  if (bytes.size() <= pieceBytes) {
+    store.put(kTinKey, bytes);
+    return;
+  }
+  const std::size_t pieces = (bytes.size() + pieceBytes - 1) / pieceBytes;
+  for (std::size_t k = pieces; k-- > 0;) {
+    const std::size_t begin = k * pieceBytes;
+    store.put(tinPieceKey(k), bytes.substr(begin, std::min(pieceBytes, bytes.size() - begin)));
+  }
+}
+
+std::optional<std::string> getTin(const TileStore& store) {
+  if (auto whole = store.get(kTinKey)) return whole;
+  std::optional<std::string> joined;
+  for (std::size_t k = 0;; ++k) {
+    auto piece = store.get(tinPieceKey(k));
+    if (!piece) break;
+    if (!joined) joined.emplace();
+    joined->append(*piece);
+  }
+  return joined;
+}
+
+bool copyTin(const TileStore& from, TileStore& to) {
+  const std::vector<std::string> keys = storedTinKeys(from);
+  for (auto key = keys.rbegin(); key != keys.rend(); ++key) {
+    const auto bytes = from.get(*key);
+    if (!bytes)
+      throw ioError("'" + *key + "' went missing from " + from.path().string() +
+                    " while it was copied");
+    to.put(*key, *bytes);
+  }
+  return !keys.empty();
+}
+
+}  // namespace tinsmith::store
