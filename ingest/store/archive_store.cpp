@@ -88,12 +88,19 @@ void bindText(sqlite3_stmt* stmt, int index, std::string_view text) {
   sqlite3_bind_text64(stmt, index, text.data(), text.size(), SQLITE_STATIC, SQLITE_UTF8);
 }
 
-void bindBlob(sqlite3_stmt* stmt, int index, std::string_view bytes) {
+/// SQLite's result: a value over its length limit (10⁹ bytes) is refused
+/// (SQLITE_TOOBIG), and the statement would then store NULL in its place.
+[[nodiscard]] int bindBlob(sqlite3_stmt* stmt, int index, std::string_view bytes) {
   // A null pointer would bind NULL; an empty tile is an empty blob.
-  if (bytes.empty())
-    sqlite3_bind_zeroblob(stmt, index, 0);
-  else
-    sqlite3_bind_blob64(stmt, index, bytes.data(), bytes.size(), SQLITE_STATIC);
+  if (bytes.empty()) return sqlite3_bind_zeroblob(stmt, index, 0);
+  return sqlite3_bind_blob64(stmt, index, bytes.data(), bytes.size(), SQLITE_STATIC);
+}
+
+/// The error for a value that could not be bound under `key`.
+Error bindFailure(int rc, std::string_view key, std::size_t bytes, const fs::path& archive) {
+  return ioError("cannot write the key '" + std::string(key) + "': " + sqlite3_errstr(rc) + " (" +
+                     std::to_string(bytes) + " bytes; an archive's value holds at most 10^9)",
+                 fileLocation(archive), "write a folder store instead (a name without .3dtiles)");
 }
 
 // One SQLite connection with the statements every store call uses.
@@ -354,7 +361,8 @@ class ArchiveStore final : public TileStore {
     sqlite3_stmt* stmt = connection->put.get();
     const StepScope scope(stmt);
     bindText(stmt, 1, key);
-    bindBlob(stmt, 2, bytes);
+    if (const int rc = bindBlob(stmt, 2, bytes); rc != SQLITE_OK)
+      throw bindFailure(rc, key, bytes.size(), path_);
     if (sqlite3_step(stmt) != SQLITE_DONE)
       throw ioError(
           "cannot write the key '" + std::string(key) + "': " + message(connection->db.get()),
@@ -468,7 +476,8 @@ void writeArchive(const TileStore& source, std::span<const std::string> keys,
       const std::string bytes = bytesForCopy(source, key);
       const StepScope scope(insert.get());
       bindText(insert.get(), 1, key);
-      bindBlob(insert.get(), 2, bytes);
+      if (rc = bindBlob(insert.get(), 2, bytes); rc != SQLITE_OK)
+        throw bindFailure(rc, key, bytes.size(), target);
       rc = sqlite3_step(insert.get());
       if (rc == SQLITE_CONSTRAINT_PRIMARYKEY)
         throw inputError("the key '" + key + "' is listed twice for the archive",

@@ -4,6 +4,7 @@
 // reads from several threads at once.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/mman.h>
 
 #include <algorithm>
 #include <atomic>
@@ -434,6 +435,25 @@ TEST(OpenStore, AFileWhereAFolderStoreIsExpectedIsAnInputError) {
 
 // The final archive: the schema 3d-tiles-tools reads, rows in the given order,
 // a rollback-journal header (not WAL), and no files beside it.
+TEST(ArchiveStore, AValueOverSqlitesLimitIsAnErrorNotANull) {
+  // 10⁹ + 1 bytes of untouched anonymous memory (no page is read: SQLite
+  // refuses the length first). The archive used to store NULL in its place
+  // and go on: a 22 M-vertex TIN left an empty tinsmith/terrain.tin.
+  const std::size_t size = 1'000'000'001;
+  void* pages = mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  ASSERT_NE(pages, MAP_FAILED);
+  const fs::path path = test::scratchDir("store-too-big") / "t.3dtiles";
+  auto store = openStoreForWriting(path, false);
+  const Thrown thrown = thrownBy([&] {
+    store->put("tinsmith/terrain.tin", {static_cast<const char*>(pages), size});
+  });
+  munmap(pages, size);
+  EXPECT_EQ(thrown.kind, ErrorKind::Io);
+  EXPECT_NE(thrown.message.find("tinsmith/terrain.tin"), std::string::npos) << thrown.message;
+  EXPECT_NE(thrown.message.find("too big"), std::string::npos) << thrown.message;
+  EXPECT_FALSE(store->contains("tinsmith/terrain.tin"));
+}
+
 TEST(ArchiveStore, WriteStoreMakesAPlainArchive) {
   const fs::path dir = test::scratchDir("store-archive-plain");
   const Sample s = sampleTiles();
