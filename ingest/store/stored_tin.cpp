@@ -24,6 +24,11 @@ std::vector<std::string> storedTinKeys(const TileStore& store) {
   return keys;
 }
 
+bool holdsEmptyTin(const TileStore& store) {
+  const auto whole = store.get(kTinKey);
+  return whole && whole->empty();
+}
+
 void putTin(TileStore& store, std::string_view bytes, std::size_t pieceBytes) {
   if (pieceBytes == 0) throw internalError("putTin: a piece of 0 bytes");
   if (bytes.size() <= pieceBytes) {
@@ -56,6 +61,11 @@ bool copyTin(const TileStore& from, TileStore& to) {
     if (!bytes)
       throw ioError("'" + *key + "' went missing from " + from.path().string() +
                     " while it was copied");
+    if (bytes->empty())
+      throw inputError("the TIN in '" + from.path().string() + "' is empty",
+                       fileLocation(from.path().string()),
+                       "tile that store again with this tinsmith (an older one stored a TIN "
+                       "over 10^9 bytes as nothing)");
     to.put(*key, *bytes);
   }
   return !keys.empty();

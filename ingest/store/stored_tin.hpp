@@ -4,6 +4,8 @@
 // An archive's value holds at most 10⁹ bytes (SQLite's limit; a TIN of about
 // 20 M vertices), and pieces let a merge copy a TIN of any size a piece at a
 // time. Piece 0 is written last: a store that holds it holds every piece.
+// The piece size is fixed (kTinPieceBytes; the build record does not name
+// it): a resumed stage written with another would keep its higher pieces.
 #pragma once
 
 #include <cstddef>
@@ -29,6 +31,10 @@ inline constexpr std::size_t kTinPieceBytes = std::size_t{256} << 20;
 /// it holds none.
 [[nodiscard]] std::vector<std::string> storedTinKeys(const TileStore& store);
 
+/// Whether the store's whole TIN is an empty value: what a tinsmith before
+/// the pieces stored for a TIN over an archive's 10⁹ bytes (reads the value).
+[[nodiscard]] bool holdsEmptyTin(const TileStore& store);
+
 /// Writes `bytes` as the store's TIN: whole when they fit in `pieceBytes`,
 /// else in pieces of `pieceBytes` (piece 0 last).
 void putTin(TileStore& store, std::string_view bytes, std::size_t pieceBytes = kTinPieceBytes);
@@ -38,6 +44,7 @@ void putTin(TileStore& store, std::string_view bytes, std::size_t pieceBytes = k
 
 /// Copies the TIN of `from` into `to` as it is stored (whole or in the same
 /// pieces), one value at a time (piece 0 last); false when `from` holds none.
+/// Throws inputError naming `from` when its TIN is an empty value.
 bool copyTin(const TileStore& from, TileStore& to);
 
 }  // namespace tinsmith::store

@@ -454,6 +454,11 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   store::removeStaleTemps(stagePath);
 
   auto stage = store::openStoreForWriting(stagePath, options.resume);
+  if (options.resume && holdsRoot && store::holdsEmptyTin(*stage))
+    throw usageError("the stage '" + stagePath.string() +
+                         "' holds an empty TIN (an older tinsmith stored a TIN over 10^9 bytes "
+                         "as nothing)",
+                     "run again without --resume");
   stage->put(kBuildKey, build);
   // The TIN goes with the pyramid's root (the whole run, or the top shard):
   // a subtree shard would copy the whole TIN for its part of the tiles.

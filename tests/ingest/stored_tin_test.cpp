@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
 #include "core/tiles/tileset_json.hpp"
 #include "ingest/store/tile_store.hpp"
@@ -83,6 +84,43 @@ TEST(StoredTin, ARunAndItsMergedShardsKeepATinLargerThanAPieceInPieces) {
   const auto root = rebuilder.build(tiles::TileId{});
   ASSERT_TRUE(root);
   EXPECT_EQ(root->glb, one->get(tiles::tileContentKey(tiles::TileId{})));
+}
+
+TEST(StoredTin, AnEmptyTinLeftByAnOlderTinsmithIsNeitherResumedNorMerged) {
+  // An older archive stored a TIN over 10⁹ bytes as an empty value; a stage
+  // or a shard holding one must not pass it on as the TIN.
+  const fs::path dir = test::scratchDir("stored-tin-empty");
+  const TinData tin = rollingHill();
+  TileJobOptions options;
+  options.tiler.tolerance = 0.5;
+  options.threads = 1;
+  runTileJob(tin, "hill.tin", dir / "one.3dtiles", options);
+  const auto one = store::openStoreForReading(dir / "one.3dtiles");
+  EXPECT_FALSE(store::holdsEmptyTin(*one));
+  {
+    auto stage = store::openStoreForWriting(dir / "two.partial.3dtiles", false);
+    stage->put(store::kStoreMarkerKey, *one->get(store::kStoreMarkerKey));
+    stage->put(store::kTinKey, "");
+    EXPECT_TRUE(store::holdsEmptyTin(*stage));
+    auto copy = store::openStoreForWriting(dir / "copy.3dtiles", false);
+    try {
+      store::copyTin(*stage, *copy);
+      ADD_FAILURE() << "an empty TIN was copied";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find("two.partial.3dtiles"), std::string::npos) << e.what();
+    }
+  }
+  TileJobOptions resume = options;
+  resume.resume = true;
+  try {
+    runTileJob(tin, "hill.tin", dir / "two.3dtiles", resume);
+    ADD_FAILURE() << "a stage with an empty TIN was resumed";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Usage);
+    EXPECT_NE(std::string(e.what()).find("empty TIN"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "two.3dtiles"));
 }
 
 }  // namespace
