@@ -62,10 +62,8 @@ class Reader {
 
 }  // namespace
 
-TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
-                          int cornerZoom, std::optional<std::uint32_t> fileCrc) {
-  const TinIdentity identity{fileCrc ? *fileCrc : crc32(encodeTin(tin)), tin.vertices.size(),
-                             tin.triangles.size()};
+TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options, int cornerZoom) {
+  const TinIdentity identity{crc32(encodeTin(tin)), tin.vertices.size(), tin.triangles.size()};
   return makeTilingPlan(tiles::Tiler(tin, options), options, cornerZoom, identity);
 }
 

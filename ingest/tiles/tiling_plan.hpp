@@ -49,10 +49,9 @@ struct TilingPlan {
 /// the planning (tiles::Tiler::plan), with the corners off the TIN to
 /// `cornerZoom` (−1: none; a shard of zoom s reads vertices around its
 /// square as far as 4 tile widths of zoom cornerZoom + 1, if finer than s).
-/// `fileCrc` names the TIN: that of the format 2 file it was read from
-/// (ingest::readTinFileHeader), else crc32(encodeTin(tin)) is taken.
+/// The TIN is named by crc32(encodeTin(tin)).
 TilingPlan makeTilingPlan(const TinData& tin, const tiles::TilerOptions& options,
-                          int cornerZoom = -1, std::optional<std::uint32_t> fileCrc = {});
+                          int cornerZoom = -1);
 /// The plan `tiler` (made of the whole TIN `tin` names, with `options`,
 /// and no plan) holds: what a run that plans and tiles at once writes for
 /// the shards that follow it.

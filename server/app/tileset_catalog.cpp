@@ -21,9 +21,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kBuildKey = "tinsmith/build.json";
+constexpr std::string_view kBuildKey = store::kStoreMarkerKey;
 
-nlohmann::json parseStoredJson(const store::TileStore& s, const std::string& key) {
+nlohmann::json parseStoredJson(const store::TileStore& s, std::string_view key) {
   const auto text = s.get(key);
   if (!text) return nlohmann::json();
   auto j = nlohmann::json::parse(*text, nullptr, false);
@@ -300,8 +300,7 @@ const ingest::TileRebuilder& Tileset::rebuilder() const {
       const auto build = store_->get(kBuildKey);
       const auto tin = store::getTin(*store_);
       if (!build || !tin) {
-        rebuilderError_ =
-            "the store has no " + std::string(build ? store::kTinKey : std::string_view(kBuildKey));
+        rebuilderError_ = "the store has no " + std::string(build ? store::kTinKey : kBuildKey);
         return;
       }
       rebuilder_ = std::make_unique<ingest::TileRebuilder>(*build, *tin, store_->path().string());
