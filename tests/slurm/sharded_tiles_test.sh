@@ -21,7 +21,8 @@
 #   (DependencyNeverSatisfied) and writes nothing;
 # - the folder gone, `--resume --submit` resubmits that task alone and a new
 #   merge, whose store again matches one.3dtiles; once more, with nothing
-#   missing: a merge alone, with no dependency.
+#   missing and task 0's tiler.plan removed (only the subtrees read it): a
+#   merge alone, with no dependency.
 # Everything stays in WORKDIR (the daemons' logs in WORKDIR/cluster/log);
 # the waits are bounded by 300 s in all. Ends with `N passed, M failed`;
 # exits 1 on any failure. tests/slurm/README.md says more.
@@ -205,7 +206,9 @@ else
 fi
 
 # ---------------------------------------------------------------- 4. nothing to resume
+# The plan gone too: no subtree is left to read it, so the top is not rerun.
 t0=$(date +%s.%N)
+rm -f "$again/tiler.plan"
 rc=0
 run_slurm "$again" "$work/merged-again.3dtiles" --resume --submit --json || rc=$?
 if [ "$rc" -ne 0 ]; then

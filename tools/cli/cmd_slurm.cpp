@@ -23,7 +23,8 @@
 // the subtrees after it and `sbatch` of the merge after every task (afterok).
 // Nothing heavy runs where tinsmith slurm runs (a login node): it reads the
 // TIN's header only. --resume resubmits only the tasks that left no store
-// (a failed, cancelled or lost shard; the top too when tiler.plan is gone),
+// (a failed, cancelled or lost shard; the top too when tiler.plan is gone
+// and a subtree still needs it),
 // and a new merge after them. Shards are built exactly as `tinsmith tile
 // --subtree` builds them, so the merged store has the bytes of one run.
 #include <charconv>
@@ -140,16 +141,15 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
   return s.str();
 }
 
-/// The tasks that have left no store, and the top when the plan it wrote is
-/// gone (the subtrees read it).
+/// The tasks that have left no store, and the top when a subtree among them
+/// needs the plan the top writes and it is gone (the merge does not read it:
+/// with every store there, nothing is rerun for it).
 std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
   std::vector<int> out;
-  for (int k = 0; k < tasks; ++k) {
-    const fs::path shards = dir / "shards";
-    if (!fs::exists(shards / (std::to_string(k) + ".3dtiles")) ||
-        (k == 0 && !fs::exists(dir / "tiler.plan")))
-      out.push_back(k);
-  }
+  for (int k = 0; k < tasks; ++k)
+    if (!fs::exists(dir / "shards" / (std::to_string(k) + ".3dtiles"))) out.push_back(k);
+  if (!out.empty() && out.front() != 0 && !fs::exists(dir / "tiler.plan"))
+    out.insert(out.begin(), 0);
   return out;
 }
 
