@@ -469,34 +469,52 @@ BlockResult triangulateBlock(const std::filesystem::path& dir, std::size_t task,
   if (task >= layout.tasks.size())
     throw usageError("block task " + std::to_string(task) + " is not one of the " +
                      std::to_string(layout.tasks.size()) + " of " + dir.string());
+  // What a task holds at its peak is the triangulation: the points are
+  // handed to it and let go, and the kept triangles go to the file as they
+  // are found (its counts patched in at the end).
   LoadedBlock load;
-  std::vector<Point3> theirs;
-  loadBlock(layout, dir, layout.tasks[task], load, theirs);
+  {
+    std::vector<Point3> theirs;
+    loadBlock(layout, dir, layout.tasks[task], load, theirs);
+  }
+  std::vector<std::uint32_t>().swap(load.global);
   BlockResult result;
   result.triangulated = load.points.size();
+  AtomicFile file(trianglesPath(dir, task));
+  file.write(kTriMagic.data(), kTriMagic.size());
+  std::array<std::uint64_t, 3> counts{};
+  file.write(counts.data(), sizeof counts);
+  constexpr std::size_t kChunk = 1 << 14;
   std::vector<std::array<std::uint32_t, 3>> kept;
+  kept.reserve(kChunk);
+  const auto flush = [&] {
+    file.write(kept.data(), kept.size() * sizeof kept[0]);
+    result.kept += kept.size();
+    kept.clear();
+  };
   if (!collinear(load.points)) {  // collinear: no triangle within reach, none of its own
     CdtOptions cdtOptions;
     cdtOptions.canonicalTies = true;
     cdtOptions.threads = threads;
     Cdt cdt(cdtOptions);
     cdt.insertPoints(load.points);
+    const auto loaded = static_cast<std::uint32_t>(load.points.size());
+    std::vector<Point3>().swap(load.points);  // the triangulation holds them: mesh.point
     cdt.finalize();
     const Mesh& mesh = cdt.mesh();
     std::vector<std::uint32_t> loadedOf(mesh.vertexCount(), 0);
-    for (std::uint32_t i = 0; i < load.points.size(); ++i)
-      loadedOf[cdt.meshVertex(VertexId(i)).value] = i;
+    for (std::uint32_t i = 0; i < loaded; ++i) loadedOf[cdt.meshVertex(VertexId(i)).value] = i;
     const tiles::Rect& around = load.around;
     for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
       const auto v = mesh.vertices(TriangleId(t));
       const std::array<std::uint32_t, 3> corner{loadedOf[v[0].value], loadedOf[v[1].value],
                                                 loadedOf[v[2].value]};
-      std::uint32_t least = corner[0];
-      for (const std::uint32_t k : {corner[1], corner[2]})
-        if (lessXY(load.points[k], load.points[least])) least = k;
-      if (least >= load.own) continue;  // its least corner's block keeps it
-      const Circle circle = circumcircle(load.points[corner[0]].xy(), load.points[corner[1]].xy(),
-                                         load.points[corner[2]].xy());
+      std::size_t least = 0;
+      for (const std::size_t i : {1, 2})
+        if (lessXY(mesh.point(v[i]), mesh.point(v[least]))) least = i;
+      if (corner[least] >= load.own) continue;  // its least corner's block keeps it
+      const Circle circle =
+          circumcircle(mesh.point(v[0]).xy(), mesh.point(v[1]).xy(), mesh.point(v[2]).xy());
       if (!(circle.radius <= layout.radius)) {
         ++result.leftOut;
         continue;
@@ -508,14 +526,12 @@ BlockResult triangulateBlock(const std::filesystem::path& dir, std::size_t task,
           circle.center.y + circle.radius > around.y1)
         throw internalError("a kept triangle's circle leaves its block's surroundings");
       kept.push_back(corner);
+      if (kept.size() == kChunk) flush();
     }
   }
-  result.kept = kept.size();
-  AtomicFile file(trianglesPath(dir, task));
-  file.write(kTriMagic.data(), kTriMagic.size());
-  const std::array<std::uint64_t, 3> counts{result.triangulated, result.leftOut, result.kept};
-  file.write(counts.data(), sizeof counts);
-  file.write(kept.data(), kept.size() * sizeof kept[0]);
+  flush();
+  counts = {result.triangulated, result.leftOut, result.kept};
+  file.writeAt(kTriMagic.size(), counts.data(), sizeof counts);
   file.commit();
   return result;
 }
