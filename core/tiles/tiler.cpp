@@ -294,7 +294,7 @@ class SectionProfile {
 
 }  // namespace
 
-Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(options), index_(tin) {
+Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(options) {
   if (!(options_.tolerance > 0) || !std::isfinite(options_.tolerance)) {
     throw usageError("the tile tolerance must be a positive number of metres (got " +
                          std::to_string(options_.tolerance) + ")",
@@ -359,6 +359,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
       std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
   if (plan && plan->zoomLines.size() != static_cast<std::size_t>(finestZoom_) + 1)
     throw internalError("Tiler: the plan's lines are not one set a zoom to the finest");
+  index_.emplace(tin);
 }
 
 Rect tilerReadRegion(const Rect& region) {
@@ -395,7 +396,7 @@ TilerPlan Tiler::plan(int cornerZoom) const {
     for (std::uint32_t row = 0; row < lines; ++row) {
       for (std::uint32_t column = 0; column < lines; ++column) {
         const Point2 corner{geometry_.lineX(z, column), geometry_.lineY(z, row)};
-        if (!near.contains(corner) || index_.z(corner)) continue;
+        if (!near.contains(corner) || index_->z(corner)) continue;
         p.offTinCorners.push_back({z, row, column, offTinZ(z, column, row)});
       }
     }
@@ -480,7 +481,7 @@ std::vector<TerrainLine> Tiler::simplifiedLines(int z) const {
   // would otherwise sit metres off the ground it crosses, at every zoom.
   std::vector<TinIndex::SectionPoint> section;
   const ChordError offTin = [&](const Point3& a, const Point3& b) {
-    index_.section(a.xy(), b.xy(), section);
+    index_->section(a.xy(), b.xy(), section);
     double worst = 0.0;
     for (const auto& sp : section) {
       if (!std::isnan(sp.z)) worst = std::max(worst, std::abs(sp.z - (a.z + sp.t * (b.z - a.z))));
@@ -513,7 +514,7 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = sideMargin(rect);
   refine.earthRadius = kEarthRadiusOfCurvature;
-  tile.heldPoints = refineTile(tile, index_, refine);
+  tile.heldPoints = refineTile(tile, *index_, refine);
   tile.tolerance = zd.tolerance;
   return tile;
 }
@@ -550,7 +551,7 @@ double Tiler::fitZ(const fit::MultilevelFit* fit, Point2 p) const {
     const double size = mesh.size();
     return fit->evaluate({std::clamp(p.x, o.x, o.x + size), std::clamp(p.y, o.y, o.y + size)});
   }
-  return index_.z(p).value_or(0.0);
+  return index_->z(p).value_or(0.0);
 }
 
 double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
@@ -574,7 +575,7 @@ double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
   const double width = std::ldexp(geometry_.size(), -z);
   std::vector<std::uint32_t> found;
   for (double r = width / 64; r <= kOffTinReach * width; r *= 2) {
-    index_.verticesIn({p.x - r, p.y - r, p.x + r, p.y + r}, found);
+    index_->verticesIn({p.x - r, p.y - r, p.x + r, p.y + r}, found);
     if (found.empty()) continue;
     std::uint32_t best = found.front();
     double bestD = std::numeric_limits<double>::infinity();
@@ -668,9 +669,9 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
     auto at = [&](double u, double offset = 0.0) {
       return horizontal ? Point2{u, fixed + offset} : Point2{fixed + offset, u};
     };
-    onSide.take(index_, at(u0), at(u1), u0, u1);
-    left.take(index_, at(u0, -margin), at(u1, -margin), u0, u1);
-    right.take(index_, at(u0, margin), at(u1, margin), u0, u1);
+    onSide.take(*index_, at(u0), at(u1), u0, u1);
+    left.take(*index_, at(u0, -margin), at(u1, -margin), u0, u1);
+    right.take(*index_, at(u0, margin), at(u1, margin), u0, u1);
     auto tinZ = [&](double u) { return onSide.at(u); };
     // Inside the corners' squares of the margin no vertex can be added at
     // all, so a step's kink there (where a TIN edge from the corner crosses
@@ -705,7 +706,7 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
         // A corner: the TIN at the point (it is on two sides of each of
         // four tiles, whose sections reach it in different arithmetic),
         // else — off the TIN — the nearest TIN vertex's z.
-        const auto z = index_.z(sp.p.xy());
+        const auto z = index_->z(sp.p.xy());
         must.back().p.z = z ? *z
                             : offTinZ(id.z, id.x + (sp.p.x == rect.x1 ? 1U : 0U),
                                       id.y + (sp.p.y == rect.y1 ? 1U : 0U));
@@ -812,7 +813,7 @@ TileSurface Tiler::triangulateTile(const TileId& id, const Rect& rect, const Til
     const VertexId v = cdt.meshVertex(VertexId(firstBinary.value + static_cast<std::uint32_t>(k)));
     if (!v.valid() || !(flags[v.value] & kHeld) || points[v.value].z != input.interior[k].z)
       continue;
-    if (const auto z = index_.z(points[v.value].xy())) points[v.value].z = *z;
+    if (const auto z = index_->z(points[v.value].xy())) points[v.value].z = *z;
   }
   for (std::size_t v = 0; v < nv; ++v) {
     const Point3& p = points[v];

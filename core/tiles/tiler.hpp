@@ -276,7 +276,9 @@ class Tiler {
   Rect within_{-HUGE_VAL, -HUGE_VAL, HUGE_VAL, HUGE_VAL};
   double fitSpacing_ = 0;            // TilerPlan::fitSpacing
   bool tileFitAllData_ = false;      // TilerPlan::tileFitAllData
-  TinIndex index_;
+  // Built last in the constructor, after the planning fit: the two are the
+  // largest things a Tiler of a whole TIN holds, and are not needed at once.
+  std::optional<TinIndex> index_;
   int finestZoom_ = 0;
   int maxZoom_ = 0;
   int levelsPerTile_ = 5;
