@@ -1,5 +1,10 @@
 #include "ingest/tinfile/tin_file.hpp"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -7,13 +12,9 @@
 #include <cstring>
 #include <fstream>
 #include <future>
+#include <limits>
 #include <tuple>
 #include <vector>
-
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "core/base/error.hpp"
 #include "core/base/parallel.hpp"
@@ -229,6 +230,20 @@ void include(tiles::Rect& box, const Point3& p) {
   box.y0 = std::min(box.y0, p.y);
   box.x1 = std::max(box.x1, p.x);
   box.y1 = std::max(box.y1, p.y);
+}
+
+/// x as a float no greater than it (roundedDown) or no less (roundedUp):
+/// a box that holds the double one.
+float roundedDown(double x) {
+  constexpr float kMax = std::numeric_limits<float>::max();
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  if (x > kMax) return kMax;
+  if (x < -kMax) return -kInf;
+  const auto f = static_cast<float>(x);  // NaN stays NaN
+  return f > x ? std::nextafter(f, -kInf) : f;
+}
+float roundedUp(double x) {
+  return -roundedDown(-x);
 }
 
 /// Appends little-endian values to a byte string.
@@ -962,8 +977,9 @@ TinPart readPartThrough(const MappedFile& file, const CheckedPayload& payload,
 /// A version 2 file's part, through its block index: the frame (CRS, counts,
 /// features) and the index are read whole and checked, then only the blocks
 /// the part needs, each checked against its CRC.
-TinPart readPartByBlocks(const CheckedPayload& payload, const std::string& name,
-                         const tiles::Rect& region, const tiles::Rect& vertexRegion) {
+TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
+                         const std::string& name, const tiles::Rect& region,
+                         const tiles::Rect& vertexRegion) {
   PayloadReader r(payload.bytes.data(), payload.bytes.size(), name);
   TinPart part;
   TinData& tin = part.tin;
@@ -993,62 +1009,91 @@ TinPart readPartByBlocks(const CheckedPayload& payload, const std::string& name,
   frameFrom(from);
   const std::uint8_t* edgeRecords = r.skip(ne, 12, "constrained edges");
 
+  // The index is read through once, its CRC following, and given back to
+  // the kernel as it goes (at 10⁹ vertices it is about 105 MB, and every
+  // shard reads it). Kept of it: every vertex block's box (in floats rounded
+  // outward, for the test below that only rules triangles out) and CRC, and
+  // of the triangle and edge blocks only those whose boxes meet the region.
+  struct VertexBlock {
+    std::array<float, 4> box;  // x0, y0, x1, y1
+    std::uint32_t crc;
+  };
+  struct KeptBlock {
+    std::size_t block;
+    std::uint32_t crc;
+  };
+  std::vector<VertexBlock> vertexBlocks;
+  std::vector<std::size_t> vertexRegionBlocks;  // the vertex blocks whose boxes meet vertexRegion
+  std::array<std::vector<KeptBlock>, 3> keptBlocks;  // triangle and edge blocks meeting the region
   from = r.position();
-  BlockIndex index;
-  index.recordsPerBlock = r.get<std::uint32_t>("block index");
-  if (index.recordsPerBlock == 0) r.corrupt("the block index has blocks of 0 records");
-  index.frameCrc = r.get<std::uint32_t>("block index");
-  const std::size_t perBlock = index.recordsPerBlock;
+  std::uint32_t indexCrc = 0;
+  const std::uint8_t* crcUpTo = from;
+  const auto followIndex = [&] {
+    indexCrc = crc32({crcUpTo, static_cast<std::size_t>(r.position() - crcUpTo)}, indexCrc);
+    crcUpTo = r.position();
+    file.release(crcUpTo);
+  };
+  const std::size_t perBlock = r.get<std::uint32_t>("block index");
+  if (perBlock == 0) r.corrupt("the block index has blocks of 0 records");
+  const std::uint32_t indexFrameCrc = r.get<std::uint32_t>("block index");
   const std::array<std::size_t, 3> records{nv, nt, ne};
+  constexpr std::size_t kIndexWindow = std::size_t{8} << 20;
   for (std::size_t s = 0; s < 3; ++s) {
-    auto& blocks = index.sections[s];
-    blocks.resize(r.getCount(kBlockEntrySize, "block index"));
-    if (blocks.size() != blockCount(records[s], perBlock))
-      r.corrupt("the block index lists " + std::to_string(blocks.size()) + " " +
-                kBlockSectionNames[s] + " blocks for " + std::to_string(records[s]) + " records");
-    for (auto& b : blocks) {
-      b.box.x0 = r.get<double>("block index");
-      b.box.y0 = r.get<double>("block index");
-      b.box.x1 = r.get<double>("block index");
-      b.box.y1 = r.get<double>("block index");
-      b.crc = r.get<std::uint32_t>("block index");
+    const std::size_t blocks = r.getCount(kBlockEntrySize, "block index");
+    if (blocks != blockCount(records[s], perBlock))
+      r.corrupt("the block index lists " + std::to_string(blocks) + " " + kBlockSectionNames[s] +
+                " blocks for " + std::to_string(records[s]) + " records");
+    if (s == kVertexBlocks) vertexBlocks.reserve(blocks);
+    for (std::size_t b = 0; b < blocks; ++b) {
+      tiles::Rect box;
+      box.x0 = r.get<double>("block index");
+      box.y0 = r.get<double>("block index");
+      box.x1 = r.get<double>("block index");
+      box.y1 = r.get<double>("block index");
+      const auto crc = r.get<std::uint32_t>("block index");
+      if (s == kVertexBlocks) {
+        vertexBlocks.push_back(
+            {{roundedDown(box.x0), roundedDown(box.y0), roundedUp(box.x1), roundedUp(box.y1)},
+             crc});
+        if (box.overlaps(vertexRegion)) vertexRegionBlocks.push_back(b);
+      } else if (box.overlaps(region)) {
+        keptBlocks[s].push_back({b, crc});
+      }
+      if (static_cast<std::size_t>(r.position() - crcUpTo) >= kIndexWindow) followIndex();
     }
   }
-  const std::span<const std::uint8_t> indexBytes(from, static_cast<std::size_t>(r.position() - from));
-  if (r.get<std::uint32_t>("block index") != crc32(indexBytes))
+  followIndex();
+  const std::size_t indexSize = static_cast<std::size_t>(r.position() - from);
+  if (r.get<std::uint32_t>("block index") != indexCrc)
     r.corrupt("the block index checksum does not match");
   if (r.remaining() != 0) r.corrupt("bytes left over after the block index");
-  if (frameCrc != index.frameCrc)
+  if (frameCrc != indexFrameCrc)
     r.corrupt("the checksum of the CRS, the counts and the features does not match");
-  part.bytesRead += kTinHeaderSize + indexBytes.size() + 4;
+  part.bytesRead += kTinHeaderSize + indexSize + 4;
 
-  const auto checkBlock = [&](BlockSection s, std::size_t b, const std::uint8_t* section,
-                              std::size_t recordSize) {
+  const auto checkBlock = [&](BlockSection s, std::size_t b, std::uint32_t crc,
+                              const std::uint8_t* section, std::size_t recordSize) {
     const std::size_t first = b * perBlock;
     const std::span<const std::uint8_t> bytes(
         section + first * recordSize, std::min(perBlock, records[s] - first) * recordSize);
-    if (crc32(bytes) != index.sections[s][b].crc)
+    if (crc32(bytes) != crc)
       r.corrupt(std::string(kBlockSectionNames[s]) + " block " + std::to_string(b) +
                 " does not match its checksum");
     part.bytesRead += bytes.size();
   };
-  std::vector<char> vertexBlockChecked(index.sections[kVertexBlocks].size(), 0);
+  std::vector<char> vertexBlockChecked(vertexBlocks.size(), 0);
   const auto vertexAt = [&](std::uint32_t v) {
     const std::size_t b = v / perBlock;
     if (!vertexBlockChecked[b]) {
-      checkBlock(kVertexBlocks, b, vertexRecords, 24);
+      checkBlock(kVertexBlocks, b, vertexBlocks[b].crc, vertexRecords, 24);
       vertexBlockChecked[b] = 1;
     }
     const std::uint8_t* p = vertexRecords + std::size_t{24} * v;
     return Point3{getLe<double>(p), getLe<double>(p + 8), getLe<double>(p + 16)};
   };
-  const auto blocksMeeting = [&](BlockSection s, const tiles::Rect& box, auto&& each) {
-    const auto& blocks = index.sections[s];
-    for (std::size_t b = 0; b < blocks.size(); ++b) {
-      if (!blocks[b].box.overlaps(box)) continue;
-      const std::size_t end = std::min(records[s], (b + 1) * perBlock);
-      each(b, b * perBlock, end);
-    }
+  const auto eachKept = [&](BlockSection s, auto&& each) {
+    for (const KeptBlock& k : keptBlocks[s])
+      each(k.block, k.crc, k.block * perBlock, std::min(records[s], (k.block + 1) * perBlock));
   };
 
   // Whether records at these vertices may meet the region: the boxes of
@@ -1057,16 +1102,17 @@ TinPart readPartByBlocks(const CheckedPayload& payload, const std::string& name,
   const auto mayMeet = [&](std::initializer_list<std::uint32_t> vertices) {
     tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (const std::uint32_t v : vertices) {
-      const tiles::Rect& b = index.sections[kVertexBlocks][v / perBlock].box;
-      include(box, {b.x0, b.y0, 0.0});
-      include(box, {b.x1, b.y1, 0.0});
+      const std::array<float, 4>& b = vertexBlocks[v / perBlock].box;
+      include(box, {b[0], b[1], 0.0});
+      include(box, {b[2], b[3], 0.0});
     }
     return box.overlaps(region);
   };
 
   std::vector<std::uint32_t> keep;
-  blocksMeeting(kTriangleBlocks, region, [&](std::size_t b, std::size_t first, std::size_t end) {
-    checkBlock(kTriangleBlocks, b, triangleRecords, 12);
+  eachKept(kTriangleBlocks, [&](std::size_t b, std::uint32_t crc, std::size_t first,
+                                std::size_t end) {
+    checkBlock(kTriangleBlocks, b, crc, triangleRecords, 12);
     for (std::size_t k = first; k < end; ++k) {
       const std::uint8_t* p = triangleRecords + 12 * k;
       const std::array<std::uint32_t, 3> t{getLe<std::uint32_t>(p), getLe<std::uint32_t>(p + 4),
@@ -1081,8 +1127,8 @@ TinPart readPartByBlocks(const CheckedPayload& payload, const std::string& name,
       }
     }
   });
-  blocksMeeting(kEdgeBlocks, region, [&](std::size_t b, std::size_t first, std::size_t end) {
-    checkBlock(kEdgeBlocks, b, edgeRecords, 12);
+  eachKept(kEdgeBlocks, [&](std::size_t b, std::uint32_t crc, std::size_t first, std::size_t end) {
+    checkBlock(kEdgeBlocks, b, crc, edgeRecords, 12);
     for (std::size_t k = first; k < end; ++k) {
       const std::uint8_t* p = edgeRecords + 12 * k;
       const TinData::ConstrainedEdge e{getLe<std::uint32_t>(p), getLe<std::uint32_t>(p + 4),
@@ -1096,11 +1142,11 @@ TinPart readPartByBlocks(const CheckedPayload& payload, const std::string& name,
       }
     }
   });
-  blocksMeeting(kVertexBlocks, vertexRegion, [&](std::size_t, std::size_t first, std::size_t end) {
-    for (std::size_t v = first; v < end; ++v)
+  for (const std::size_t b : vertexRegionBlocks) {
+    for (std::size_t v = b * perBlock; v < std::min(nv, (b + 1) * perBlock); ++v)
       if (vertexRegion.contains(vertexAt(static_cast<std::uint32_t>(v)).xy()))
         keep.push_back(static_cast<std::uint32_t>(v));
-  });
+  }
   renumberPart(tin, std::move(keep), vertexAt);
   part.vertices = nv;
   part.triangles = nt;
@@ -1139,9 +1185,8 @@ TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& re
   requireReadableFile(path, name);
   const MappedFile file(path, name);
   const CheckedPayload payload = checkedPayload(file.bytes(), name);
-  TinPart part = payload.version < 2
-                     ? readPartThrough(file, payload, name, region, vertexRegion)
-                     : readPartByBlocks(payload, name, region, vertexRegion);
+  TinPart part = payload.version < 2 ? readPartThrough(file, payload, name, region, vertexRegion)
+                                     : readPartByBlocks(file, payload, name, region, vertexRegion);
   part.fileCrc = payload.fileCrc;
   checkTinContract(part.tin, name, false);
   return part;

@@ -340,6 +340,29 @@ TEST(TinFile, APartRefusesDamageInWhatItReads) {
   EXPECT_NE(partError().find("block index checksum"), std::string::npos) << partError();
 }
 
+TEST(TinFile, APartReadsAnIndexLargerThanItsWindowAndSeesDamageAtItsEnd) {
+  // One record a block: the index (36 bytes a block, 268 k blocks, 9.6 MB)
+  // is read through in more than one of the reader's 8 MB windows, its
+  // checksum following them; what the part keeps of it is the same.
+  const TinData tin = gridTin(300);
+  const auto dir = test::scratchDir("tinfile-part-big-index");
+  const std::filesystem::path file = dir / "grid.tin";
+  std::string bytes = encodeTin(tin, 1);
+  ASSERT_GT(bytes.size() - kTinHeaderSize - 24 * tin.vertices.size() - 12 * tin.triangles.size(),
+            std::size_t{8} << 20);
+  const double x = 431000, y = 4512000;
+  const tiles::Rect region{x + 100, y + 150, x + 140, y + 170};
+  const tiles::Rect vertices{x + 90, y + 140, x + 150, y + 180};
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+  const TinPart part = readTinFilePart(file, region, vertices);
+  expectSame(part.tin, expectedPart(tin, region, vertices));
+  EXPECT_EQ(part.fileCrc, crc32(bytes));
+  // A byte of the index's last window, in a block the part does not read.
+  damage(file, bytes.size() - kTinHeaderSize - 4 - 36 * 3);
+  const std::string msg = errorOf([&] { (void)readTinFilePart(file, region, vertices); });
+  EXPECT_NE(msg.find("block index checksum"), std::string::npos) << msg;
+}
+
 TEST(TinFile, NoDamagedByteGivesAWrongPart) {
   // Blocks of 64 records: many blocks, some read and some not. A flipped
   // byte anywhere is refused as damage or lies where the part does not read.

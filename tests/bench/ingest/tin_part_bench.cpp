@@ -1,0 +1,98 @@
+// What reading a shard's part of a `.tin` costs when its block index is
+// large (issue 24: a subtree shard reads its part through the index, which
+// at 10⁹ vertices is about 105 MB). The index grows with the number of
+// blocks, so a file written with few records a block stands for a much
+// larger TIN: SRTM N44W072 (1.44 M vertices) at 1 record a block has the
+// index of a TIN of about 1.5·10⁹ vertices at the usual 1 024.
+//
+//   tin_part_bench write IN.tin OUT.tin RECORDS_PER_BLOCK
+//       the same TIN with another block size (a file every reader reads alike)
+//   tin_part_bench square FILE.tin ZOOM X Y
+//       the square x0 y0 x1 y1 of the subtree Z/X/Y of the TIN's bounding square
+//   tin_part_bench read FILE.tin X0 Y0 X1 Y1
+//       reads the part a subtree shard of that square reads (its square, and
+//       the vertices an eighth of its width around it), and prints what it
+//       read and the process's peak memory before and after (VmHWM), MiB
+// e.g.
+//   tin_part_bench write srtm.tin srtm-k1.tin 1
+//   tin_part_bench read srtm-k1.tin $(tin_part_bench square srtm.tin 2 1 1)
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "ingest/tinfile/tin_file.hpp"
+
+namespace {
+
+/// The process's peak resident memory so far, MiB (Linux VmHWM).
+double peakMiB() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return -1;
+}
+
+int usage() {
+  std::cerr << "usage: tin_part_bench write IN.tin OUT.tin RECORDS_PER_BLOCK\n"
+               "       tin_part_bench square FILE.tin ZOOM X Y\n"
+               "       tin_part_bench read FILE.tin X0 Y0 X1 Y1\n";
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace tinsmith;
+  const std::string mode = argc > 1 ? argv[1] : "";
+  try {
+    if (mode == "write" && argc == 5) {
+      const TinData tin = ingest::readTinFile(argv[2]);
+      const std::string bytes =
+          ingest::encodeTin(tin, static_cast<std::uint32_t>(std::stoul(argv[4])));
+      std::ofstream out(argv[3], std::ios::binary | std::ios::trunc);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      if (!out) throw std::runtime_error(std::string("cannot write ") + argv[3]);
+      std::cout << "wrote " << argv[3] << ": " << bytes.size() << " bytes, " << tin.vertices.size()
+                << " vertices\n";
+      return 0;
+    }
+    if (mode == "square" && argc == 6) {
+      const TinData tin = ingest::readTinFile(argv[2]);
+      tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+      for (const Point3& p : tin.vertices) {
+        box.x0 = std::min(box.x0, p.x);
+        box.y0 = std::min(box.y0, p.y);
+        box.x1 = std::max(box.x1, p.x);
+        box.y1 = std::max(box.y1, p.y);
+      }
+      const int x = std::stoi(argv[4]), y = std::stoi(argv[5]);
+      const double side = std::max(box.width(), box.height()) / (1 << std::stoi(argv[3]));
+      std::printf("%.17g %.17g %.17g %.17g\n", box.x0 + x * side, box.y0 + y * side,
+                  box.x0 + (x + 1) * side, box.y0 + (y + 1) * side);
+      return 0;
+    }
+    if (mode == "read" && argc == 7) {
+      const tiles::Rect region{std::stod(argv[3]), std::stod(argv[4]), std::stod(argv[5]),
+                               std::stod(argv[6])};
+      const double grow = region.width() / 8;
+      const tiles::Rect vertexRegion{region.x0 - grow, region.y0 - grow, region.x1 + grow,
+                                     region.y1 + grow};
+      const double before = peakMiB();
+      const ingest::TinPart part = ingest::readTinFilePart(argv[2], region, vertexRegion);
+      const double after = peakMiB();
+      std::printf(
+          "%zu of %zu vertices, %zu of %zu triangles, %.1f MB read and checked; "
+          "peak memory %.1f MiB before, %.1f MiB after (+%.1f)\n",
+          part.tin.vertices.size(), part.vertices, part.tin.triangles.size(), part.triangles,
+          part.bytesRead / 1e6, before, after, after - before);
+      return 0;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "tin_part_bench: " << e.what() << "\n";
+    return 1;
+  }
+  return usage();
+}
