@@ -10,6 +10,12 @@
 #   bash tests/bench/ingest/block_tin.sh TINSMITH POINTS.xyz CRS TRIM_HULL RADIUS "N1 N2 ..." [WORKDIR]
 # e.g. the SRTM N44W072 points of tests/slurm/srtm_shards_test.sh:
 #   bash tests/bench/ingest/block_tin.sh build/release/bin/tinsmith srtm.xyz EPSG:32619 300 150 "100000 400000"
+# or 12 M random points over 30 km × 30 km of a smooth terrain (Debian's
+# mawk; another awk draws other points):
+#   awk 'BEGIN { srand(24); for (i = 0; i < 12000000; i++) { x = 500000 + 30000 * rand();
+#     y = 4900000 + 30000 * rand(); printf "%.3f %.3f %.3f\n", x, y,
+#     300 + 80 * sin(x / 3100) * cos(y / 2700) + 0.02 * (x - 500000) / 30 } }' > random12m.xyz
+#   bash tests/bench/ingest/block_tin.sh build/release/bin/tinsmith random12m.xyz EPSG:32619 100 40 "200000"
 set -euo pipefail
 [ $# -ge 6 ] || { echo "usage: block_tin.sh TINSMITH POINTS CRS TRIM_HULL RADIUS \"N...\" [WORKDIR]" >&2; exit 2; }
 tinsmith="$(realpath "$1")"; points="$(realpath "$2")"; crs="$3"; trim="$4"; radius="$5"; sizes="$6"
