@@ -144,6 +144,36 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
 // and assemble.sh after them, as Slurm would: the .tin of `tinsmith tin
 // --block-points` on one machine, byte for byte. A missing task stops the
 // assembly, naming it and what to run.
+TEST(SlurmCli, AnyShardZoomGivesTheBytesOfOneRunOnCliffsAndBreakLines) {
+  // The hill crossed by three random break lines whose z is far below it:
+  // cliffs of over 1 km at every line, tiles that refine to zoom 10, and
+  // lines that cross the subtrees' sides. One run, then the job at shard
+  // zooms 1 (5 tasks) and 3 (65 tasks, deeper than the merge test's 2).
+  const fs::path dir = scratchDir("slurm-cli-any-zoom");
+  const fs::path tin = dir / "site.tin";
+  const auto built = runTinsmith(
+      "tin --points 'synthetic:grid?nx=121&ny=41&spacing=10&noise=0.5&x0=430000&y0=4515000"
+      "&surface=hill&z0=1600&scale=80' --breaklines 'synthetic:lines?layout=random&n=3&vertices=3"
+      "&seed=5&width=1200&height=400&x0=430000&y0=4515000' --crs EPSG:26912 -q -o " +
+      tin.string());
+  ASSERT_EQ(built.exitCode, 0) << built.err;
+  const std::string options = " --tolerance 0.2 --max-triangles 512 -q";
+  const auto one =
+      runTinsmith("tile " + tin.string() + options + " -o " + (dir / "one.3dtiles").string());
+  ASSERT_EQ(one.exitCode, 0) << one.err;
+  for (const int zoom : {1, 3}) {
+    SCOPED_TRACE(zoom);
+    const fs::path work = dir / ("work" + std::to_string(zoom));
+    const fs::path merged = dir / ("merged" + std::to_string(zoom) + ".3dtiles");
+    const auto planned =
+        runTinsmith("slurm " + tin.string() + options + " --shard-zoom " + std::to_string(zoom) +
+                    " --workdir " + work.string() + " -o " + merged.string());
+    ASSERT_EQ(planned.exitCode, 0) << planned.err;
+    runAsSlurmWould(work, 1 + (1 << (2 * zoom)));
+    EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+  }
+}
+
 TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
   const fs::path dir = scratchDir("slurm-cli-tin");
   const std::string points =
