@@ -55,7 +55,10 @@ constexpr double kSideSagShare = 0.1;
 /// line makes (a river lowered below its banks); the least squares over each
 /// tile mesh (fitTile) uses it all.
 struct FitData {
+  /// Empty when the data are the TIN's vertices, every one and nothing else
+  /// (allAreTinVertices): a whole TIN with no triangle to sample.
   std::vector<Point3> all;
+  bool allAreTinVertices = false;
   std::vector<Point3> tileFit;  // empty when it would be `all` (tileFitIsAll)
   double spacing = 0;           // TilerPlan::fitSpacing
   bool tileFitAll = false;      // TilerPlan::tileFitAllData
@@ -114,9 +117,13 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
   }
   // Without break lines (a DEM) the two are the same points: kept once.
   const bool anyHeld = std::find(held.begin(), held.end(), 1) != held.end();
+  // Every vertex inside: data.all gets the samples first, the vertices
+  // before them only if there are any (else the TIN's own vertices serve).
+  const bool everyVertex = std::all_of(tin.vertices.begin(), tin.vertices.end(),
+                                       [&](const Point3& p) { return within.contains(p.xy()); });
   for (std::size_t v = 0; v < tin.vertices.size(); ++v) {
     if (!within.contains(tin.vertices[v].xy())) continue;
-    data.all.push_back(tin.vertices[v]);
+    if (!everyVertex) data.all.push_back(tin.vertices[v]);
     if (anyHeld && !held[v]) data.tileFit.push_back(tin.vertices[v]);
   }
   data.spacing = plan ? plan->fitSpacing : fitSpacing(tin);
@@ -144,8 +151,19 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
       }
     }
   }
+  if (everyVertex) {
+    data.allAreTinVertices = data.all.empty();
+    if (!data.allAreTinVertices) {  // the vertices, then the samples
+      std::vector<Point3> all;
+      all.reserve(tin.vertices.size() + data.all.size());
+      all.insert(all.end(), tin.vertices.begin(), tin.vertices.end());
+      all.insert(all.end(), data.all.begin(), data.all.end());
+      data.all = std::move(all);
+    }
+  }
+  const std::size_t allSize = data.allAreTinVertices ? tin.vertices.size() : data.all.size();
   // A TIN that is all break lines still needs something to fit.
-  data.tileFitAll = plan ? plan->tileFitAllData : (anyHeld ? data.tileFit : data.all).size() < 3;
+  data.tileFitAll = plan ? plan->tileFitAllData : (anyHeld ? data.tileFit.size() : allSize) < 3;
   data.tileFitIsAll = data.tileFitAll || !anyHeld;
   if (data.tileFitIsAll) std::vector<Point3>().swap(data.tileFit);
   data.all.shrink_to_fit();  // grown by doubling: up to half of it unused
@@ -332,14 +350,15 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   if (options_.region) within_ = tilerReadRegion(*options_.region);
   const Rect dataBox = options_.region ? within_ : extent;  // holds the data, if it has no box
   FitData data = fitData(tin, plan, within_);
-  data_ = std::move(data.all);
+  dataOwned_ = std::move(data.all);
+  data_ = data.allAreTinVertices ? std::span<const Point3>(tin.vertices) : dataOwned_;
   tileFitData_ = std::move(data.tileFit);
   tileFitIsData_ = data.tileFitIsAll;
   fitSpacing_ = data.spacing;
   tileFitAllData_ = data.tileFitAll;
   // The grids only speed up finding the data in a square (what is found is
   // put in the data's order): over the data's own box.
-  auto gridOf = [&](const std::vector<Point3>& points) {
+  auto gridOf = [&](std::span<const Point3> points) {
     const Rect box = points.empty() ? dataBox : boundsOf(points);
     CellGrid grid(box.x0, box.y0, box.x1, box.y1,
                   CellGrid::cellFor(box.width(), box.height(), points.size() / 4 + 1, 1e-9));
@@ -522,7 +541,7 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
 std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolerance) const {
   const Rect rect = geometry_.bounds(id);
   std::vector<std::uint32_t> inTile;
-  const std::vector<Point3>& data = tileFitData();
+  const std::span<const Point3> data = tileFitData();
   (tileFitIsData_ ? dataGrid_ : tileFitGrid_)
       .forEachInBox(rect.x0, rect.y0, rect.x1, rect.y1, [&](std::uint32_t i) {
         if (rect.contains(data[i].xy())) inTile.push_back(i);

@@ -257,14 +257,18 @@ class Tiler {
                                             const TileInput& input,
                                             const std::vector<TerrainLine>& zoomLines) const;
   void fitTile(TileSurface& tile, const fit::MultilevelFit* fit) const;
-  [[nodiscard]] const std::vector<Point3>& tileFitData() const {
-    return tileFitIsData_ ? data_ : tileFitData_;
+  [[nodiscard]] std::span<const Point3> tileFitData() const {
+    return tileFitIsData_ ? data_ : std::span<const Point3>(tileFitData_);
   }
 
   const TinData& tin_;
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
-  std::vector<Point3> data_;          // TIN vertices and points sampled from its triangles
+  // TIN vertices and points sampled from its triangles: the TIN's own
+  // vertices, not a copy, when they are all of it (a whole TIN, no samples),
+  // else dataOwned_.
+  std::span<const Point3> data_;
+  std::vector<Point3> dataOwned_;
   // The part of data_ the tile fits refine for: data_ itself when
   // tileFitIsData_ (no break line leaves a point out), else tileFitData_.
   std::vector<Point3> tileFitData_;
