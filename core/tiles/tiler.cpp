@@ -117,8 +117,8 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
   }
   // Without break lines (a DEM) the two are the same points: kept once.
   const bool anyHeld = std::find(held.begin(), held.end(), 1) != held.end();
-  // Every vertex inside: data.all gets the samples first, the vertices
-  // before them only if there are any (else the TIN's own vertices serve).
+  // Every vertex inside: they are put before the samples at the end, and
+  // only if there are samples (else the TIN's own vertices serve).
   const bool everyVertex = std::all_of(tin.vertices.begin(), tin.vertices.end(),
                                        [&](const Point3& p) { return within.contains(p.xy()); });
   for (std::size_t v = 0; v < tin.vertices.size(); ++v) {
@@ -151,16 +151,9 @@ FitData fitData(const TinData& tin, const TilerPlan* plan, const Rect& within) {
       }
     }
   }
-  if (everyVertex) {
-    data.allAreTinVertices = data.all.empty();
-    if (!data.allAreTinVertices) {  // the vertices, then the samples
-      std::vector<Point3> all;
-      all.reserve(tin.vertices.size() + data.all.size());
-      all.insert(all.end(), tin.vertices.begin(), tin.vertices.end());
-      all.insert(all.end(), data.all.begin(), data.all.end());
-      data.all = std::move(all);
-    }
-  }
+  data.allAreTinVertices = everyVertex && data.all.empty();
+  if (everyVertex && !data.all.empty())
+    data.all.insert(data.all.begin(), tin.vertices.begin(), tin.vertices.end());
   const std::size_t allSize = data.allAreTinVertices ? tin.vertices.size() : data.all.size();
   // A TIN that is all break lines still needs something to fit.
   data.tileFitAll = plan ? plan->tileFitAllData : (anyHeld ? data.tileFit.size() : allSize) < 3;

@@ -17,11 +17,11 @@
 //   tin_part_bench write srtm.tin srtm-k1.tin 1
 //   tin_part_bench read srtm-k1.tin $(tin_part_bench square srtm.tin 2 1 1)
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <string>
 
+#include "core/tiles/pyramid.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 namespace {
@@ -60,18 +60,13 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (mode == "square" && argc == 6) {
-      const TinData tin = ingest::readTinFile(argv[2]);
-      tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-      for (const Point3& p : tin.vertices) {
-        box.x0 = std::min(box.x0, p.x);
-        box.y0 = std::min(box.y0, p.y);
-        box.x1 = std::max(box.x1, p.x);
-        box.y1 = std::max(box.y1, p.y);
-      }
-      const int x = std::stoi(argv[4]), y = std::stoi(argv[5]);
-      const double side = std::max(box.width(), box.height()) / (1 << std::stoi(argv[3]));
-      std::printf("%.17g %.17g %.17g %.17g\n", box.x0 + x * side, box.y0 + y * side,
-                  box.x0 + (x + 1) * side, box.y0 + (y + 1) * side);
+      // The pyramid a Tiler of the whole TIN makes: its bounding square.
+      const tiles::Rect box = tiles::boundsOf(ingest::readTinFile(argv[2]).vertices);
+      const tiles::PyramidGeometry pyramid({box.x0, box.y0}, std::max(box.width(), box.height()));
+      const tiles::Rect square =
+          pyramid.bounds({std::stoi(argv[3]), static_cast<std::uint32_t>(std::stoul(argv[4])),
+                          static_cast<std::uint32_t>(std::stoul(argv[5]))});
+      std::printf("%.17g %.17g %.17g %.17g\n", square.x0, square.y0, square.x1, square.y1);
       return 0;
     }
     if (mode == "read" && argc == 7) {
