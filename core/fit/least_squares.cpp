@@ -163,10 +163,13 @@ NormalEquations assembleNormalEquations(std::size_t vertexCount, std::span<const
   return scatterMoments(vertexCount, triangles, triangleMoments(vertexCount, triangles, samples));
 }
 
-PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span<const TriangleMoments> moments,
-                                  const SparseMatrix& energy, double lambdaFactor,
-                                  std::optional<double> lambdaAbsolute) {
-  PenalizedSystem sys;
+namespace {
+
+// assemblePenalized into `sys` (a fresh one): the callers' systems are
+// filled in place, not copied (see assembleSystem).
+void assemblePenalizedInto(PenalizedSystem& sys, std::span<const Triangle> triangles,
+                           std::span<const TriangleMoments> moments, const SparseMatrix& energy,
+                           double lambdaFactor, std::optional<double> lambdaAbsolute) {
   SparseMatrix btb = energy;
   std::fill(btb.valuePtr(), btb.valuePtr() + btb.nonZeros(), 0.0);
   sys.b = Vector::Zero(energy.rows());
@@ -177,7 +180,7 @@ PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span
   sys.lambdaDefault = defaultLambda(btb, energy);
   sys.lambda = lambdaAbsolute ? *lambdaAbsolute : lambdaFactor * sys.lambdaDefault;
   if (btb.nonZeros() == energy.nonZeros()) {  // no entry was inserted: same pattern
-    sys.a = std::move(btb);
+    sys.a.swap(btb);  // (Eigen 3.4's SparseMatrix has no move: std::move copies)
     double* v = sys.a.valuePtr();
     const double* e = energy.valuePtr();
     for (Eigen::Index k = 0; k < sys.a.nonZeros(); ++k) v[k] += sys.lambda * e[k];
@@ -185,16 +188,33 @@ PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span
     sys.a = btb + sys.lambda * energy;
     sys.a.makeCompressed();
   }
+}
+
+}  // namespace
+
+PenalizedSystem assemblePenalized(std::span<const Triangle> triangles,
+                                  std::span<const TriangleMoments> moments,
+                                  const SparseMatrix& energy, double lambdaFactor,
+                                  std::optional<double> lambdaAbsolute) {
+  PenalizedSystem sys;
+  assemblePenalizedInto(sys, triangles, moments, energy, lambdaFactor, lambdaAbsolute);
   return sys;
 }
 
 PenalizedSystem assembleSystem(std::size_t vertexCount, std::span<const Triangle> triangles,
                                std::span<const TriangleMoments> moments,
-                               std::optional<SparseMatrix> energy, double lambdaFactor,
+                               std::optional<SparseMatrix>&& energy, double lambdaFactor,
                                std::optional<double> lambdaAbsolute) {
-  if (energy) return assemblePenalized(triangles, moments, *energy, lambdaFactor, lambdaAbsolute);
-  NormalEquations eq = scatterMoments(vertexCount, triangles, moments);
-  return {std::move(eq.btb), std::move(eq.btz)};
+  PenalizedSystem sys;
+  if (energy) {
+    assemblePenalizedInto(sys, triangles, moments, *energy, lambdaFactor, lambdaAbsolute);
+    energy.reset();
+  } else {
+    NormalEquations eq = scatterMoments(vertexCount, triangles, moments);
+    sys.a.swap(eq.btb);
+    sys.b = std::move(eq.btz);
+  }
+  return sys;
 }
 
 SparseMatrix membraneEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
@@ -272,20 +292,32 @@ SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const T
   // E = DᵀD with one row d_e = √L_e β_e per interior edge e (4 entries, on the
   // stencil {s, t, l, r}), so that cᵀEc = Σ_e L_e (T_e f)². Built row by row
   // (Gustavson): row i of E sums d_e,i · d_e over the edges whose stencil
-  // holds i, found through a vertex → stencil-slot index.
-  const auto edges = meshEdges(vertices.size(), triangles);
+  // holds i, found through a vertex → stencil-slot index. The rows go
+  // straight into the matrix's own arrays, sized by a bound on its entries:
+  // at the finest levels of a fit this is the peak of its memory, and a
+  // matrix built aside and then copied held its entries twice.
   const std::size_t n = vertices.size();
   struct StencilRow {
     std::array<std::uint32_t, 4> v;
     std::array<double, 4> d;
   };
   std::vector<StencilRow> rows;
-  rows.reserve(edges.size());
-  for (const auto& e : edges) {
-    if (e.right == MeshEdge::kNone) continue;
-    const auto beta = thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
-    const double w = std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
-    rows.push_back({{e.s, e.t, e.left, e.right}, {w * beta[0], w * beta[1], w * beta[2], w * beta[3]}});
+  std::size_t edgeCount = 0;
+  {
+    const auto edges = meshEdges(n, triangles);  // gone before the matrix is
+    edgeCount = edges.size();
+    std::size_t interior = 0;
+    for (const auto& e : edges) interior += e.right != MeshEdge::kNone;
+    rows.reserve(interior);
+    for (const auto& e : edges) {
+      if (e.right == MeshEdge::kNone) continue;
+      const auto beta =
+          thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
+      const double w = std::sqrt(
+          std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
+      rows.push_back(
+          {{e.s, e.t, e.left, e.right}, {w * beta[0], w * beta[1], w * beta[2], w * beta[3]}});
+    }
   }
   // slots[start[i] .. start[i+1]) = 4·row + position of i in that row.
   std::vector<std::uint32_t> start(n + 1, 0);
@@ -300,10 +332,17 @@ SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const T
       for (std::uint32_t a = 0; a < 4; ++a) slots[fill[rows[k].v[a]]++] = static_cast<std::uint32_t>(4 * k + a);
     }
   }
-  std::vector<SparseMatrix::StorageIndex> outer(n + 1, 0), inner;
-  std::vector<double> values;
-  inner.reserve(14 * n);
-  values.reserve(14 * n);
+  // Row i's columns are i, its neighbours (a stencil of an edge at i lies
+  // in i's two triangles) and, per triangle at i, the vertex across its
+  // opposite edge: at most 1 + deg(i) + (triangles at i), which sums to
+  // n + 2·edges + 3·triangles. The room past the last entry is never written.
+  const std::size_t bound = n + 2 * edgeCount + 3 * triangles.size();
+  SparseMatrix energy(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  energy.resizeNonZeros(static_cast<Eigen::Index>(bound));
+  SparseMatrix::StorageIndex* outer = energy.outerIndexPtr();
+  SparseMatrix::StorageIndex* inner = energy.innerIndexPtr();
+  double* value = energy.valuePtr();
+  std::size_t entries = 0;
   std::vector<double> sum(n, 0.0);
   std::vector<std::uint32_t> seenIn(n, std::numeric_limits<std::uint32_t>::max()), columns;
   for (std::size_t i = 0; i < n; ++i) {
@@ -321,16 +360,18 @@ SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const T
         sum[j] += di * r.d[b];
       }
     }
+    if (entries + columns.size() > bound)
+      throw internalError("thinPlateEnergy: more entries than the bound");
     std::sort(columns.begin(), columns.end());
     for (const std::uint32_t j : columns) {
-      inner.push_back(static_cast<SparseMatrix::StorageIndex>(j));
-      values.push_back(sum[j]);
+      inner[entries] = static_cast<SparseMatrix::StorageIndex>(j);
+      value[entries] = sum[j];
+      ++entries;
     }
-    outer[i + 1] = static_cast<SparseMatrix::StorageIndex>(inner.size());
+    outer[i + 1] = static_cast<SparseMatrix::StorageIndex>(entries);
   }
-  return Eigen::Map<const SparseMatrix>(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n),
-                                        static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
-                                        values.data());
+  energy.data().resize(static_cast<Eigen::Index>(entries));  // keeps the room: no copy
+  return energy;
 }
 
 SparseMatrix smoothingMatrix(Smoothing kind, std::span<const Point2> vertices, std::span<const Triangle> triangles) {
@@ -513,7 +554,10 @@ LeastSquaresResult fitLeastSquares(std::span<const Point2> vertices, std::span<c
   const std::vector<TriangleMoments> moments = triangleMoments(vertices.size(), triangles, samples);
   LeastSquaresResult result;
   std::optional<SparseMatrix> energy;
-  if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, vertices, triangles);
+  if (options.smoothing != Smoothing::None) {
+    SparseMatrix built = smoothingMatrix(options.smoothing, vertices, triangles);
+    energy.emplace().swap(built);  // swapped, not copied (see assembleSystem)
+  }
   PenalizedSystem sys = assembleSystem(vertices.size(), triangles, moments, std::move(energy),
                                        options.lambdaFactor, options.lambdaAbsolute);
   result.lambdaDefault = sys.lambdaDefault;

@@ -117,10 +117,13 @@ PenalizedSystem assemblePenalized(std::span<const Triangle> triangles, std::span
                                   std::optional<double> lambdaAbsolute);
 /// The system a fit solves: assemblePenalized with `energy` (freed on
 /// return, before the solve), or without smoothing (no energy) the moments
-/// alone, scatterMoments, with λ 0.
+/// alone, scatterMoments, with λ 0. Eigen 3.4's SparseMatrix has no move
+/// constructor or assignment (std::move copies): `energy` is taken by
+/// reference and reset here, and the matrices are handed on by swap, so
+/// that no matrix of the system is held twice.
 PenalizedSystem assembleSystem(std::size_t vertexCount, std::span<const Triangle> triangles,
                                std::span<const TriangleMoments> moments,
-                               std::optional<SparseMatrix> energy, double lambdaFactor,
+                               std::optional<SparseMatrix>&& energy, double lambdaFactor,
                                std::optional<double> lambdaAbsolute);
 
 /// Membrane energy matrix (section 8.6): symmetric PSD, annihilates constants.

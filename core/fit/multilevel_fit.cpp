@@ -158,7 +158,10 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     // The smoothing matrix first: its temporaries are gone before the
     // moments are summed (lower peak memory).
     std::optional<SparseMatrix> energy;
-    if (options.smoothing != Smoothing::None) energy = smoothingMatrix(options.smoothing, positions, triVerts);
+    if (options.smoothing != Smoothing::None) {
+      SparseMatrix built = smoothingMatrix(options.smoothing, positions, triVerts);
+      energy.emplace().swap(built);  // swapped, not copied (see assembleSystem)
+    }
     const std::vector<TriangleMoments>& moments =
         levelMoments(mesh, level, data, tris, triIndex, triVerts, positions, triOf, previousTris,
                      previousMoments, threads);
