@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/base/point.hpp"
@@ -34,6 +35,13 @@ bool isBreakLineKind(FeatureKind kind);
 
 /// The break-line chains and domain-boundary rings of a TIN, deterministic.
 std::vector<TerrainLine> extractTerrainLines(const TinData& tin);
+
+/// The TIN's boundary half-edges (from, to), sorted: those a half-edge mesh
+/// of it (Mesh::build) leaves without a twin — an edge of one triangle, of
+/// two in the same direction, or of more than two — over the triangles with
+/// three distinct corners in range. About 4 bytes a half-edge, not a mesh's
+/// 60. Throws internalError for 2^31 vertices or 2^32 half-edges.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> boundaryHalfEdges(const TinData& tin);
 
 /// How far a chord a → b that replaces part of a line is from the surface
 /// the line lies on (largest vertical distance), so that simplification can

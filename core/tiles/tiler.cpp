@@ -179,7 +179,7 @@ fit::MultilevelOptions binaryFitOptions(const TilerOptions& o, Point2 origin, do
 
 /// Whether the points lie on one line, to `slack`: their RMS distance from
 /// their principal axis is at most slack.
-bool onOneLine(const std::vector<Point3>& points, double slack) {
+bool onOneLine(std::span<const Point3> points, double slack) {
   double mx = 0, my = 0;
   for (const auto& p : points) mx += p.x, my += p.y;
   mx /= static_cast<double>(points.size());
@@ -540,10 +540,17 @@ std::optional<fit::MultilevelFit> Tiler::tileFit(const TileId& id, double tolera
         if (rect.contains(data[i].xy())) inTile.push_back(i);
       });
   if (inTile.size() < 3) return std::nullopt;
-  std::sort(inTile.begin(), inTile.end());  // the data's order, whatever the grid's
-  std::vector<Point3> points;
-  points.reserve(inTile.size());
-  for (const std::uint32_t i : inTile) points.push_back(data[i]);
+  // The data's order, whatever the grid's. A tile holding all the data (the
+  // root, most often) fits them where they are, not a copy of them.
+  std::vector<Point3> copied;
+  std::span<const Point3> points = data;
+  if (inTile.size() < data.size()) {
+    std::sort(inTile.begin(), inTile.end());
+    copied.reserve(inTile.size());
+    for (const std::uint32_t i : inTile) copied.push_back(data[i]);
+    points = copied;
+  }
+  std::vector<std::uint32_t>().swap(inTile);
   // Thin-plate smoothing leaves planes free: data on one line (a raster's
   // row along the tile's side, straight or nearly) cannot fix the slope
   // across it, and the system is singular.

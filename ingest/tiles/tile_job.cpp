@@ -463,6 +463,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   // The TIN goes with the pyramid's root (the whole run, or the top shard):
   // a subtree shard would copy the whole TIN for its part of the tiles.
   if (holdsRoot && !store::holdsTin(*stage)) store::putTin(*stage, tinBytes, options.tinPieceBytes);
+  std::string().swap(tinBytes);  // stored: not held through the tiles (the TIN's size again)
   if (!shard.empty()) {
     stage->put(kShardKey, shard);
   } else if (store::storeKindFor(out) == store::StoreKind::Directory) {

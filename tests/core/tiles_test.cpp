@@ -13,6 +13,7 @@
 
 #include "core/base/error.hpp"
 #include "core/cdt/cdt.hpp"
+#include "core/mesh/mesh.hpp"
 #include "core/surface/surface.hpp"
 #include "core/tiles/chord_sag.hpp"
 #include "core/tiles/pyramid.hpp"
@@ -91,6 +92,77 @@ TEST(TerrainLines, BreakLinesAndTheBoundaryRingComeOutOfATin) {
   }
   EXPECT_GE(roads, 1);
   EXPECT_EQ(rings, 1);
+}
+
+TEST(TerrainLines, BoundaryHalfEdgesAreThoseAHalfEdgeMeshLeavesWithoutATwin) {
+  // What the rings are traced from, against the half-edge mesh's own
+  // boundary, on TINs with holes, pinched holes, duplicated, overturned,
+  // non-manifold and invalid triangles.
+  const auto meshBoundary = [](const TinData& tin) {
+    const Mesh mesh = Mesh::fromTinData(tin);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+    for (HalfedgeId h : mesh.boundaryHalfedges())
+      out.push_back({mesh.origin(h).value, mesh.target(h).value});
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  TinData lone;
+  lone.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  lone.triangles = {{0, 1, 2}};
+  EXPECT_EQ(boundaryHalfEdges(lone),
+            (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{0, 1}, {1, 2}, {2, 0}}));
+  EXPECT_EQ(boundaryHalfEdges(syntheticTin()), meshBoundary(syntheticTin()));
+
+  // A 7 × 7 grid of vertices, each cell cut into two CCW triangles.
+  TinData grid;
+  const std::uint32_t n = 7;
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i) grid.vertices.push_back({double(i), double(j), 0});
+  for (std::uint32_t j = 0; j + 1 < n; ++j)
+    for (std::uint32_t i = 0; i + 1 < n; ++i) {
+      const std::uint32_t a = j * n + i;
+      grid.triangles.push_back({a, a + 1, a + n + 1});
+      grid.triangles.push_back({a, a + n + 1, a + n});
+    }
+  const auto without = [&](std::vector<std::size_t> drop) {
+    TinData t = grid;
+    std::sort(drop.rbegin(), drop.rend());
+    for (const std::size_t k : drop)
+      t.triangles.erase(t.triangles.begin() + static_cast<std::ptrdiff_t>(k));
+    return t;
+  };
+  std::vector<TinData> cases;
+  cases.push_back(grid);
+  cases.push_back(without({14, 15, 16, 17}));          // a hole
+  cases.push_back(without({14, 15, 28, 29, 30, 31}));  // two holes meeting at a vertex
+  cases.push_back(without({0, 11, 12}));               // notches in the hull
+  TinData duplicated = grid;                           // edges used twice one way
+  duplicated.triangles.push_back(grid.triangles[20]);
+  cases.push_back(duplicated);
+  TinData overturned = grid;  // a reversed copy: three triangles at its edges
+  const auto& t20 = grid.triangles[20];
+  overturned.triangles.push_back({t20[0], t20[2], t20[1]});
+  cases.push_back(overturned);
+  TinData invalid = grid;  // dropped by both: a repeated corner, one out of range
+  invalid.triangles.push_back({3, 3, 4});
+  invalid.triangles.push_back({3, 4, 4000});
+  cases.push_back(invalid);
+  std::mt19937_64 rng(11);
+  for (int k = 0; k < 20; ++k) {  // a third of the triangles gone at random
+    TinData t;
+    t.vertices = grid.vertices;
+    for (const auto& tri : grid.triangles)
+      if (rng() % 3 != 0) t.triangles.push_back(tri);
+    cases.push_back(t);
+  }
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    SCOPED_TRACE("case " + std::to_string(c));
+    const auto expected = meshBoundary(cases[c]);
+    EXPECT_EQ(boundaryHalfEdges(cases[c]), expected);
+    if (c == 1) {
+      EXPECT_EQ(expected.size(), 4 * (n - 1) + 6);  // the hull and a 2 × 1 hole
+    }
+  }
 }
 
 TEST(SurfaceDifference, PeakOfAPyramidOverAPlaneIsFoundExactly) {
