@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include <condition_variable>
+#include <cstring>
 #include <mutex>
 #include <optional>
 #include <vector>
@@ -103,10 +104,53 @@ Error bindFailure(int rc, std::string_view key, std::size_t bytes, const fs::pat
                  fileLocation(archive), "write a folder store instead (a name without .3dtiles)");
 }
 
+struct BlobCloser {
+  void operator()(sqlite3_blob* blob) const { sqlite3_blob_close(blob); }
+};
+using Blob = std::unique_ptr<sqlite3_blob, BlobCloser>;
+
+// Inserts `key` through `insert` (INSERT … (key, content) VALUES (?1, ?2))
+// with `size` zero bytes (SQLite writes them without holding them), then
+// writes the value over them a piece at a time from `fill`: no copy of the
+// whole value is held, by SQLite or here. Returns the insert's result; the
+// pieces are written only after SQLITE_DONE. Throws ioError when a piece
+// cannot be written, and what `fill` throws. The caller's transaction makes
+// it atomic.
+int insertInPieces(sqlite3* db, sqlite3_stmt* insert, std::string_view key, std::uint64_t size,
+                   const TileStore::PieceFiller& fill, const fs::path& archive) {
+  {
+    const StepScope scope(insert);
+    bindText(insert, 1, key);
+    if (const int rc = sqlite3_bind_zeroblob64(insert, 2, size); rc != SQLITE_OK)
+      throw bindFailure(rc, key, size, archive);
+    if (const int rc = sqlite3_step(insert); rc != SQLITE_DONE) return rc;
+  }
+  sqlite3_blob* opened = nullptr;
+  const int rc =
+      sqlite3_blob_open(db, "main", "media", "content", sqlite3_last_insert_rowid(db), 1, &opened);
+  const Blob blob(opened);
+  auto failure = [&] {
+    return ioError("cannot write the key '" + std::string(key) + "': " + message(db),
+                   fileLocation(archive), "check free disk space and permissions");
+  };
+  if (rc != SQLITE_OK) throw failure();
+  std::vector<char> piece(static_cast<std::size_t>(std::min<std::uint64_t>(size, kCopyPieceBytes)));
+  for (std::uint64_t offset = 0; offset < size;) {
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(piece.size(), size - offset));
+    fill(offset, {piece.data(), n});
+    if (sqlite3_blob_write(blob.get(), piece.data(), static_cast<int>(n),
+                           static_cast<int>(offset)) != SQLITE_OK)
+      throw failure();
+    offset += n;
+  }
+  return SQLITE_DONE;
+}
+
 // One SQLite connection with the statements every store call uses.
 struct Connection {
   Db db;
-  Stmt get, contains, keys, put;
+  Stmt get, contains, keys, put, size;
+  Stmt rowid;  // null when the media table has no rowid (a value is then read whole)
 };
 
 bool isWritable(Access access) {
@@ -166,6 +210,7 @@ std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
       {&connection->get, "SELECT content FROM media WHERE key = ?1"},
       {&connection->contains, "SELECT 1 FROM media WHERE key = ?1"},
       {&connection->keys, "SELECT key FROM media ORDER BY key"},
+      {&connection->size, "SELECT length(content) FROM media WHERE key = ?1"},
       {&connection->put, isWritable(access)
                              ? "INSERT OR REPLACE INTO media (key, content) VALUES (?1, ?2)"
                              : nullptr}};
@@ -177,6 +222,8 @@ std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
           "not a .3dtiles archive: the media table is not media(key, content): " + message(db),
           "give a .3dtiles file written by tinsmith or 3d-tiles-tools");
   }
+  connection->rowid = prepare(db, "SELECT rowid FROM media WHERE key = ?1", rc);
+  if (rc != SQLITE_OK) connection->rowid.reset();
   return connection;
 }
 
@@ -369,6 +416,88 @@ class ArchiveStore final : public TileStore {
           fileLocation(path_), "check free disk space and permissions");
   }
 
+  [[nodiscard]] std::optional<std::uint64_t> size(std::string_view key) const override {
+    requireValidKey(key, path_);
+    const auto connection = pool_.acquire();
+    sqlite3_stmt* stmt = connection->size.get();
+    const StepScope scope(stmt);
+    bindText(stmt, 1, key);
+    const int rc = sqlite3_step(stmt);
+    if (rc == SQLITE_DONE) return std::nullopt;
+    if (rc != SQLITE_ROW) throw readFailure(key, connection->db.get());
+    return static_cast<std::uint64_t>(sqlite3_column_int64(stmt, 0));  // NULL content: 0
+  }
+
+  void read(std::string_view key, std::uint64_t offset, std::span<char> out) const override {
+    requireValidKey(key, path_);
+    const auto connection = pool_.acquire();
+    sqlite3* db = connection->db.get();
+    const auto shortValue = [&](std::uint64_t end) {
+      return ioError("cannot read the key '" + std::string(key) + "': " +
+                         (end == 0 ? std::string("it is not in the archive")
+                                   : "it ends at byte " + std::to_string(end)) +
+                         ", before " + std::to_string(offset + out.size()),
+                     fileLocation(path_));
+    };
+    if (!connection->rowid) {  // a media table without rowids: the value whole
+      sqlite3_stmt* stmt = connection->get.get();
+      const StepScope scope(stmt);
+      bindText(stmt, 1, key);
+      const int rc = sqlite3_step(stmt);
+      if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw readFailure(key, db);
+      const auto size =
+          rc == SQLITE_ROW ? static_cast<std::uint64_t>(sqlite3_column_bytes(stmt, 0)) : 0;
+      if (rc == SQLITE_DONE || size < offset + out.size()) throw shortValue(size);
+      std::memcpy(out.data(), static_cast<const char*>(sqlite3_column_blob(stmt, 0)) + offset,
+                  out.size());
+      return;
+    }
+    sqlite3_int64 rowid = 0;
+    {
+      sqlite3_stmt* stmt = connection->rowid.get();
+      const StepScope scope(stmt);
+      bindText(stmt, 1, key);
+      const int rc = sqlite3_step(stmt);
+      if (rc == SQLITE_DONE) throw shortValue(0);
+      if (rc != SQLITE_ROW) throw readFailure(key, db);
+      rowid = sqlite3_column_int64(stmt, 0);
+    }
+    sqlite3_blob* opened = nullptr;
+    const int rc = sqlite3_blob_open(db, "main", "media", "content", rowid, 0, &opened);
+    const Blob blob(opened);
+    if (rc != SQLITE_OK) throw readFailure(key, db);
+    const auto size = static_cast<std::uint64_t>(sqlite3_blob_bytes(blob.get()));
+    if (size < offset + out.size()) throw shortValue(size);
+    if (sqlite3_blob_read(blob.get(), out.data(), static_cast<int>(out.size()),
+                          static_cast<int>(offset)) != SQLITE_OK)
+      throw readFailure(key, db);
+  }
+
+  void putInPieces(std::string_view key, std::uint64_t size, const PieceFiller& fill) override {
+    if (!isWritable(access_))
+      throw usageError("put into '" + path_.string() + "', which was opened for reading",
+                       "open the store with openStoreForWriting");
+    requireValidKey(key, path_);
+    const auto connection = pool_.acquire();
+    sqlite3* db = connection->db.get();
+    const auto failure = [&] {
+      return ioError("cannot write the key '" + std::string(key) + "': " + message(db),
+                     fileLocation(path_), "check free disk space and permissions");
+    };
+    // One transaction: readers see the value whole or not at all, and a
+    // failure leaves what was there.
+    if (sqlite3_exec(db, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK)
+      throw failure();
+    try {
+      if (insertInPieces(db, connection->put.get(), key, size, fill, path_) != SQLITE_DONE)
+        throw failure();
+      if (sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK) throw failure();
+    } catch (...) {
+      sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+  }
+
  private:
   Error readFailure(std::string_view key, sqlite3* db) const {
     return ioError("cannot read the key '" + std::string(key) + "': " + message(db),
@@ -473,12 +602,20 @@ void writeArchive(const TileStore& source, std::span<const std::string> keys,
     Stmt insert = prepare(db.get(), "INSERT INTO media (key, content) VALUES (?1, ?2)", rc);
     if (rc != SQLITE_OK) throw fail("cannot create the archive");
     for (const std::string& key : keys) {
-      const std::string bytes = bytesForCopy(source, key);
-      const StepScope scope(insert.get());
-      bindText(insert.get(), 1, key);
-      if (rc = bindBlob(insert.get(), 2, bytes); rc != SQLITE_OK)
-        throw bindFailure(rc, key, bytes.size(), target);
-      rc = sqlite3_step(insert.get());
+      const std::uint64_t size = sizeForCopy(source, key);
+      if (size > kCopyPieceBytes) {  // a TIN's piece: not held whole
+        rc = insertInPieces(
+            db.get(), insert.get(), key, size,
+            [&](std::uint64_t offset, std::span<char> piece) { source.read(key, offset, piece); },
+            target);
+      } else {
+        const std::string bytes = bytesForCopy(source, key);
+        const StepScope scope(insert.get());
+        bindText(insert.get(), 1, key);
+        if (rc = bindBlob(insert.get(), 2, bytes); rc != SQLITE_OK)
+          throw bindFailure(rc, key, bytes.size(), target);
+        rc = sqlite3_step(insert.get());
+      }
       if (rc == SQLITE_CONSTRAINT_PRIMARYKEY)
         throw inputError("the key '" + key + "' is listed twice for the archive",
                          fileLocation(target), "list each key once");

@@ -111,6 +111,62 @@ class DirectoryStore final : public TileStore {
   }
 
   void put(std::string_view key, std::string_view bytes) override {
+    writeAtomically(key, [&](int fd) { writeAll(fd, bytes, key); });
+  }
+
+  [[nodiscard]] std::optional<std::uint64_t> size(std::string_view key) const override {
+    const fs::path file = fileFor(key);
+    struct stat info {};
+    if (::stat(file.c_str(), &info) != 0) {
+      if (errno == ENOENT || errno == ENOTDIR) return std::nullopt;
+      throw readFailure(key, errnoText());
+    }
+    if (!S_ISREG(info.st_mode)) return std::nullopt;
+    return static_cast<std::uint64_t>(info.st_size);
+  }
+
+  void read(std::string_view key, std::uint64_t offset, std::span<char> out) const override {
+    const fs::path file = fileFor(key);
+    Fd fd(::open(file.c_str(), O_RDONLY | O_CLOEXEC));
+    if (fd.get() < 0) throw readFailure(key, errnoText());
+    std::size_t done = 0;
+    while (done < out.size()) {
+      const ssize_t n = ::pread(fd.get(), out.data() + done, out.size() - done,
+                                static_cast<off_t>(offset + done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) throw readFailure(key, errnoText());
+      if (n == 0)
+        throw readFailure(key, "it ends at byte " + std::to_string(offset + done) + ", before " +
+                                   std::to_string(offset + out.size()));
+      done += static_cast<std::size_t>(n);
+    }
+  }
+
+  void putInPieces(std::string_view key, std::uint64_t size, const PieceFiller& fill) override {
+    writeAtomically(key, [&](int fd) {
+      std::vector<char> piece(
+          static_cast<std::size_t>(std::min<std::uint64_t>(size, kCopyPieceBytes)));
+      for (std::uint64_t offset = 0; offset < size;) {
+        const auto n =
+            static_cast<std::size_t>(std::min<std::uint64_t>(piece.size(), size - offset));
+        fill(offset, {piece.data(), n});
+        writeAll(fd, {piece.data(), n}, key);
+        offset += n;
+      }
+    });
+  }
+
+ private:
+  // The one place a key becomes a path, after the check.
+  [[nodiscard]] fs::path fileFor(std::string_view key) const {
+    requireValidKey(key, root_);
+    return root_ / fs::path(std::string(key));
+  }
+
+  // A put: write(fd) fills a temporary file beside the key's, renamed over
+  // it once closed; removed instead when anything throws.
+  template <class Write>
+  void writeAtomically(std::string_view key, Write&& write) {
     if (access_ == Access::Read)
       throw usageError("put into '" + root_.string() + "', which was opened for reading",
                        "open the store with openStoreForWriting");
@@ -123,16 +179,12 @@ class DirectoryStore final : public TileStore {
     const fs::path temp = tempSibling(file);
     Fd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));
     if (fd.get() < 0) throw writeFailure(key, "cannot create a file: " + errnoText());
-    std::size_t done = 0;
-    while (done < bytes.size()) {
-      const ssize_t n = ::write(fd.get(), bytes.data() + done, bytes.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0) {
-        const std::string reason = errnoText();
-        discard(temp);
-        throw writeFailure(key, "writing failed: " + reason);
-      }
-      done += static_cast<std::size_t>(n);
+    try {
+      write(fd.get());
+    } catch (...) {
+      fd.close();
+      discard(temp);
+      throw;
     }
     if (!fd.close()) {
       const std::string reason = errnoText();
@@ -146,11 +198,14 @@ class DirectoryStore final : public TileStore {
     }
   }
 
- private:
-  // The one place a key becomes a path, after the check.
-  [[nodiscard]] fs::path fileFor(std::string_view key) const {
-    requireValidKey(key, root_);
-    return root_ / fs::path(std::string(key));
+  void writeAll(int fd, std::string_view bytes, std::string_view key) const {
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+      const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) throw writeFailure(key, "writing failed: " + errnoText());
+      done += static_cast<std::size_t>(n);
+    }
   }
 
   static void discard(const fs::path& temp) {
@@ -320,7 +375,7 @@ void writeDirectory(const TileStore& source, std::span<const std::string> keys,
       if (out.contains(key))
         throw inputError("the key '" + key + "' is listed twice for the folder",
                          fileLocation(target), "list each key once");
-      out.put(key, bytesForCopy(source, key));
+      copyValue(source, key, out);
     }
   }
   moveFolderStore(staged.path(), target);

@@ -3,6 +3,7 @@
 // Not part of the public API; only ingest/store/*.cpp include it.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <span>
@@ -37,6 +38,9 @@ void createFolderFor(const std::filesystem::path& folder, const std::filesystem:
 /// The bytes of `key` in `source`, for writeStore. Throws inputError naming
 /// the source when the key is invalid or missing.
 std::string bytesForCopy(const TileStore& source, const std::string& key);
+/// The size of `key` in `source`, for a copy a piece at a time; throws as
+/// bytesForCopy.
+std::uint64_t sizeForCopy(const TileStore& source, std::string_view key);
 
 /// What a folder holds, for requireReplaceable: whether it has the marker
 /// key, and the files that are not the store's (not a store key, not a

@@ -29,16 +29,33 @@ bool holdsEmptyTin(const TileStore& store) {
   return whole && whole->empty();
 }
 
+namespace {
+
+// put, or for a value over kCopyPieceBytes putInPieces: an archive's SQLite
+// would otherwise build its row with a copy of the whole value.
+void putValue(TileStore& store, std::string_view key, std::string_view bytes) {
+  if (bytes.size() <= kCopyPieceBytes) {
+    store.put(key, bytes);
+    return;
+  }
+  store.putInPieces(key, bytes.size(), [&](std::uint64_t offset, std::span<char> piece) {
+    bytes.copy(piece.data(), piece.size(), static_cast<std::size_t>(offset));
+  });
+}
+
+}  // namespace
+
 void putTin(TileStore& store, std::string_view bytes, std::size_t pieceBytes) {
   if (pieceBytes == 0) throw internalError("putTin: a piece of 0 bytes");
   if (bytes.size() <= pieceBytes) {
-    store.put(kTinKey, bytes);
+    putValue(store, kTinKey, bytes);
     return;
   }
   const std::size_t pieces = (bytes.size() + pieceBytes - 1) / pieceBytes;
   for (std::size_t k = pieces; k-- > 0;) {
     const std::size_t begin = k * pieceBytes;
-    store.put(tinPieceKey(k), bytes.substr(begin, std::min(pieceBytes, bytes.size() - begin)));
+    putValue(store, tinPieceKey(k),
+             bytes.substr(begin, std::min(pieceBytes, bytes.size() - begin)));
   }
 }
 
@@ -57,16 +74,16 @@ std::optional<std::string> getTin(const TileStore& store) {
 bool copyTin(const TileStore& from, TileStore& to) {
   const std::vector<std::string> keys = storedTinKeys(from);
   for (auto key = keys.rbegin(); key != keys.rend(); ++key) {
-    const auto bytes = from.get(*key);
-    if (!bytes)
+    const auto size = from.size(*key);
+    if (!size)
       throw ioError("'" + *key + "' went missing from " + from.path().string() +
                     " while it was copied");
-    if (bytes->empty())
+    if (*size == 0)
       throw inputError("the TIN in '" + from.path().string() + "' is empty",
                        fileLocation(from.path().string()),
                        "tile that store again with this tinsmith (an older one stored a TIN "
                        "over 10^9 bytes as nothing)");
-    to.put(*key, *bytes);
+    copyValue(from, *key, to);  // a piece of up to 256 MiB, a few MiB at a time
   }
   return !keys.empty();
 }

@@ -121,7 +121,27 @@ std::string bytesForCopy(const TileStore& source, const std::string& key) {
   return std::move(*bytes);
 }
 
+std::uint64_t sizeForCopy(const TileStore& source, std::string_view key) {
+  requireValidKey(key, source.path());
+  const std::optional<std::uint64_t> size = source.size(key);
+  if (!size)
+    throw inputError("the key '" + std::string(key) + "' to be copied is not in the store",
+                     fileLocation(source.path()), "list only keys the store holds");
+  return *size;
+}
+
 }  // namespace detail
+
+void copyValue(const TileStore& from, std::string_view key, TileStore& to) {
+  const std::uint64_t size = detail::sizeForCopy(from, key);
+  if (size <= kCopyPieceBytes) {
+    to.put(key, detail::bytesForCopy(from, std::string(key)));
+    return;
+  }
+  to.putInPieces(key, size, [&](std::uint64_t offset, std::span<char> piece) {
+    from.read(key, offset, piece);
+  });
+}
 
 namespace {
 

@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -72,7 +73,31 @@ class TileStore {
   /// ioError naming the store and key (nothing half-written is left), or
   /// usageError on a store opened for reading.
   virtual void put(std::string_view key, std::string_view bytes) = 0;
+
+  /// The size in bytes of `key`'s value, without reading it; nullopt when
+  /// absent. Throws as get().
+  [[nodiscard]] virtual std::optional<std::uint64_t> size(std::string_view key) const = 0;
+  /// Reads out.size() bytes of `key`'s value from `offset`: a value is read
+  /// a piece at a time without holding it whole. Throws ioError naming the
+  /// store and key when it is absent or ends before offset + out.size().
+  virtual void read(std::string_view key, std::uint64_t offset, std::span<char> out) const = 0;
+  /// Hands fill(offset, piece) one piece of a value after another, in order,
+  /// each to be filled with the bytes at `offset`.
+  using PieceFiller = std::function<void(std::uint64_t offset, std::span<char> piece)>;
+  /// put() of a value of `size` bytes written a piece at a time (at most
+  /// kCopyPieceBytes held): atomic as put, and nothing is left of it when
+  /// `fill` throws (which is rethrown).
+  virtual void putInPieces(std::string_view key, std::uint64_t size, const PieceFiller& fill) = 0;
 };
+
+/// The largest piece copyValue, writeStore and putInPieces hold of a value.
+inline constexpr std::size_t kCopyPieceBytes = std::size_t{8} << 20;
+
+/// Copies `key`'s value from one store to another, a piece at a time when it
+/// is larger than kCopyPieceBytes (a TIN's piece is up to 256 MiB). Throws
+/// inputError naming `from` when the key is invalid or missing there, and
+/// what from.read and to.put throw.
+void copyValue(const TileStore& from, std::string_view key, TileStore& to);
 
 /// Which file (or folder) a path names: its device and inode. A store
 /// renamed over the path is another file; the same file is the same store

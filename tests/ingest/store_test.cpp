@@ -379,6 +379,89 @@ TEST_P(TileStoreTest, ATinWhosePieceZeroIsMissingIsNoTin) {
   EXPECT_EQ(getTin(*store), large);
 }
 
+TEST_P(TileStoreTest, ALargeValueIsWrittenAndReadAPieceAtATime) {
+  // A TIN's piece is up to 256 MiB: it is put, copied and written into a
+  // finished store a few MiB at a time, never held whole.
+  const fs::path dir = scratch("pieces");
+  const std::string big = tileBytes(21, 2 * kCopyPieceBytes + 12345);
+  const std::string key = "tinsmith/terrain.tin";
+  auto store = openStoreForWriting(dir / nameFor(GetParam()), false);
+  store->put(kStoreMarkerKey, "{}");
+  std::vector<std::uint64_t> offsets;
+  const auto fromBig = [&](std::uint64_t offset, std::span<char> piece) {
+    offsets.push_back(offset);
+    EXPECT_LE(piece.size(), kCopyPieceBytes);
+    big.copy(piece.data(), piece.size(), offset);
+  };
+  store->putInPieces(key, big.size(), fromBig);
+  EXPECT_EQ(offsets, (std::vector<std::uint64_t>{0, kCopyPieceBytes, 2 * kCopyPieceBytes}));
+  EXPECT_EQ(store->size(key), big.size());
+  EXPECT_EQ(store->get(key), big);
+  EXPECT_EQ(store->size("tiles/none.glb"), std::nullopt);
+  EXPECT_EQ(store->size(kStoreMarkerKey), 2u);
+  std::string part(1000, '\0');
+  store->read(key, kCopyPieceBytes - 10, part);
+  EXPECT_EQ(part, big.substr(kCopyPieceBytes - 10, 1000));
+  store->read(key, big.size() - part.size(), part);
+  EXPECT_EQ(part, big.substr(big.size() - part.size()));
+  const Thrown pastTheEnd = thrownBy([&] { store->read(key, big.size() - 999, part); });
+  EXPECT_EQ(pastTheEnd.kind, ErrorKind::Io);
+  EXPECT_NE(pastTheEnd.message.find("ends at byte " + std::to_string(big.size())),
+            std::string::npos)
+      << pastTheEnd.message;
+  EXPECT_EQ(thrownBy([&] { store->read("tiles/none.glb", 0, part); }).kind, ErrorKind::Io);
+
+  // A filler that fails half way leaves the old value, and no file of the
+  // new one.
+  const auto before = GetParam() == StoreKind::Directory ? treeOf(dir / nameFor(GetParam()))
+                                                         : std::vector<std::string>{};
+  const Thrown failed = thrownBy([&] {
+    store->putInPieces(key, big.size(), [&](std::uint64_t offset, std::span<char> piece) {
+      if (offset > 0) throw ioError("the source went away");
+      std::fill(piece.begin(), piece.end(), 'x');
+    });
+  });
+  EXPECT_EQ(failed.kind, ErrorKind::Io);
+  EXPECT_NE(failed.message.find("the source went away"), std::string::npos);
+  EXPECT_EQ(store->get(key), big);
+  if (GetParam() == StoreKind::Directory) {
+    EXPECT_EQ(treeOf(dir / nameFor(GetParam())), before);
+  }
+  const std::string other = tileBytes(22, kCopyPieceBytes + 1);  // replaces, shorter
+  store->putInPieces(key, other.size(), [&](std::uint64_t offset, std::span<char> piece) {
+    other.copy(piece.data(), piece.size(), offset);
+  });
+  EXPECT_EQ(store->get(key), other);
+  store->putInPieces(key, big.size(), fromBig);
+
+  // Copied into both kinds, by copyValue and by writeStore (twice: the same
+  // bytes), beside small values.
+  store->put("tiles/0/0/0.glb", tileBytes(23, 5000));
+  const std::vector<std::string> keys{std::string(kStoreMarkerKey), key, "tiles/0/0/0.glb"};
+  for (const std::string name : {"c.3dtiles", "c"}) {
+    auto copy = openStoreForWriting(dir / name, false);
+    for (const std::string& k : keys) copyValue(*store, k, *copy);
+    for (const std::string& k : keys) EXPECT_EQ(copy->get(k), store->get(k)) << name << " " << k;
+    const fs::path first = dir / ("w1-" + name), second = dir / ("w2-" + name);
+    writeStore(*copy, keys, first);
+    writeStore(*store, keys, second);
+    auto written = openStoreForReading(first);
+    EXPECT_EQ(written->get(key), big) << name;
+    if (name == "c.3dtiles") {
+      EXPECT_EQ(test::readFile(first), test::readFile(second));
+    }
+  }
+  EXPECT_EQ(thrownBy([&] {
+              auto copy = openStoreForWriting(dir / "d", false);
+              copyValue(*store, "tiles/none.glb", *copy);
+            }).kind,
+            ErrorKind::Input);
+  EXPECT_EQ(thrownBy([&] {
+              openStoreForReading(dir / nameFor(GetParam()))->putInPieces(key, 10, fromBig);
+            }).kind,
+            ErrorKind::Usage);
+}
+
 INSTANTIATE_TEST_SUITE_P(Kinds, TileStoreTest,
                          ::testing::Values(StoreKind::Archive, StoreKind::Directory),
                          [](const auto& info) {
