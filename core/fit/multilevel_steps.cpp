@@ -195,6 +195,10 @@ const std::vector<TriangleMoments>& levelMoments(
       fresh[remap[t]] = 0;
     }
   }
+  // Δ_{k−1}'s triangles and moments are read: let go before this level's
+  // points are located and summed (at the finest levels each is tens of MB).
+  std::vector<TriangleMoments>().swap(previousMoments);
+  std::vector<BinaryTriangle>().swap(previousTris);
   // Every point's triangle first (a point in a triangle kept from Δ_{k−1}
   // is only renumbered).
   forEachPart(pts.size(), threads, [&](std::size_t b, std::size_t e, unsigned) {
@@ -206,6 +210,9 @@ const std::vector<TriangleMoments>& levelMoments(
                      : locator.locate(locatorRoot[old], mesh.toGrid(pts[i].xy()));
     }
   });
+  locator = NestedLocator();
+  std::vector<std::uint32_t>().swap(remap);
+  std::vector<std::int32_t>().swap(locatorRoot);
   // Then the sums. A new triangle's points are summed into `moments` by the
   // first part that holds one of them; a later part that holds some too
   // (a triangle across the parts' boundary: few) sums them aside, merged in
