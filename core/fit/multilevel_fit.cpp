@@ -143,7 +143,7 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     }
     for (const auto& f : fixed) coefficients[f.vertex] = f.z;
 
-    const auto tris = mesh.triangles();
+    auto tris = mesh.triangles();
     st.triangles = tris.size();
     KeyIndexMap triIndex;
     triIndex.reserve(tris.size());
@@ -165,6 +165,10 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     const std::vector<TriangleMoments>& moments =
         levelMoments(mesh, level, data, tris, triIndex, triVerts, positions, triOf, previousTris,
                      previousMoments, threads);
+    // The triangles' paths and their index served the moments alone (which
+    // keep a copy of the paths for the next level): let go before the solve.
+    std::vector<BinaryTriangle>().swap(tris);
+    triIndex = KeyIndexMap();
     PenalizedSystem sys = assembleSystem(nv, triVerts, moments, std::move(energy),
                                          options.lambdaFactor, options.lambdaAbsolute);
     st.lambda = sys.lambda;
@@ -175,6 +179,8 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     const SolveReport report = solveSystem(a, rhs, coefficients, st.solver, options.control);
     st.iterations = report.iterations;
     st.relativeResidual = report.relativeResidual;
+    SparseMatrix().swap(a);  // solved: let go before the errors are measured
+    Vector().swap(rhs);
 
     const LevelErrors errors = levelErrors(data, triOf, triVerts, positions, coefficients, level, gridLevels, threads);
     st.maxError = errors.maxError;

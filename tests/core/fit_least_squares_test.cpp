@@ -317,7 +317,21 @@ TEST(FitLeastSquares, PenalizedAssemblyInTheEnergyPatternMatchesTheSum) {
     const Eigen::MatrixXd expected = dense(eq.btb) + sys.lambda * dense(e);
     EXPECT_LE((dense(sys.a) - expected).norm(), 1e-12 * expected.norm()) << static_cast<int>(kind);
     EXPECT_LE((sys.b - eq.btz).norm(), 1e-12);
+    // assembleSystem gives the same system and lets the energy go (taken by
+    // reference: Eigen 3.4's SparseMatrix has no move, std::move copies).
+    std::optional<SparseMatrix> energy;
+    energy.emplace(e);
+    const PenalizedSystem same = assembleSystem(m.vertices.size(), m.triangles, moments,
+                                                std::move(energy), 2.5, std::nullopt);
+    EXPECT_FALSE(energy.has_value());
+    EXPECT_EQ((dense(same.a) - dense(sys.a)).norm(), 0.0);
+    EXPECT_EQ(same.lambda, sys.lambda);
   }
+  // Without smoothing: the moments alone, λ 0.
+  const PenalizedSystem plain =
+      assembleSystem(m.vertices.size(), m.triangles, moments, std::nullopt, 2.5, std::nullopt);
+  EXPECT_EQ((dense(plain.a) - dense(eq.btb)).norm(), 0.0);
+  EXPECT_EQ(plain.lambda, 0.0);
 }
 
 }  // namespace
