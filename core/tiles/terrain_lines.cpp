@@ -64,8 +64,7 @@ bool isBreakLineKind(FeatureKind kind) {
 std::vector<std::pair<std::uint32_t, std::uint32_t>> boundaryHalfEdges(const TinData& tin) {
   // Each half-edge as 2·(its greater end) + 1 when it runs from that end,
   // bucketed by its lesser end (a counting sort), each bucket sorted: twins
-  // are neighbours. On a DEM-TIN of 1.4 M vertices a whole mesh for this was
-  // the planning's peak of memory.
+  // are neighbours.
   const std::size_t nv = tin.vertices.size();
   if (nv >= (std::size_t{1} << 31))
     throw internalError("boundaryHalfEdges: a TIN of 2^31 vertices or more");

@@ -210,7 +210,8 @@ std::unique_ptr<Connection> connect(const fs::path& path, Access access) {
       {&connection->get, "SELECT content FROM media WHERE key = ?1"},
       {&connection->contains, "SELECT 1 FROM media WHERE key = ?1"},
       {&connection->keys, "SELECT key FROM media ORDER BY key"},
-      {&connection->size, "SELECT length(content) FROM media WHERE key = ?1"},
+      {&connection->size,
+       "SELECT length(content), typeof(content) = 'text' FROM media WHERE key = ?1"},
       {&connection->put, isWritable(access)
                              ? "INSERT OR REPLACE INTO media (key, content) VALUES (?1, ?2)"
                              : nullptr}};
@@ -425,7 +426,16 @@ class ArchiveStore final : public TileStore {
     const int rc = sqlite3_step(stmt);
     if (rc == SQLITE_DONE) return std::nullopt;
     if (rc != SQLITE_ROW) throw readFailure(key, connection->db.get());
-    return static_cast<std::uint64_t>(sqlite3_column_int64(stmt, 0));  // NULL content: 0
+    // length() counts a text's characters (another tool may store text):
+    // its size is then that of the bytes get() gives.
+    if (sqlite3_column_int(stmt, 1) == 0)
+      return static_cast<std::uint64_t>(sqlite3_column_int64(stmt, 0));  // NULL content: 0
+    sqlite3_stmt* text = connection->get.get();
+    const StepScope textScope(text);
+    bindText(text, 1, key);
+    if (sqlite3_step(text) != SQLITE_ROW) throw readFailure(key, connection->db.get());
+    (void)sqlite3_column_blob(text, 0);  // as bytes, not converted
+    return static_cast<std::uint64_t>(sqlite3_column_bytes(text, 0));
   }
 
   void read(std::string_view key, std::uint64_t offset, std::span<char> out) const override {

@@ -508,6 +508,34 @@ TEST(OpenStore, ASqliteFileWithoutMediaIsAnInputError) {
   EXPECT_EQ(thrownBy([&] { (void)openStoreForWriting(path, true); }).kind, ErrorKind::Io);
 }
 
+TEST(ArchiveStore, AnotherToolsTextValueAndATableWithoutRowidsAreSizedAndReadInBytes) {
+  // length() counts a text's characters; a WITHOUT ROWID table has no blob
+  // handles: both are still sized and read by the byte.
+  const fs::path dir = test::scratchDir("store-text");
+  const std::string text = "\xC3\xA9\xE2\x82\xACx";  // "é€x": 3 characters, 6 bytes
+  for (const std::string table :
+       {"CREATE TABLE media (key TEXT PRIMARY KEY, content BLOB)",
+        "CREATE TABLE media (key TEXT PRIMARY KEY, content BLOB) WITHOUT ROWID"}) {
+    const fs::path path = dir / (table.ends_with("ROWID") ? "norowid.3dtiles" : "rowid.3dtiles");
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    const std::string sql = table + "; INSERT INTO media VALUES ('tileset.json', '" + text +
+                            "'), ('tiles/0/0/0.glb', x'00ff10');";
+    ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+    auto store = openStoreForReading(path);
+    EXPECT_EQ(store->size("tileset.json"), 6u) << path;
+    EXPECT_EQ(store->size("tiles/0/0/0.glb"), 3u) << path;
+    std::string part(4, '\0');
+    store->read("tileset.json", 2, part);
+    EXPECT_EQ(part, text.substr(2)) << path;
+    EXPECT_EQ(thrownBy([&] { store->read("tileset.json", 3, part); }).kind, ErrorKind::Io);
+    auto copy = openStoreForWriting(dir / (path.stem().string() + "-copy"), false);
+    copyValue(*store, "tileset.json", *copy);
+    EXPECT_EQ(copy->get("tileset.json"), text) << path;
+  }
+}
+
 TEST(OpenStore, AFileWhereAFolderStoreIsExpectedIsAnInputError) {
   const fs::path dir = test::scratchDir("store-open-file");
   std::ofstream(dir / "tiles.zip") << "zip?";
