@@ -33,26 +33,52 @@ struct Plane {
   }
 };
 
-/// Which triangles a query has met, each once, in O(1) a triangle: a mark
-/// per triangle holding the number of the query that last met it.
-class SeenMarks {
+/// Which triangles a query has met, each once: an open-addressing set of
+/// their ids (linear probing, at most half full), emptied by numbering the
+/// queries (a slot counts in the query whose number it holds). Its size
+/// follows the largest query (the triangles along one segment), not the
+/// TIN: a mark per triangle, kept by every thread, held 4 bytes a triangle
+/// per thread (8 GB a thread at 10^9 vertices).
+class SeenSet {
  public:
-  void begin(std::size_t triangles) {
-    if (marks_.size() < triangles) marks_.resize(triangles, 0);
-    if (++query_ == 0) {  // wrapped: old marks could equal the new number
-      std::fill(marks_.begin(), marks_.end(), 0);
+  void begin() {
+    count_ = 0;
+    if (++query_ == 0) {  // wrapped: old slots could hold the new number
+      std::fill(queries_.begin(), queries_.end(), 0);
       query_ = 1;
     }
   }
   /// True the first time `t` is met in this query.
   bool insert(std::uint32_t t) {
-    if (marks_[t] == query_) return false;
-    marks_[t] = query_;
-    return true;
+    if (2 * (count_ + 1) > ids_.size()) grow();
+    for (std::size_t i = slotOf(t);; i = (i + 1) & (ids_.size() - 1)) {
+      if (queries_[i] != query_) {
+        queries_[i] = query_;
+        ids_[i] = t;
+        ++count_;
+        return true;
+      }
+      if (ids_[i] == t) return false;
+    }
   }
 
  private:
-  std::vector<std::uint32_t> marks_;
+  [[nodiscard]] std::size_t slotOf(std::uint32_t t) const {  // Fibonacci hashing
+    return static_cast<std::size_t>((t * 0x9E3779B97F4A7C15ULL) >> (64 - bits_));
+  }
+  void grow() {
+    std::vector<std::uint32_t> ids = std::move(ids_), queries = std::move(queries_);
+    bits_ = std::max(bits_ + 1, 6);
+    ids_.assign(std::size_t{1} << bits_, 0);
+    queries_.assign(ids_.size(), 0);
+    count_ = 0;
+    for (std::size_t i = 0; i < ids.size(); ++i)
+      if (queries[i] == query_) insert(ids[i]);
+  }
+
+  std::vector<std::uint32_t> ids_, queries_;
+  int bits_ = 0;
+  std::size_t count_ = 0;
   std::uint32_t query_ = 0;
 };
 
@@ -173,8 +199,8 @@ void TinIndex::section(Point2 a, Point2 b, std::vector<SectionPoint>& out) const
   // larger than a cell is listed in every cell it covers, and on a cliff's
   // contours beside a plain's that is hundreds (sorting the list to drop
   // them was a sixth of a tile job's time).
-  thread_local SeenMarks seen;
-  seen.begin(tin_.triangles.size());
+  thread_local SeenSet seen;
+  seen.begin();
   std::vector<std::uint32_t> candidates;
   grid_->forEachCellOfSegment(a.x, a.y, b.x, b.y, [&](std::size_t c) {
     grid_->forEachInCell(c, [&](std::uint32_t t) {
