@@ -442,11 +442,12 @@ class ArchiveStore final : public TileStore {
     requireValidKey(key, path_);
     const auto connection = pool_.acquire();
     sqlite3* db = connection->db.get();
-    const auto shortValue = [&](std::uint64_t end) {
+    // `end`: where the value ends; none when it is not there.
+    const auto shortValue = [&](std::optional<std::uint64_t> end) {
       return ioError("cannot read the key '" + std::string(key) + "': " +
-                         (end == 0 ? std::string("it is not in the archive")
-                                   : "it ends at byte " + std::to_string(end)) +
-                         ", before " + std::to_string(offset + out.size()),
+                         (end ? "it ends at byte " + std::to_string(*end) + ", before " +
+                                    std::to_string(offset + out.size())
+                              : std::string("it is not in the archive")),
                      fileLocation(path_));
     };
     if (!connection->rowid) {  // a media table without rowids: the value whole
@@ -455,11 +456,11 @@ class ArchiveStore final : public TileStore {
       bindText(stmt, 1, key);
       const int rc = sqlite3_step(stmt);
       if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw readFailure(key, db);
-      const auto size =
-          rc == SQLITE_ROW ? static_cast<std::uint64_t>(sqlite3_column_bytes(stmt, 0)) : 0;
-      if (rc == SQLITE_DONE || size < offset + out.size()) throw shortValue(size);
-      std::memcpy(out.data(), static_cast<const char*>(sqlite3_column_blob(stmt, 0)) + offset,
-                  out.size());
+      if (rc == SQLITE_DONE) throw shortValue(std::nullopt);
+      const auto* data = static_cast<const char*>(sqlite3_column_blob(stmt, 0));  // then its size
+      const auto size = static_cast<std::uint64_t>(sqlite3_column_bytes(stmt, 0));
+      if (size < offset + out.size()) throw shortValue(size);
+      if (!out.empty()) std::memcpy(out.data(), data + offset, out.size());
       return;
     }
     sqlite3_int64 rowid = 0;
@@ -468,7 +469,7 @@ class ArchiveStore final : public TileStore {
       const StepScope scope(stmt);
       bindText(stmt, 1, key);
       const int rc = sqlite3_step(stmt);
-      if (rc == SQLITE_DONE) throw shortValue(0);
+      if (rc == SQLITE_DONE) throw shortValue(std::nullopt);
       if (rc != SQLITE_ROW) throw readFailure(key, db);
       rowid = sqlite3_column_int64(stmt, 0);
     }
