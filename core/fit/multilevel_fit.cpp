@@ -145,30 +145,28 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
 
     auto tris = mesh.triangles();
     st.triangles = tris.size();
-    KeyIndexMap triIndex;
-    triIndex.reserve(tris.size());
     std::vector<Triangle> triVerts(tris.size());
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      triIndex.insert(tris[t].path, static_cast<std::uint32_t>(t));
+    for (std::size_t t = 0; t < tris.size(); ++t)
       triVerts[t] = {mesh.vertexId(tris[t].l), mesh.vertexId(tris[t].r), mesh.vertexId(tris[t].a)};
-    }
     std::vector<Point2> positions(nv);
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
     // The smoothing matrix first: its temporaries are gone before the
-    // moments are summed (lower peak memory).
+    // moments are summed, and the triangles' index is made after it (lower
+    // peak memory).
     std::optional<SparseMatrix> energy;
     if (options.smoothing != Smoothing::None) {
       SparseMatrix built = smoothingMatrix(options.smoothing, positions, triVerts);
       energy.emplace().swap(built);  // swapped, not copied (see assembleSystem)
     }
+    KeyIndexMap triIndex;
+    triIndex.reserve(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      triIndex.insert(tris[t].path, static_cast<std::uint32_t>(t));
     const std::vector<TriangleMoments>& moments =
-        levelMoments(mesh, level, data, tris, triIndex, triVerts, positions, triOf, previousTris,
-                     previousMoments, threads);
-    // The triangles' paths and their index served the moments alone (which
-    // keep a copy of the paths for the next level): let go before the solve.
-    std::vector<BinaryTriangle>().swap(tris);
-    triIndex = KeyIndexMap();
+        levelMoments(mesh, level, data, std::move(tris), triIndex, triVerts, positions, triOf,
+                     previousTris, previousMoments, threads);
+    triIndex = KeyIndexMap();  // served the moments alone: let go before the solve
     PenalizedSystem sys = assembleSystem(nv, triVerts, moments, std::move(energy),
                                          options.lambdaFactor, options.lambdaAbsolute);
     st.lambda = sys.lambda;

@@ -168,7 +168,7 @@ std::vector<FixedVertex> activateFixedPoints(BinaryTriangulation& mesh, std::spa
 
 const std::vector<TriangleMoments>& levelMoments(
     const BinaryTriangulation& mesh, int level, const SortedData& data,
-    std::span<const BinaryTriangle> tris, const KeyIndexMap& triIndex,
+    std::vector<BinaryTriangle>&& tris, const KeyIndexMap& triIndex,
     std::span<const Triangle> triVerts, std::span<const Point2> positions,
     std::vector<std::uint32_t>& triOf, std::vector<BinaryTriangle>& previousTris,
     std::vector<TriangleMoments>& previousMoments, unsigned threads) {
@@ -179,26 +179,26 @@ const std::vector<TriangleMoments>& levelMoments(
   // in part order, are the same whichever level computed them.
   const auto& pts = data.points;
   const auto& weights = data.weights;
-  std::vector<std::uint32_t> remap(previousTris.size());
-  for (std::size_t t = 0; t < previousTris.size(); ++t) {
+  // Δ_{k−1}'s triangles and then its moments are let go as soon as they
+  // are read (at the finest levels each is tens of MB).
+  const std::size_t previousCount = previousTris.size();
+  std::vector<std::uint32_t> remap(previousCount);
+  NestedLocator locator;
+  std::vector<std::int32_t> locatorRoot(previousCount, 0);
+  for (std::size_t t = 0; t < previousCount; ++t) {
     remap[t] = level == 1 ? KeyIndexMap::kNone : triIndex.find(previousTris[t].path);
+    if (remap[t] == KeyIndexMap::kNone)
+      locatorRoot[t] = locator.add(mesh, triIndex, previousTris[t]);
   }
+  std::vector<BinaryTriangle>().swap(previousTris);
   std::vector<TriangleMoments> moments(tris.size());
   std::vector<char> fresh(tris.size(), 1);
-  NestedLocator locator;
-  std::vector<std::int32_t> locatorRoot(previousTris.size(), 0);
-  for (std::size_t t = 0; t < previousTris.size(); ++t) {
-    if (remap[t] == KeyIndexMap::kNone) {
-      locatorRoot[t] = locator.add(mesh, triIndex, previousTris[t]);
-    } else {
-      moments[remap[t]] = previousMoments[t];
-      fresh[remap[t]] = 0;
-    }
+  for (std::size_t t = 0; t < previousCount; ++t) {
+    if (remap[t] == KeyIndexMap::kNone) continue;
+    moments[remap[t]] = previousMoments[t];
+    fresh[remap[t]] = 0;
   }
-  // Δ_{k−1}'s triangles and moments are read: let go before this level's
-  // points are located and summed (at the finest levels each is tens of MB).
   std::vector<TriangleMoments>().swap(previousMoments);
-  std::vector<BinaryTriangle>().swap(previousTris);
   // Every point's triangle first (a point in a triangle kept from Δ_{k−1}
   // is only renumbered).
   forEachPart(pts.size(), threads, [&](std::size_t b, std::size_t e, unsigned) {
@@ -258,7 +258,7 @@ const std::vector<TriangleMoments>& levelMoments(
   for (const auto& sums : aside) {
     for (const auto& [t, m] : sums) moments[t].merge(m);
   }
-  previousTris.assign(tris.begin(), tris.end());
+  previousTris = std::move(tris);
   previousMoments = std::move(moments);
   return previousMoments;
 }

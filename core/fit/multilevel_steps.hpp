@@ -61,12 +61,12 @@ std::vector<FixedVertex> activateFixedPoints(BinaryTriangulation& mesh, std::spa
 /// Triangles of the previous level that were not split keep their moments;
 /// the points of split ones are located again below their old triangle and
 /// accumulated. Updates triOf (each point's current triangle), previousTris
-/// and previousMoments to this level's, and returns previousMoments (the
-/// moments move there: one copy serves this level's system and the next
-/// level). `level` 1 locates from the roots.
+/// (`tris` moves there) and previousMoments to this level's, and returns
+/// previousMoments (the moments move there: one copy serves this level's
+/// system and the next level). `level` 1 locates from the roots.
 const std::vector<TriangleMoments>& levelMoments(
     const BinaryTriangulation& mesh, int level, const SortedData& data,
-    std::span<const BinaryTriangle> tris, const KeyIndexMap& triIndex,
+    std::vector<BinaryTriangle>&& tris, const KeyIndexMap& triIndex,
     std::span<const Triangle> triVerts, std::span<const Point2> positions,
     std::vector<std::uint32_t>& triOf, std::vector<BinaryTriangle>& previousTris,
     std::vector<TriangleMoments>& previousMoments, unsigned threads);
