@@ -134,15 +134,11 @@ int insertInPieces(sqlite3* db, sqlite3_stmt* insert, std::string_view key, std:
                    fileLocation(archive), "check free disk space and permissions");
   };
   if (rc != SQLITE_OK) throw failure();
-  std::vector<char> piece(static_cast<std::size_t>(std::min<std::uint64_t>(size, kCopyPieceBytes)));
-  for (std::uint64_t offset = 0; offset < size;) {
-    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(piece.size(), size - offset));
-    fill(offset, {piece.data(), n});
-    if (sqlite3_blob_write(blob.get(), piece.data(), static_cast<int>(n),
+  copyPieces(size, fill, [&](std::uint64_t offset, std::span<const char> piece) {
+    if (sqlite3_blob_write(blob.get(), piece.data(), static_cast<int>(piece.size()),
                            static_cast<int>(offset)) != SQLITE_OK)
       throw failure();
-    offset += n;
-  }
+  });
   return SQLITE_DONE;
 }
 
@@ -364,10 +360,7 @@ class ArchiveStore final : public TileStore {
     const auto connection = pool_.acquire();
     sqlite3_stmt* stmt = connection->get.get();
     const StepScope scope(stmt);
-    bindText(stmt, 1, key);
-    const int rc = sqlite3_step(stmt);
-    if (rc == SQLITE_DONE) return std::nullopt;
-    if (rc != SQLITE_ROW) throw readFailure(key, connection->db.get());
+    if (!stepKey(stmt, key, connection->db.get())) return std::nullopt;
     const auto* data = static_cast<const char*>(sqlite3_column_blob(stmt, 0));
     const int size = sqlite3_column_bytes(stmt, 0);
     return data ? std::string(data, static_cast<std::size_t>(size)) : std::string();
@@ -378,10 +371,7 @@ class ArchiveStore final : public TileStore {
     const auto connection = pool_.acquire();
     sqlite3_stmt* stmt = connection->contains.get();
     const StepScope scope(stmt);
-    bindText(stmt, 1, key);
-    const int rc = sqlite3_step(stmt);
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw readFailure(key, connection->db.get());
-    return rc == SQLITE_ROW;
+    return stepKey(stmt, key, connection->db.get());
   }
 
   [[nodiscard]] std::vector<std::string> keys() const override {
@@ -422,18 +412,14 @@ class ArchiveStore final : public TileStore {
     const auto connection = pool_.acquire();
     sqlite3_stmt* stmt = connection->size.get();
     const StepScope scope(stmt);
-    bindText(stmt, 1, key);
-    const int rc = sqlite3_step(stmt);
-    if (rc == SQLITE_DONE) return std::nullopt;
-    if (rc != SQLITE_ROW) throw readFailure(key, connection->db.get());
+    if (!stepKey(stmt, key, connection->db.get())) return std::nullopt;
     // length() counts a text's characters (another tool may store text):
     // its size is then that of the bytes get() gives.
     if (sqlite3_column_int(stmt, 1) == 0)
       return static_cast<std::uint64_t>(sqlite3_column_int64(stmt, 0));  // NULL content: 0
     sqlite3_stmt* text = connection->get.get();
     const StepScope textScope(text);
-    bindText(text, 1, key);
-    if (sqlite3_step(text) != SQLITE_ROW) throw readFailure(key, connection->db.get());
+    if (!stepKey(text, key, connection->db.get())) throw readFailure(key, connection->db.get());
     (void)sqlite3_column_blob(text, 0);  // as bytes, not converted
     return static_cast<std::uint64_t>(sqlite3_column_bytes(text, 0));
   }
@@ -453,10 +439,7 @@ class ArchiveStore final : public TileStore {
     if (!connection->rowid) {  // a media table without rowids: the value whole
       sqlite3_stmt* stmt = connection->get.get();
       const StepScope scope(stmt);
-      bindText(stmt, 1, key);
-      const int rc = sqlite3_step(stmt);
-      if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw readFailure(key, db);
-      if (rc == SQLITE_DONE) throw shortValue(std::nullopt);
+      if (!stepKey(stmt, key, db)) throw shortValue(std::nullopt);
       const auto* data = static_cast<const char*>(sqlite3_column_blob(stmt, 0));  // then its size
       const auto size = static_cast<std::uint64_t>(sqlite3_column_bytes(stmt, 0));
       if (size < offset + out.size()) throw shortValue(size);
@@ -467,10 +450,7 @@ class ArchiveStore final : public TileStore {
     {
       sqlite3_stmt* stmt = connection->rowid.get();
       const StepScope scope(stmt);
-      bindText(stmt, 1, key);
-      const int rc = sqlite3_step(stmt);
-      if (rc == SQLITE_DONE) throw shortValue(std::nullopt);
-      if (rc != SQLITE_ROW) throw readFailure(key, db);
+      if (!stepKey(stmt, key, db)) throw shortValue(std::nullopt);
       rowid = sqlite3_column_int64(stmt, 0);
     }
     sqlite3_blob* opened = nullptr;
@@ -510,6 +490,16 @@ class ArchiveStore final : public TileStore {
   }
 
  private:
+  // Binds `key` as ?1 of `stmt` and steps it: true on a row, false when the
+  // key is not there; throws readFailure otherwise. The caller's StepScope
+  // resets it.
+  bool stepKey(sqlite3_stmt* stmt, std::string_view key, sqlite3* db) const {
+    bindText(stmt, 1, key);
+    const int rc = sqlite3_step(stmt);
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw readFailure(key, db);
+    return rc == SQLITE_ROW;
+  }
+
   Error readFailure(std::string_view key, sqlite3* db) const {
     return ioError("cannot read the key '" + std::string(key) + "': " + message(db),
                    fileLocation(path_));

@@ -144,15 +144,9 @@ class DirectoryStore final : public TileStore {
 
   void putInPieces(std::string_view key, std::uint64_t size, const PieceFiller& fill) override {
     writeAtomically(key, [&](int fd) {
-      std::vector<char> piece(
-          static_cast<std::size_t>(std::min<std::uint64_t>(size, kCopyPieceBytes)));
-      for (std::uint64_t offset = 0; offset < size;) {
-        const auto n =
-            static_cast<std::size_t>(std::min<std::uint64_t>(piece.size(), size - offset));
-        fill(offset, {piece.data(), n});
-        writeAll(fd, {piece.data(), n}, key);
-        offset += n;
-      }
+      copyPieces(size, fill, [&](std::uint64_t, std::span<const char> piece) {
+        writeAll(fd, {piece.data(), piece.size()}, key);
+      });
     });
   }
 

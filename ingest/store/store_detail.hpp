@@ -42,6 +42,12 @@ std::string bytesForCopy(const TileStore& source, const std::string& key);
 /// bytesForCopy.
 std::uint64_t sizeForCopy(const TileStore& source, std::string_view key);
 
+/// putInPieces' loop: pieces of at most kCopyPieceBytes of a value of `size`
+/// bytes, each filled by `fill` and then handed to write(offset, piece), in
+/// order, through one buffer.
+void copyPieces(std::uint64_t size, const TileStore::PieceFiller& fill,
+                const std::function<void(std::uint64_t offset, std::span<const char> piece)>& write);
+
 /// What a folder holds, for requireReplaceable: whether it has the marker
 /// key, and the files that are not the store's (not a store key, not a
 /// put's temporary file; symbolic links and special files count too).

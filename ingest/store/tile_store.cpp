@@ -130,6 +130,17 @@ std::uint64_t sizeForCopy(const TileStore& source, std::string_view key) {
   return *size;
 }
 
+void copyPieces(std::uint64_t size, const TileStore::PieceFiller& fill,
+                const std::function<void(std::uint64_t offset, std::span<const char> piece)>& write) {
+  std::vector<char> piece(static_cast<std::size_t>(std::min<std::uint64_t>(size, kCopyPieceBytes)));
+  for (std::uint64_t offset = 0; offset < size;) {
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(piece.size(), size - offset));
+    fill(offset, {piece.data(), n});
+    write(offset, {piece.data(), n});
+    offset += n;
+  }
+}
+
 }  // namespace detail
 
 void copyValue(const TileStore& from, std::string_view key, TileStore& to) {
