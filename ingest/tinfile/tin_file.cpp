@@ -38,7 +38,8 @@ constexpr std::array<std::array<std::uint32_t, 256>, 8> makeCrcTables() {
     t[0][i] = c;
   }
   for (std::size_t k = 1; k < 8; ++k)
-    for (std::uint32_t i = 0; i < 256; ++i) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFFu];
+    for (std::uint32_t i = 0; i < 256; ++i)
+      t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFFu];
   return t;
 }
 constexpr auto kCrcTables = makeCrcTables();
@@ -57,7 +58,8 @@ T getLe(const std::uint8_t* in) {
   using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
                                std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
   U bits = 0;
-  for (std::size_t i = 0; i < sizeof(T); ++i) bits |= static_cast<U>(static_cast<U>(in[i]) << (8 * i));
+  for (std::size_t i = 0; i < sizeof(T); ++i)
+    bits |= static_cast<U>(static_cast<U>(in[i]) << (8 * i));
   return std::bit_cast<T>(bits);
 }
 
@@ -73,7 +75,9 @@ struct TinSource : TinDataView {
 struct MeshSource : MeshView {
   explicit MeshSource(const Mesh& m) : MeshView{m}, edges(m.constrainedEdges()) {}
   std::vector<TinData::ConstrainedEdge> edges;
-  [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const { return edges; }
+  [[nodiscard]] const std::vector<TinData::ConstrainedEdge>& constrainedEdges() const {
+    return edges;
+  }
 };
 
 std::size_t blockCount(std::size_t records, std::size_t perBlock) {
@@ -141,8 +145,9 @@ class PayloadWriter {
     if (size == 0) return;
     if (overlapChecksum_ && size >= kOverlapFrom) {
       // If the sink throws, the future's destructor waits for the checksum.
-      auto crc = std::async(std::launch::async,
-                            [data, size, before = crc_] { return crc32({data, size}, before); });
+      auto crc = std::async(std::launch::async, [data, size, before = crc_] {
+        return crc32({data, size}, before);
+      });
       sink_(data, size);
       crc_ = crc.get();
       return;
@@ -281,7 +286,7 @@ BlockIndex makeBlockIndex(const Source& tin, std::uint32_t perBlock = kTinBlockR
   const auto& points = tin.points();
   // Each block's records are encoded as the file holds them, for its CRC.
   auto blocks = [perBlock = std::size_t{perBlock}](std::size_t records, auto&& encode,
-                                                  auto&& boxOf) {
+                                                   auto&& boxOf) {
     std::vector<BlockEntry> out(blockCount(records, perBlock));
     ByteString bytes;
     for (std::size_t b = 0; b < out.size(); ++b) {
@@ -392,8 +397,7 @@ class PayloadReader {
 
  private:
   void need(std::size_t n, const char* what) const {
-    if (static_cast<std::size_t>(end_ - p_) < n)
-      corrupt(std::string("it ends inside the ") + what);
+    if (static_cast<std::size_t>(end_ - p_) < n) corrupt(std::string("it ends inside the ") + what);
   }
   const std::uint8_t* p_;
   const std::uint8_t* end_;
@@ -447,16 +451,26 @@ std::uint32_t crc32Combine(std::uint32_t first, std::uint32_t second, std::uint6
 
 std::string_view featureKindName(FeatureKind kind) {
   switch (kind) {
-    case FeatureKind::Other: return "other";
-    case FeatureKind::SpotHeight: return "spot-height";
-    case FeatureKind::Contour: return "contour";
-    case FeatureKind::Road: return "road";
-    case FeatureKind::River: return "river";
-    case FeatureKind::Lake: return "lake";
-    case FeatureKind::Boundary: return "boundary";
-    case FeatureKind::Hole: return "hole";
-    case FeatureKind::Raster: return "raster";
-    case FeatureKind::BreakLine: return "breakline";
+    case FeatureKind::Other:
+      return "other";
+    case FeatureKind::SpotHeight:
+      return "spot-height";
+    case FeatureKind::Contour:
+      return "contour";
+    case FeatureKind::Road:
+      return "road";
+    case FeatureKind::River:
+      return "river";
+    case FeatureKind::Lake:
+      return "lake";
+    case FeatureKind::Boundary:
+      return "boundary";
+    case FeatureKind::Hole:
+      return "hole";
+    case FeatureKind::Raster:
+      return "raster";
+    case FeatureKind::BreakLine:
+      return "breakline";
   }
   return "unknown";
 }
@@ -487,8 +501,8 @@ void checkContract(const Source& tin, const std::string& name, bool forWriting) 
   for (std::size_t t = 0; t < tin.triangleCount(); ++t) {
     const auto& tri = tin.triangle(t);
     if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv)
-      bad("triangle " + std::to_string(t) + " refers to a vertex beyond the " +
-          std::to_string(nv) + " vertices");
+      bad("triangle " + std::to_string(t) + " refers to a vertex beyond the " + std::to_string(nv) +
+          " vertices");
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
       bad("triangle " + std::to_string(t) + " repeats a vertex");
   }
@@ -867,8 +881,7 @@ void checkBlockIndex(const PayloadReader& r, const TinData& tin, std::uint32_t v
 TinData decodeTin(std::string_view bytes, const std::string& name) {
   const CheckedPayload payload =
       checkedPayload({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, name);
-  if (crc32(payload.bytes) != payload.crc)
-    corruptFile("the payload checksum does not match", name);
+  if (crc32(payload.bytes) != payload.crc) corruptFile("the payload checksum does not match", name);
 
   PayloadReader r(payload.bytes.data(), payload.bytes.size(), name);
   TinData tin;
@@ -1074,8 +1087,8 @@ TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
   const auto checkBlock = [&](BlockSection s, std::size_t b, std::uint32_t crc,
                               const std::uint8_t* section, std::size_t recordSize) {
     const std::size_t first = b * perBlock;
-    const std::span<const std::uint8_t> bytes(
-        section + first * recordSize, std::min(perBlock, records[s] - first) * recordSize);
+    const std::span<const std::uint8_t> bytes(section + first * recordSize,
+                                              std::min(perBlock, records[s] - first) * recordSize);
     if (crc32(bytes) != crc)
       r.corrupt(std::string(kBlockSectionNames[s]) + " block " + std::to_string(b) +
                 " does not match its checksum");
@@ -1110,23 +1123,23 @@ TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
   };
 
   std::vector<std::uint32_t> keep;
-  eachKept(kTriangleBlocks, [&](std::size_t b, std::uint32_t crc, std::size_t first,
-                                std::size_t end) {
-    checkBlock(kTriangleBlocks, b, crc, triangleRecords, 12);
-    for (std::size_t k = first; k < end; ++k) {
-      const std::uint8_t* p = triangleRecords + 12 * k;
-      const std::array<std::uint32_t, 3> t{getLe<std::uint32_t>(p), getLe<std::uint32_t>(p + 4),
-                                           getLe<std::uint32_t>(p + 8)};
-      if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
-        r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
-                  std::to_string(nv) + " vertices");
-      if (mayMeet({t[0], t[1], t[2]}) &&
-          meetsRegion(region, {vertexAt(t[0]), vertexAt(t[1]), vertexAt(t[2])})) {
-        tin.triangles.push_back(t);
-        keep.insert(keep.end(), t.begin(), t.end());
-      }
-    }
-  });
+  eachKept(
+      kTriangleBlocks, [&](std::size_t b, std::uint32_t crc, std::size_t first, std::size_t end) {
+        checkBlock(kTriangleBlocks, b, crc, triangleRecords, 12);
+        for (std::size_t k = first; k < end; ++k) {
+          const std::uint8_t* p = triangleRecords + 12 * k;
+          const std::array<std::uint32_t, 3> t{getLe<std::uint32_t>(p), getLe<std::uint32_t>(p + 4),
+                                               getLe<std::uint32_t>(p + 8)};
+          if (t[0] >= nv || t[1] >= nv || t[2] >= nv)
+            r.corrupt("triangle " + std::to_string(k) + " refers to a vertex beyond the " +
+                      std::to_string(nv) + " vertices");
+          if (mayMeet({t[0], t[1], t[2]}) &&
+              meetsRegion(region, {vertexAt(t[0]), vertexAt(t[1]), vertexAt(t[2])})) {
+            tin.triangles.push_back(t);
+            keep.insert(keep.end(), t.begin(), t.end());
+          }
+        }
+      });
   eachKept(kEdgeBlocks, [&](std::size_t b, std::uint32_t crc, std::size_t first, std::size_t end) {
     checkBlock(kEdgeBlocks, b, crc, edgeRecords, 12);
     for (std::size_t k = first; k < end; ++k) {

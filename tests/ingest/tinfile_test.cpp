@@ -38,9 +38,12 @@ void expectSame(const TinData& a, const TinData& b) {
   ASSERT_EQ(a.vertices.size(), b.vertices.size());
   for (std::size_t i = 0; i < a.vertices.size(); ++i) {
     // Bit-for-bit, including the sign of zero.
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.vertices[i].x), std::bit_cast<std::uint64_t>(b.vertices[i].x));
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.vertices[i].y), std::bit_cast<std::uint64_t>(b.vertices[i].y));
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.vertices[i].z), std::bit_cast<std::uint64_t>(b.vertices[i].z));
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.vertices[i].x),
+              std::bit_cast<std::uint64_t>(b.vertices[i].x));
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.vertices[i].y),
+              std::bit_cast<std::uint64_t>(b.vertices[i].y));
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.vertices[i].z),
+              std::bit_cast<std::uint64_t>(b.vertices[i].z));
   }
   EXPECT_EQ(a.triangles, b.triangles);
   EXPECT_EQ(a.constrainedEdges, b.constrainedEdges);
@@ -155,8 +158,10 @@ TinData gridTin(std::uint32_t n) {
     }
   }
   tin.features = {{FeatureKind::Road, "roads.gpkg, layer roads, feature 7"}};
-  for (std::uint32_t i = 0; i + 1 < n; ++i) tin.constrainedEdges.push_back({at(i, n / 2), at(i + 1, n / 2), 0});
-  for (std::uint32_t k = 0; k + 1 < n; ++k) tin.constrainedEdges.push_back({at(k, k), at(k + 1, k + 1), 0});
+  for (std::uint32_t i = 0; i + 1 < n; ++i)
+    tin.constrainedEdges.push_back({at(i, n / 2), at(i + 1, n / 2), 0});
+  for (std::uint32_t k = 0; k + 1 < n; ++k)
+    tin.constrainedEdges.push_back({at(k, k), at(k + 1, k + 1), 0});
   for (std::uint32_t k = 0; k < 3; ++k)
     tin.vertices.push_back({431000.0 + 10.5 * k, 4512000.0 + n + 5.0, 1.0});
   return tin;
@@ -174,7 +179,8 @@ TinData expectedPart(const TinData& tin, const tiles::Rect& region, const tiles:
     return tiles::boundsOf(corners).overlaps(region);
   };
   for (const auto& t : tin.triangles)
-    if (meets({t[0], t[1], t[2]})) part.triangles.push_back(t), keep[t[0]] = keep[t[1]] = keep[t[2]] = 1;
+    if (meets({t[0], t[1], t[2]}))
+      part.triangles.push_back(t), keep[t[0]] = keep[t[1]] = keep[t[2]] = 1;
   for (const auto& e : tin.constrainedEdges)
     if (meets({e.a, e.b})) part.constrainedEdges.push_back(e), keep[e.a] = keep[e.b] = 1;
   std::vector<std::uint32_t> number(tin.vertices.size(), 0);
@@ -222,8 +228,8 @@ TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
       {{x + 100.25, y + 40, x + 130, y + 80}, {x + 90, y + 30, x + 140, y + 90}},  // a square
       {{x + 20, y + 140, x + 60, y + 170}, {x, y + 120, x + 100, y + 190}},  // across the road
       {{x - 50, y - 50, x - 10, y - 10}, {x - 50, y - 50, x - 10, y - 10}},  // off the TIN
-      {{x, y + 305, x + 30, y + 306}, {x, y + 300, x + 30, y + 310}},  // the lone vertices
-      {{-1e9, -1e9, 1e9, 1e9}, {-1e9, -1e9, 1e9, 1e9}},                // all of it
+      {{x, y + 305, x + 30, y + 306}, {x, y + 300, x + 30, y + 310}},        // the lone vertices
+      {{-1e9, -1e9, 1e9, 1e9}, {-1e9, -1e9, 1e9, 1e9}},                      // all of it
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(testing::Message() << c.region.x0 - x << " " << c.region.y0 - y);
@@ -309,18 +315,20 @@ TEST(TinFile, APartRefusesDamageInWhatItReads) {
   const std::filesystem::path file = dir / "grid.tin";
   const double x = 431000, y = 4512000;
   const tiles::Rect nearOrigin{x + 1, y + 1, x + 5, y + 5};  // in the first blocks
-  const std::size_t vertices = 4 + tin.crs.size() + 8;      // where the vertex records start
+  const std::size_t vertices = 4 + tin.crs.size() + 8;       // where the vertex records start
   const std::size_t triangles = vertices + 24 * tin.vertices.size() + 8;
   const std::size_t lastTriangle = triangles + 12 * (tin.triangles.size() - 1);
-  const auto partError = [&] { return errorOf([&] { (void)readTinFilePart(file, nearOrigin, nearOrigin); }); };
+  const auto partError = [&] {
+    return errorOf([&] { (void)readTinFilePart(file, nearOrigin, nearOrigin); });
+  };
   struct Case {
     std::size_t at;
     const char* says;  // "" when the part does not read it
   };
-  for (const Case c : {Case{6, "CRS, the counts and the features"},  // in the CRS text
-                       Case{vertices + 5, "vertex block 0 does not match"},
-                       Case{triangles + 30, "triangle block 0 does not match"},
-                       Case{lastTriangle, ""}}) {
+  for (const Case c :
+       {Case{6, "CRS, the counts and the features"},  // in the CRS text
+        Case{vertices + 5, "vertex block 0 does not match"},
+        Case{triangles + 30, "triangle block 0 does not match"}, Case{lastTriangle, ""}}) {
     writeTinFile(file, tin);
     damage(file, c.at);
     SCOPED_TRACE(c.at);
