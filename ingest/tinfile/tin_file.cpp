@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <limits>
 #include <tuple>
@@ -87,14 +88,22 @@ std::size_t blockCount(std::size_t records, std::size_t perBlock) {
 constexpr std::size_t kBlockEntrySize = 4 * 8 + 4;
 
 std::uint64_t blockIndexSize(std::size_t vertices, std::size_t triangles, std::size_t edges,
-                             std::size_t perBlock) {
-  const std::size_t blocks = blockCount(vertices, perBlock) + blockCount(triangles, perBlock) +
-                             blockCount(edges, perBlock);
-  return 4 + 4 + 3 * 8 + kBlockEntrySize * blocks + 4;
+                             std::size_t perBlock, std::size_t perGroup,
+                             std::uint32_t version = kTinFormatVersion) {
+  if (version < 2) return 0;
+  std::size_t blocks = 0, groups = 0;
+  for (const std::size_t records : {vertices, triangles, edges}) {
+    blocks += blockCount(records, perBlock);
+    groups += blockCount(blockCount(records, perBlock), perGroup);
+  }
+  const std::uint64_t summary = version < 3 ? 0 : 4 + 3 * 8 + kBlockEntrySize * groups + 4;
+  return 4 + 4 + 3 * 8 + kBlockEntrySize * blocks + summary + 4;
 }
 
 template <class Source>
-std::uint64_t payloadSize(const Source& tin, std::size_t perBlock = kTinBlockRecords) {
+std::uint64_t payloadSize(const Source& tin, std::size_t perBlock = kTinBlockRecords,
+                          std::size_t perGroup = kTinIndexGroupBlocks,
+                          std::uint32_t version = kTinFormatVersion) {
   std::uint64_t size = 4 + tin.crs().size();
   size += 8 + 24ull * tin.points().size();
   size += 8 + 12ull * tin.triangleCount();
@@ -102,7 +111,7 @@ std::uint64_t payloadSize(const Source& tin, std::size_t perBlock = kTinBlockRec
   for (const auto& f : tin.features()) size += 1 + 4 + f.source.size();
   size += 8 + 12ull * tin.constrainedEdges().size();
   return size + blockIndexSize(tin.points().size(), tin.triangleCount(),
-                               tin.constrainedEdges().size(), perBlock);
+                               tin.constrainedEdges().size(), perBlock, perGroup, version);
 }
 
 // Buffers payload bytes, keeps the running CRC, and hands full buffers to a sink.
@@ -204,10 +213,11 @@ std::uint32_t writePayload(const Source& tin, BlockIndexBytes&& blockIndex, Sink
   return w.crc();
 }
 
-std::array<std::uint8_t, kTinHeaderSize> makeHeader(std::uint64_t payload, std::uint32_t crc) {
+std::array<std::uint8_t, kTinHeaderSize> makeHeader(std::uint64_t payload, std::uint32_t crc,
+                                                    std::uint32_t version = kTinFormatVersion) {
   std::array<std::uint8_t, kTinHeaderSize> h{};
   std::memcpy(h.data(), kMagic.data(), kMagic.size());
-  putLe(h.data() + 8, kTinFormatVersion);
+  putLe(h.data() + 8, version);
   putLe(h.data() + 12, std::uint32_t{0});
   putLe(h.data() + 16, payload);
   putLe(h.data() + 24, crc);
@@ -226,9 +236,17 @@ constexpr std::array<const char*, 3> kBlockSectionNames = {"vertex", "triangle",
                                                            "constrained-edge"};
 struct BlockIndex {
   std::uint32_t recordsPerBlock = kTinBlockRecords;
+  std::uint32_t blocksPerGroup = kTinIndexGroupBlocks;  ///< of the summary (version 3)
   std::uint32_t frameCrc = 0;
   std::array<std::vector<BlockEntry>, 3> sections;
 };
+
+void unite(tiles::Rect& box, const tiles::Rect& other) {
+  box.x0 = std::min(box.x0, other.x0);
+  box.y0 = std::min(box.y0, other.y0);
+  box.x1 = std::max(box.x1, other.x1);
+  box.y1 = std::max(box.y1, other.y1);
+}
 
 void include(tiles::Rect& box, const Point3& p) {
   box.x0 = std::min(box.x0, p.x);
@@ -268,9 +286,11 @@ class ByteString {
 };
 
 template <class Source>
-BlockIndex makeBlockIndex(const Source& tin, std::uint32_t perBlock = kTinBlockRecords) {
+BlockIndex makeBlockIndex(const Source& tin, std::uint32_t perBlock = kTinBlockRecords,
+                          std::uint32_t perGroup = kTinIndexGroupBlocks) {
   BlockIndex index;
   index.recordsPerBlock = perBlock;
+  index.blocksPerGroup = perGroup;
   ByteString frame;
   frame.putString(tin.crs());
   frame.put(static_cast<std::uint64_t>(tin.points().size()));
@@ -333,19 +353,43 @@ BlockIndex makeBlockIndex(const Source& tin, std::uint32_t perBlock = kTinBlockR
   return index;
 }
 
-std::string encodeBlockIndex(const BlockIndex& index) {
+/// The block index as a file of `version` (2 or 3) holds it: version 3
+/// adds the summary of its groups of entries.
+std::string encodeBlockIndex(const BlockIndex& index, std::uint32_t version = kTinFormatVersion) {
   ByteString out;
   out.put(index.recordsPerBlock);
   out.put(index.frameCrc);
-  for (const auto& section : index.sections) {
-    out.put(static_cast<std::uint64_t>(section.size()));
-    for (const auto& block : section) {
-      out.put(block.box.x0);
-      out.put(block.box.y0);
-      out.put(block.box.x1);
-      out.put(block.box.y1);
-      out.put(block.crc);
+  const auto putEntry = [&out](const tiles::Rect& box, std::uint32_t crc) {
+    out.put(box.x0);
+    out.put(box.y0);
+    out.put(box.x1);
+    out.put(box.y1);
+    out.put(crc);
+  };
+  std::array<std::size_t, 3> entriesAt{};
+  for (std::size_t s = 0; s < 3; ++s) {
+    out.put(static_cast<std::uint64_t>(index.sections[s].size()));
+    entriesAt[s] = out.bytes.size();
+    for (const auto& block : index.sections[s]) putEntry(block.box, block.crc);
+  }
+  if (version >= 3) {
+    const std::size_t summaryAt = out.bytes.size();
+    const std::size_t perGroup = index.blocksPerGroup;
+    out.put(index.blocksPerGroup);
+    for (std::size_t s = 0; s < 3; ++s) {
+      const auto& blocks = index.sections[s];
+      out.put(static_cast<std::uint64_t>(blockCount(blocks.size(), perGroup)));
+      for (std::size_t first = 0; first < blocks.size(); first += perGroup) {
+        const std::size_t end = std::min(blocks.size(), first + perGroup);
+        tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+        for (std::size_t b = first; b < end; ++b) unite(box, blocks[b].box);
+        const std::uint32_t crc = crc32(std::string_view(out.bytes).substr(
+            entriesAt[s] + kBlockEntrySize * first, kBlockEntrySize * (end - first)));
+        putEntry(box, crc);
+      }
     }
+    const std::uint32_t head = crc32(std::string_view(out.bytes).substr(0, 8));
+    out.put(crc32(std::string_view(out.bytes).substr(summaryAt), head));
   }
   out.put(crc32(out.bytes));
   return std::move(out.bytes);
@@ -527,20 +571,29 @@ void checkTinContract(const TinData& tin, const std::string& name, bool forWriti
   checkContract(TinSource{{tin}}, name, forWriting);
 }
 
-std::string encodeTin(const TinData& tin, std::uint32_t recordsPerBlock) {
-  if (recordsPerBlock == 0) throw internalError("encodeTin: blocks of 0 records");
+std::string encodeTin(const TinData& tin, std::uint32_t recordsPerBlock,
+                      std::uint32_t blocksPerGroup, std::uint32_t version) {
+  if (recordsPerBlock == 0 || blocksPerGroup == 0)
+    throw internalError("encodeTin: blocks of 0 records or groups of 0 blocks");
+  if (version == 0 || version > kTinFormatVersion)
+    throw internalError("encodeTin: no .tin format version " + std::to_string(version));
   checkTinContract(tin, "(memory)", true);
   std::string out;
   const TinSource source{{tin}};
-  const std::uint64_t size = payloadSize(source, recordsPerBlock);
+  const std::uint64_t size = payloadSize(source, recordsPerBlock, blocksPerGroup, version);
   out.reserve(kTinHeaderSize + size);
   out.resize(kTinHeaderSize);
   auto sink = [&out](const std::uint8_t* data, std::size_t n) {
     out.append(reinterpret_cast<const char*>(data), n);
   };
   const std::uint32_t crc = writePayload(
-      source, [&] { return encodeBlockIndex(makeBlockIndex(source, recordsPerBlock)); }, sink);
-  const auto header = makeHeader(size, crc);
+      source,
+      [&]() -> std::string {
+        if (version < 2) return {};
+        return encodeBlockIndex(makeBlockIndex(source, recordsPerBlock, blocksPerGroup), version);
+      },
+      sink);
+  const auto header = makeHeader(size, crc, version);
   std::memcpy(out.data(), header.data(), header.size());
   return out;
 }
@@ -860,8 +913,8 @@ void renumberPart(TinData& tin, std::vector<std::uint32_t> keep, VertexAt&& vert
   tin.vertices = std::move(vertices);
 }
 
-/// Checks what follows the sections: nothing in version 1; in version 2 the
-/// block index, which must be the one `tin` gives.
+/// Checks what follows the sections: nothing in version 1; from version 2 on
+/// the block index, which must be the one `tin` gives.
 void checkBlockIndex(const PayloadReader& r, const TinData& tin, std::uint32_t version) {
   if (version < 2) {
     if (r.remaining() != 0) r.corrupt("bytes left over after the last section");
@@ -870,7 +923,18 @@ void checkBlockIndex(const PayloadReader& r, const TinData& tin, std::uint32_t v
   if (r.remaining() < 4) r.corrupt("it ends inside the block index");
   const auto perBlock = getLe<std::uint32_t>(r.position());
   if (perBlock == 0) r.corrupt("the block index has blocks of 0 records");
-  const std::string expected = encodeBlockIndex(makeBlockIndex(TinSource{{tin}}, perBlock));
+  std::uint32_t perGroup = kTinIndexGroupBlocks;
+  if (version >= 3) {  // the summary follows the three sections' entries
+    std::uint64_t summaryAt = 8;
+    for (const std::size_t n :
+         {tin.vertices.size(), tin.triangles.size(), tin.constrainedEdges.size()})
+      summaryAt += 8 + kBlockEntrySize * blockCount(n, perBlock);
+    if (r.remaining() < summaryAt + 4) r.corrupt("it ends inside the block index");
+    perGroup = getLe<std::uint32_t>(r.position() + summaryAt);
+    if (perGroup == 0) r.corrupt("the block index summary has groups of 0 entries");
+  }
+  const std::string expected =
+      encodeBlockIndex(makeBlockIndex(TinSource{{tin}}, perBlock, perGroup), version);
   if (r.remaining() != expected.size() ||
       std::memcmp(r.position(), expected.data(), expected.size()) != 0)
     r.corrupt("its block index does not match its sections");
@@ -937,6 +1001,20 @@ class MappedFile {
   void readInOrder() const {
     if (data_) ::madvise(const_cast<std::uint8_t*>(data_), size_, MADV_SEQUENTIAL);
   }
+  /// Copies `n` bytes of the file from `at` (in bytes()) into `out` by
+  /// reading the file, not the mapping: no page of it comes to count in the
+  /// process's memory. False when the file cannot be read.
+  bool copy(const std::uint8_t* at, std::size_t n, std::uint8_t* out) const {
+    auto offset = static_cast<off_t>(at - data_);
+    while (n > 0) {
+      const ssize_t got = ::pread(fd_, out, n, offset);
+      if (got <= 0) return false;
+      out += got;
+      offset += got;
+      n -= static_cast<std::size_t>(got);
+    }
+    return true;
+  }
   /// Gives back the pages wholly before `upTo`, which have been read: they
   /// stop counting in the process's memory (a second read maps them again).
   void release(const std::uint8_t* upTo) const {
@@ -987,9 +1065,194 @@ TinPart readPartThrough(const MappedFile& file, const CheckedPayload& payload,
   return part;
 }
 
-/// A version 2 file's part, through its block index: the frame (CRS, counts,
-/// features) and the index are read whole and checked, then only the blocks
-/// the part needs, each checked against its CRC.
+/// What the part of a file keeps of its block index: the triangle and edge
+/// blocks whose boxes meet its region, the vertex blocks whose boxes meet
+/// its vertex region, and the box and CRC of any vertex block it asks for.
+struct PartIndex {
+  struct KeptBlock {
+    std::size_t block;
+    std::uint32_t crc;
+  };
+  /// A vertex block's box in floats rounded outward (the test it serves only
+  /// rules triangles out), and its CRC.
+  struct VertexBlock {
+    std::array<float, 4> box;  // x0, y0, x1, y1
+    std::uint32_t crc;
+    static VertexBlock of(const BlockEntry& e) {
+      return {
+          {roundedDown(e.box.x0), roundedDown(e.box.y0), roundedUp(e.box.x1), roundedUp(e.box.y1)},
+          e.crc};
+    }
+  };
+  std::size_t perBlock = 0;
+  std::uint32_t frameCrc = 0;
+  std::array<std::vector<KeptBlock>, 3> keptBlocks;  // of the triangles and the edges
+  std::vector<std::size_t> vertexRegionBlocks;
+  /// The vertex blocks by groups of vertexGroupBlocks, each read when first
+  /// asked for (readVertexGroup; version 3) or all at once (version 2).
+  std::size_t vertexGroupBlocks = 1;
+  std::vector<std::vector<VertexBlock>> vertexGroups;
+  std::function<std::vector<VertexBlock>(std::size_t group)> readVertexGroup;
+
+  const VertexBlock& vertexBlock(std::size_t b) {
+    const std::size_t g = b / vertexGroupBlocks;
+    if (vertexGroups[g].empty()) vertexGroups[g] = readVertexGroup(g);
+    return vertexGroups[g][b % vertexGroupBlocks];
+  }
+};
+
+BlockEntry blockEntryAt(const std::uint8_t* p) {
+  return {{getLe<double>(p), getLe<double>(p + 8), getLe<double>(p + 16), getLe<double>(p + 24)},
+          getLe<std::uint32_t>(p + 32)};
+}
+
+/// A version 2 block index, read through once, its CRC following, and given
+/// back to the kernel as it goes (at 10⁹ vertices it is about 105 MB): every
+/// vertex block is kept, and the triangle and edge blocks that meet the region.
+PartIndex readWholeIndex(const MappedFile& file, PayloadReader& r,
+                         const std::array<std::size_t, 3>& records, const tiles::Rect& region,
+                         const tiles::Rect& vertexRegion, std::uint64_t& bytesRead) {
+  PartIndex index;
+  const std::uint8_t* from = r.position();
+  std::uint32_t indexCrc = 0;
+  const std::uint8_t* crcUpTo = from;
+  const auto followIndex = [&] {
+    indexCrc = crc32({crcUpTo, static_cast<std::size_t>(r.position() - crcUpTo)}, indexCrc);
+    crcUpTo = r.position();
+    file.release(crcUpTo);
+  };
+  index.perBlock = r.get<std::uint32_t>("block index");
+  if (index.perBlock == 0) r.corrupt("the block index has blocks of 0 records");
+  index.frameCrc = r.get<std::uint32_t>("block index");
+  constexpr std::size_t kIndexWindow = std::size_t{8} << 20;
+  for (std::size_t s = 0; s < 3; ++s) {
+    const std::size_t blocks = r.getCount(kBlockEntrySize, "block index");
+    if (blocks != blockCount(records[s], index.perBlock))
+      r.corrupt("the block index lists " + std::to_string(blocks) + " " + kBlockSectionNames[s] +
+                " blocks for " + std::to_string(records[s]) + " records");
+    std::vector<PartIndex::VertexBlock> vertexBlocks;
+    if (s == kVertexBlocks) vertexBlocks.reserve(blocks);
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const BlockEntry entry = blockEntryAt(r.skip(1, kBlockEntrySize, "block index"));
+      if (s == kVertexBlocks) {
+        vertexBlocks.push_back(PartIndex::VertexBlock::of(entry));
+        if (entry.box.overlaps(vertexRegion)) index.vertexRegionBlocks.push_back(b);
+      } else if (entry.box.overlaps(region)) {
+        index.keptBlocks[s].push_back({b, entry.crc});
+      }
+      if (static_cast<std::size_t>(r.position() - crcUpTo) >= kIndexWindow) followIndex();
+    }
+    if (s == kVertexBlocks) {
+      index.vertexGroupBlocks = std::max<std::size_t>(1, blocks);
+      index.vertexGroups.push_back(std::move(vertexBlocks));
+    }
+  }
+  followIndex();
+  const std::size_t indexSize = static_cast<std::size_t>(r.position() - from);
+  if (r.get<std::uint32_t>("block index") != indexCrc)
+    r.corrupt("the block index checksum does not match");
+  if (r.remaining() != 0) r.corrupt("bytes left over after the block index");
+  bytesRead += indexSize + 4;
+  return index;
+}
+
+/// A version 3 block index through its summary: the summary is read and
+/// checked, then only the groups of entries whose boxes meet the regions,
+/// each checked against its CRC in the summary, and any other group of
+/// vertex blocks when one of its blocks is asked for.
+PartIndex readIndexSummary(const MappedFile& file, PayloadReader& r,
+                           const std::array<std::size_t, 3>& records, const tiles::Rect& region,
+                           const tiles::Rect& vertexRegion, std::uint64_t& bytesRead) {
+  PartIndex index;
+  const std::uint8_t* head = r.position();
+  index.perBlock = r.get<std::uint32_t>("block index");
+  if (index.perBlock == 0) r.corrupt("the block index has blocks of 0 records");
+  index.frameCrc = r.get<std::uint32_t>("block index");
+  std::array<std::size_t, 3> blocks{};
+  std::array<const std::uint8_t*, 3> entries{};
+  for (std::size_t s = 0; s < 3; ++s) {
+    blocks[s] = r.getCount(kBlockEntrySize, "block index");
+    if (blocks[s] != blockCount(records[s], index.perBlock))
+      r.corrupt("the block index lists " + std::to_string(blocks[s]) + " " + kBlockSectionNames[s] +
+                " blocks for " + std::to_string(records[s]) + " records");
+    entries[s] = r.skip(blocks[s], kBlockEntrySize, "block index");
+  }
+  const std::uint8_t* summary = r.position();
+  const std::size_t perGroup = r.get<std::uint32_t>("block index summary");
+  if (perGroup == 0) r.corrupt("the block index summary has groups of 0 entries");
+  std::array<const std::uint8_t*, 3> groups{};
+  for (std::size_t s = 0; s < 3; ++s) {
+    const std::size_t n = r.getCount(kBlockEntrySize, "block index summary");
+    if (n != blockCount(blocks[s], perGroup))
+      r.corrupt("the block index summary lists " + std::to_string(n) + " " + kBlockSectionNames[s] +
+                " groups for " + std::to_string(blocks[s]) + " blocks");
+    groups[s] = r.skip(n, kBlockEntrySize, "block index summary");
+  }
+  const std::size_t summarySize = static_cast<std::size_t>(r.position() - summary);
+  if (r.get<std::uint32_t>("block index summary") !=
+      crc32({summary, summarySize}, crc32({head, 8})))
+    r.corrupt("the block index summary checksum does not match");
+  (void)r.get<std::uint32_t>("block index");  // the whole index's CRC: readTinFile checks it
+  if (r.remaining() != 0) r.corrupt("bytes left over after the block index");
+  file.release(r.position());  // what the frame and the summary brought in
+  bytesRead += 8 + 3 * 8 + summarySize + 4 + 4;
+
+  // Group g of section s: its box, and its entries once checked.
+  const auto groupBox = [&groups](std::size_t s, std::size_t g) {
+    return blockEntryAt(groups[s] + kBlockEntrySize * g).box;
+  };
+  // The entries are read from the file, not through the mapping, so that
+  // they do not stay in the process's memory: their copies do, and only
+  // the vertex groups' are kept.
+  const auto readGroup = [&file, &r, &bytesRead, blocks, entries, groups, perGroup](std::size_t s,
+                                                                                    std::size_t g) {
+    const std::size_t first = g * perGroup;
+    std::vector<std::uint8_t> bytes(kBlockEntrySize * std::min(perGroup, blocks[s] - first));
+    if (!file.copy(entries[s] + kBlockEntrySize * first, bytes.size(), bytes.data()))
+      r.corrupt("the block index cannot be read");
+    if (crc32(bytes) != blockEntryAt(groups[s] + kBlockEntrySize * g).crc)
+      r.corrupt(std::string("the block index's ") + kBlockSectionNames[s] + " group " +
+                std::to_string(g) + " does not match its checksum");
+    bytesRead += bytes.size();
+    std::vector<BlockEntry> out;
+    out.reserve(bytes.size() / kBlockEntrySize);
+    for (std::size_t i = 0; i < bytes.size(); i += kBlockEntrySize)
+      out.push_back(blockEntryAt(bytes.data() + i));
+    return out;
+  };
+  index.vertexGroupBlocks = perGroup;
+  index.vertexGroups.resize(blockCount(blocks[kVertexBlocks], perGroup));
+  index.readVertexGroup = [readGroup](std::size_t g) {
+    std::vector<PartIndex::VertexBlock> out;
+    for (const BlockEntry& e : readGroup(kVertexBlocks, g))
+      out.push_back(PartIndex::VertexBlock::of(e));
+    return out;
+  };
+  for (std::size_t g = 0; g < index.vertexGroups.size(); ++g) {
+    if (!groupBox(kVertexBlocks, g).overlaps(vertexRegion)) continue;
+    index.vertexGroups[g] = index.readVertexGroup(g);
+    for (std::size_t i = 0; i < index.vertexGroups[g].size(); ++i) {
+      const std::array<float, 4>& b = index.vertexGroups[g][i].box;
+      if (tiles::Rect{b[0], b[1], b[2], b[3]}.overlaps(vertexRegion))
+        index.vertexRegionBlocks.push_back(g * perGroup + i);
+    }
+  }
+  for (const BlockSection s : {kTriangleBlocks, kEdgeBlocks}) {
+    for (std::size_t g = 0; g < blockCount(blocks[s], perGroup); ++g) {
+      if (!groupBox(s, g).overlaps(region)) continue;
+      const std::vector<BlockEntry> group = readGroup(s, g);
+      for (std::size_t i = 0; i < group.size(); ++i)
+        if (group[i].box.overlaps(region))
+          index.keptBlocks[s].push_back({g * perGroup + i, group[i].crc});
+    }
+  }
+  return index;
+}
+
+/// A part of a file of version 2 on, through its block index: the frame
+/// (CRS, counts, features) is read whole and checked, and what the part needs
+/// of the index (PartIndex), then only the blocks the part needs, each
+/// checked against its CRC.
 TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
                          const std::string& name, const tiles::Rect& region,
                          const tiles::Rect& vertexRegion) {
@@ -1022,67 +1285,14 @@ TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
   frameFrom(from);
   const std::uint8_t* edgeRecords = r.skip(ne, 12, "constrained edges");
 
-  // The index is read through once, its CRC following, and given back to
-  // the kernel as it goes (at 10⁹ vertices it is about 105 MB, and every
-  // shard reads it). Kept of it: every vertex block's box (in floats rounded
-  // outward, for the test below that only rules triangles out) and CRC, and
-  // of the triangle and edge blocks only those whose boxes meet the region.
-  struct VertexBlock {
-    std::array<float, 4> box;  // x0, y0, x1, y1
-    std::uint32_t crc;
-  };
-  struct KeptBlock {
-    std::size_t block;
-    std::uint32_t crc;
-  };
-  std::vector<VertexBlock> vertexBlocks;
-  std::vector<std::size_t> vertexRegionBlocks;  // the vertex blocks whose boxes meet vertexRegion
-  std::array<std::vector<KeptBlock>, 3> keptBlocks;  // triangle and edge blocks meeting the region
-  from = r.position();
-  std::uint32_t indexCrc = 0;
-  const std::uint8_t* crcUpTo = from;
-  const auto followIndex = [&] {
-    indexCrc = crc32({crcUpTo, static_cast<std::size_t>(r.position() - crcUpTo)}, indexCrc);
-    crcUpTo = r.position();
-    file.release(crcUpTo);
-  };
-  const std::size_t perBlock = r.get<std::uint32_t>("block index");
-  if (perBlock == 0) r.corrupt("the block index has blocks of 0 records");
-  const std::uint32_t indexFrameCrc = r.get<std::uint32_t>("block index");
   const std::array<std::size_t, 3> records{nv, nt, ne};
-  constexpr std::size_t kIndexWindow = std::size_t{8} << 20;
-  for (std::size_t s = 0; s < 3; ++s) {
-    const std::size_t blocks = r.getCount(kBlockEntrySize, "block index");
-    if (blocks != blockCount(records[s], perBlock))
-      r.corrupt("the block index lists " + std::to_string(blocks) + " " + kBlockSectionNames[s] +
-                " blocks for " + std::to_string(records[s]) + " records");
-    if (s == kVertexBlocks) vertexBlocks.reserve(blocks);
-    for (std::size_t b = 0; b < blocks; ++b) {
-      tiles::Rect box;
-      box.x0 = r.get<double>("block index");
-      box.y0 = r.get<double>("block index");
-      box.x1 = r.get<double>("block index");
-      box.y1 = r.get<double>("block index");
-      const auto crc = r.get<std::uint32_t>("block index");
-      if (s == kVertexBlocks) {
-        vertexBlocks.push_back(
-            {{roundedDown(box.x0), roundedDown(box.y0), roundedUp(box.x1), roundedUp(box.y1)},
-             crc});
-        if (box.overlaps(vertexRegion)) vertexRegionBlocks.push_back(b);
-      } else if (box.overlaps(region)) {
-        keptBlocks[s].push_back({b, crc});
-      }
-      if (static_cast<std::size_t>(r.position() - crcUpTo) >= kIndexWindow) followIndex();
-    }
-  }
-  followIndex();
-  const std::size_t indexSize = static_cast<std::size_t>(r.position() - from);
-  if (r.get<std::uint32_t>("block index") != indexCrc)
-    r.corrupt("the block index checksum does not match");
-  if (r.remaining() != 0) r.corrupt("bytes left over after the block index");
-  if (frameCrc != indexFrameCrc)
+  PartIndex index = payload.version < 3
+                        ? readWholeIndex(file, r, records, region, vertexRegion, part.bytesRead)
+                        : readIndexSummary(file, r, records, region, vertexRegion, part.bytesRead);
+  if (frameCrc != index.frameCrc)
     r.corrupt("the checksum of the CRS, the counts and the features does not match");
-  part.bytesRead += kTinHeaderSize + indexSize + 4;
+  part.bytesRead += kTinHeaderSize;
+  const std::size_t perBlock = index.perBlock;
 
   const auto checkBlock = [&](BlockSection s, std::size_t b, std::uint32_t crc,
                               const std::uint8_t* section, std::size_t recordSize) {
@@ -1094,18 +1304,18 @@ TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
                 " does not match its checksum");
     part.bytesRead += bytes.size();
   };
-  std::vector<char> vertexBlockChecked(vertexBlocks.size(), 0);
+  std::vector<char> vertexBlockChecked(blockCount(nv, perBlock), 0);
   const auto vertexAt = [&](std::uint32_t v) {
     const std::size_t b = v / perBlock;
     if (!vertexBlockChecked[b]) {
-      checkBlock(kVertexBlocks, b, vertexBlocks[b].crc, vertexRecords, 24);
+      checkBlock(kVertexBlocks, b, index.vertexBlock(b).crc, vertexRecords, 24);
       vertexBlockChecked[b] = 1;
     }
     const std::uint8_t* p = vertexRecords + std::size_t{24} * v;
     return Point3{getLe<double>(p), getLe<double>(p + 8), getLe<double>(p + 16)};
   };
   const auto eachKept = [&](BlockSection s, auto&& each) {
-    for (const KeptBlock& k : keptBlocks[s])
+    for (const PartIndex::KeptBlock& k : index.keptBlocks[s])
       each(k.block, k.crc, k.block * perBlock, std::min(records[s], (k.block + 1) * perBlock));
   };
 
@@ -1115,7 +1325,7 @@ TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
   const auto mayMeet = [&](std::initializer_list<std::uint32_t> vertices) {
     tiles::Rect box{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (const std::uint32_t v : vertices) {
-      const std::array<float, 4>& b = vertexBlocks[v / perBlock].box;
+      const std::array<float, 4>& b = index.vertexBlock(v / perBlock).box;
       include(box, {b[0], b[1], 0.0});
       include(box, {b[2], b[3], 0.0});
     }
@@ -1155,7 +1365,7 @@ TinPart readPartByBlocks(const MappedFile& file, const CheckedPayload& payload,
       }
     }
   });
-  for (const std::size_t b : vertexRegionBlocks) {
+  for (const std::size_t b : index.vertexRegionBlocks) {
     for (std::size_t v = b * perBlock; v < std::min(nv, (b + 1) * perBlock); ++v)
       if (vertexRegion.contains(vertexAt(static_cast<std::uint32_t>(v)).xy()))
         keep.push_back(static_cast<std::uint32_t>(v));
@@ -1190,6 +1400,17 @@ TinFileHeader readTinFileHeader(const std::filesystem::path& path) {
   const MappedFile file(path, name);
   const CheckedPayload payload = checkedPayload(file.bytes(), name);
   return {payload.version, payload.fileCrc};
+}
+
+void requireCurrentTinFormat(const std::filesystem::path& path) {
+  const TinFileHeader header = readTinFileHeader(path);
+  if (header.version < kTinFormatVersion)
+    throw inputError(".tin format version " + std::to_string(header.version) +
+                         " is older than the format " + std::to_string(kTinFormatVersion) +
+                         " the shards of a tiling job read their parts of",
+                     fileLocation(path.string()),
+                     "rewrite it in this format with `tinsmith export " + path.string() +
+                         " --format tin -o NEW.tin`, then tile NEW.tin in shards");
 }
 
 TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region,

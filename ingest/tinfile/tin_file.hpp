@@ -16,7 +16,7 @@
 //     triangles         u64 n + n × (u32 a, b, c), counter-clockwise
 //     features          u64 n + n × (u8 FeatureKind, u32 length + UTF-8 source)
 //     constrained edges u64 n + n × (u32 a, u32 b, u32 feature), a < b
-//     block index       (version 2; what a reader of part of the file needs)
+//     block index       (version 2 on; what a reader of part of the file needs)
 //       u32 records a block, k (1024)
 //       u32 CRC-32 of the frame: the crs section, the vertex and triangle
 //           counts, the features section and the constrained-edge count, in
@@ -26,10 +26,20 @@
 //           f64 x0, y0, x1, y1  the box of its vertices, of its triangles'
 //                               corners, of its edges' ends
 //           u32 CRC-32          of its records' bytes
+//       summary (version 3; what lets a reader of part of the file read
+//       only the part of the index its region needs):
+//         u32 entries a group, g (1024)
+//         for the vertices, the triangles and the constrained edges:
+//           u64 groups ⌈blocks / g⌉ + per group of g entries (the last one shorter):
+//             f64 x0, y0, x1, y1  the union of its entries' boxes
+//             u32 CRC-32          of its entries' bytes
+//         u32 CRC-32 of the index's first 8 bytes (k and the frame's CRC)
+//             followed by the summary's bytes before it
 //       u32 CRC-32 of the index's bytes before it
 //
 // Python check of a file's payload: zlib.crc32(data[32:]) == header CRC.
-// Version 1 files (no block index) are still read, whole or in part.
+// Version 1 files (no block index) and version 2 files (no summary) are
+// still read, whole or in part.
 #pragma once
 
 #include <cstdint>
@@ -47,9 +57,11 @@
 
 namespace tinsmith::ingest {
 
-inline constexpr std::uint32_t kTinFormatVersion = 2;
+inline constexpr std::uint32_t kTinFormatVersion = 3;
 /// Records a block of the block index (the file says its own).
 inline constexpr std::uint32_t kTinBlockRecords = 1024;
+/// Index entries a group of the index's summary (the file says its own).
+inline constexpr std::uint32_t kTinIndexGroupBlocks = 1024;
 inline constexpr std::size_t kTinHeaderSize = 32;
 
 /// Writes `tin` atomically (temp file + rename; a failure leaves no file).
@@ -106,6 +118,11 @@ struct TinFileHeader {
   std::uint32_t fileCrc = 0;  ///< CRC-32 of the whole file, from the header alone
 };
 TinFileHeader readTinFileHeader(const std::filesystem::path& path);
+/// Throws inputError naming the file unless it is of kTinFormatVersion, as
+/// the shards of a tiling job need: they name their TIN by the CRC of its
+/// bytes in this format (encodeTin), and read their parts through its
+/// index's summary. The error says how to rewrite it (`tinsmith export`).
+void requireCurrentTinFormat(const std::filesystem::path& path);
 
 /// Part of a `.tin` file, for the tiles of one square (a shard's subtree,
 /// tiles::TilerOptions::region): the triangles whose boxes meet `region` (in
@@ -120,19 +137,26 @@ struct TinPart {
   std::size_t triangles = 0;    ///< in the whole file
   std::uint64_t bytesRead = 0;  ///< of the file's, each checked against its CRC
 };
-/// Reads the part with the file mapped. A version 2 file is read through its
-/// block index: only the blocks whose boxes meet the regions (and those of
-/// the vertices their triangles and edges use) are read, each checked
-/// against its own CRC, as are the header, the frame and the index; damage in
-/// a block the part does not read goes unseen here (readTinFile sees it). A
-/// version 1 file is read through, its checksum checked after the parse,
-/// and given back as it is read.
+/// Reads the part with the file mapped. A file of version 2 on is read
+/// through its block index: only the blocks whose boxes meet the regions
+/// (and those of the vertices their triangles and edges use) are read, each
+/// checked against its own CRC, as are the header and the frame; damage in
+/// a block the part does not read goes unseen here (readTinFile sees it).
+/// Of a version 3 index only the summary and the groups of entries the part
+/// needs are read, each checked against its CRC: what a part reads grows
+/// with the part, not with the file. A version 2 index is read through and
+/// checked whole. A version 1 file is read through, its checksum checked
+/// after the parse, and given back as it is read.
 TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region,
                         const tiles::Rect& vertexRegion);
 
 /// The exact bytes writeTinFile would write (for tests and tools); with
-/// another block size, those of a file readers read alike.
-std::string encodeTin(const TinData& tin, std::uint32_t recordsPerBlock = kTinBlockRecords);
+/// another block size or group size, those of a file readers read alike;
+/// with an older version (1 or 2), the bytes of a file written by an older
+/// tinsmith (for tests and benchmarks of what readers still read).
+std::string encodeTin(const TinData& tin, std::uint32_t recordsPerBlock = kTinBlockRecords,
+                      std::uint32_t blocksPerGroup = kTinIndexGroupBlocks,
+                      std::uint32_t version = kTinFormatVersion);
 /// Parses bytes as readTinFile does; `name` appears in error messages.
 TinData decodeTin(std::string_view bytes, const std::string& name);
 

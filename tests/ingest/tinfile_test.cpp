@@ -98,8 +98,10 @@ TEST(TinFile, BytesAreDeterministicAndMatchTheDocumentedLayout) {
   const std::uint64_t expectedPayload = 4 + tin.crs.size() + 8 + 24 * 5 + 8 + 12 * 4 + 8 +
                                         (5 + tin.features[0].source.size()) +
                                         (5 + tin.features[1].source.size()) + 8 + 12 * 3 +
-                                        // the block index: one block a section
-                                        4 + 4 + 3 * (8 + 36) + 4;
+                                        // the block index: one block a section,
+                                        4 + 4 + 3 * (8 + 36) +
+                                        // its summary: one group a section
+                                        4 + 3 * (8 + 36) + 4 + 4;
   EXPECT_EQ(a.size(), kTinHeaderSize + expectedPayload);
   std::uint32_t storedCrc = 0;
   for (int i = 3; i >= 0; --i) storedCrc = (storedCrc << 8) | static_cast<unsigned char>(a[24 + i]);
@@ -195,21 +197,49 @@ TinData expectedPart(const TinData& tin, const tiles::Rect& region, const tiles:
   return part;
 }
 
-/// The same TIN as a version 1 file: no block index.
-std::string versionOneBytes(const TinData& tin) {
-  const std::string v2 = encodeTin(tin);
+/// The same TIN as a file of an older version: version 1 (no block index)
+/// or 2 (a block index of `perBlock` records a block, without its summary).
+std::string olderVersionBytes(const TinData& tin, std::uint32_t version,
+                              std::uint32_t perBlock = kTinBlockRecords) {
+  const std::string v3 = encodeTin(tin, perBlock);
   std::uint64_t payload = 4 + tin.crs.size() + 8 + 24 * tin.vertices.size() + 8 +
                           12 * tin.triangles.size() + 8 + 8 + 12 * tin.constrainedEdges.size();
   for (const auto& f : tin.features) payload += 5 + f.source.size();
-  std::string bytes = v2.substr(0, kTinHeaderSize + payload);
-  const auto put = [&bytes](std::size_t at, std::uint64_t value, int size) {
+  const auto put = [](std::string& bytes, std::size_t at, std::uint64_t value, int size) {
     for (int i = 0; i < size; ++i) bytes[at + i] = static_cast<char>(value >> (8 * i));
   };
-  put(8, 1, 4);
-  put(16, payload, 8);
-  put(24, crc32(std::string_view(bytes).substr(kTinHeaderSize)), 4);
-  put(28, crc32(std::string_view(bytes).substr(0, 28)), 4);
+  std::string bytes = v3.substr(0, kTinHeaderSize + payload);
+  if (version == 2) {
+    std::uint64_t index = 4 + 4;
+    for (const std::size_t n :
+         {tin.vertices.size(), tin.triangles.size(), tin.constrainedEdges.size()})
+      index += 8 + 36 * ((n + perBlock - 1) / perBlock);
+    bytes += v3.substr(kTinHeaderSize + payload, index);
+    bytes += std::string(4, '\0');
+    put(bytes, bytes.size() - 4,
+        crc32(std::string_view(bytes).substr(kTinHeaderSize + payload, index)), 4);
+    payload += index + 4;
+  }
+  put(bytes, 8, version, 4);
+  put(bytes, 16, payload, 8);
+  put(bytes, 24, crc32(std::string_view(bytes).substr(kTinHeaderSize)), 4);
+  put(bytes, 28, crc32(std::string_view(bytes).substr(0, 28)), 4);
   return bytes;
+}
+std::string versionOneBytes(const TinData& tin) {
+  return olderVersionBytes(tin, 1);
+}
+
+TEST(TinFile, AnOlderVersionIsEncodedAsItsFilesHoldIt) {
+  const TinData tin = gridTin(40);
+  for (const std::uint32_t perBlock : {kTinBlockRecords, 7u}) {
+    EXPECT_EQ(encodeTin(tin, perBlock, kTinIndexGroupBlocks, 2),
+              olderVersionBytes(tin, 2, perBlock));
+    EXPECT_EQ(encodeTin(tin, perBlock, kTinIndexGroupBlocks, 1),
+              olderVersionBytes(tin, 1, perBlock));
+  }
+  EXPECT_THROW((void)encodeTin(tin, kTinBlockRecords, kTinIndexGroupBlocks, kTinFormatVersion + 1),
+               Error);
 }
 
 TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
@@ -217,7 +247,9 @@ TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
   const auto dir = test::scratchDir("tinfile-part");
   writeTinFile(dir / "grid.tin", tin);
   std::ofstream(dir / "v1.tin", std::ios::binary) << versionOneBytes(tin);
+  std::ofstream(dir / "v2.tin", std::ios::binary) << olderVersionBytes(tin, 2);
   expectSame(readTinFile(dir / "v1.tin"), tin);
+  expectSame(readTinFile(dir / "v2.tin"), tin);
   const auto size = std::filesystem::file_size(dir / "grid.tin");
   const std::uint32_t fileCrc = crc32(encodeTin(tin));
   const double x = 431000, y = 4512000;
@@ -249,6 +281,15 @@ TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
     expectSame(old.tin, expected);
     EXPECT_EQ(old.bytesRead, std::filesystem::file_size(dir / "v1.tin"));
     EXPECT_EQ(old.fileCrc, crc32(versionOneBytes(tin)));
+    // A version 2 file gives it too, its index read whole.
+    const TinPart two = readTinFilePart(dir / "v2.tin", c.region, c.vertices);
+    expectSame(two.tin, expected);
+    EXPECT_EQ(two.fileCrc, crc32(olderVersionBytes(tin, 2)));
+    if (c.region.x0 > -1e9) {
+      EXPECT_LT(two.bytesRead, size / 4);
+    } else {
+      EXPECT_EQ(two.bytesRead, std::filesystem::file_size(dir / "v2.tin"));
+    }
   }
 }
 
@@ -341,21 +382,106 @@ TEST(TinFile, APartRefusesDamageInWhatItReads) {
     }
     EXPECT_NE(errorOf([&] { (void)readTinFile(file); }).find("checksum"), std::string::npos);
   }
-  // The index itself: its checksum.
+  // The index's summary: its checksum (here in the last group's CRC).
   writeTinFile(file, tin);
   const auto size = std::filesystem::file_size(file);
-  damage(file, size - kTinHeaderSize - 20);
+  damage(file, size - kTinHeaderSize - 10);
+  EXPECT_NE(partError().find("block index summary checksum"), std::string::npos) << partError();
+  // A version 2 index: its checksum, read whole.
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << olderVersionBytes(tin, 2);
+  damage(file, std::filesystem::file_size(file) - kTinHeaderSize - 20);
   EXPECT_NE(partError().find("block index checksum"), std::string::npos) << partError();
 }
 
-TEST(TinFile, APartReadsAnIndexLargerThanItsWindowAndSeesDamageAtItsEnd) {
-  // One record a block: the index (36 bytes a block, 268 k blocks, 9.6 MB)
-  // is read through in more than one of the reader's 8 MB windows, its
-  // checksum following them; what the part keeps of it is the same.
+/// Where a section's block entries start in the payload of encodeTin(tin,
+/// perBlock), and where its groups' entries start in the index's summary.
+struct IndexLayout {
+  std::array<std::size_t, 3> entries{}, groups{};
+};
+IndexLayout indexLayout(const TinData& tin, std::size_t perBlock, std::size_t perGroup) {
+  std::size_t at = 4 + tin.crs.size() + 8 + 24 * tin.vertices.size() + 8 +
+                   12 * tin.triangles.size() + 8 + 8 + 12 * tin.constrainedEdges.size();
+  for (const auto& f : tin.features) at += 5 + f.source.size();
+  const std::array<std::size_t, 3> records{tin.vertices.size(), tin.triangles.size(),
+                                           tin.constrainedEdges.size()};
+  IndexLayout layout;
+  std::array<std::size_t, 3> blocks{};
+  at += 8;
+  for (std::size_t s = 0; s < 3; ++s) {
+    blocks[s] = (records[s] + perBlock - 1) / perBlock;
+    layout.entries[s] = at + 8;
+    at += 8 + 36 * blocks[s];
+  }
+  at += 4;
+  for (std::size_t s = 0; s < 3; ++s) {
+    layout.groups[s] = at + 8;
+    at += 8 + 36 * ((blocks[s] + perGroup - 1) / perGroup);
+  }
+  return layout;
+}
+
+TEST(TinFile, APartReadsOnlyTheGroupsOfTheIndexItNeeds) {
+  // One record a block: an index (36 bytes a block, 268 k blocks, 9.7 MB)
+  // as large as that of a TIN a thousand times larger at 1 024. The part
+  // reads the summary and the groups around its region; version 2 reads the
+  // whole index.
+  const TinData tin = gridTin(300);
+  const auto dir = test::scratchDir("tinfile-part-index-groups");
+  const std::filesystem::path file = dir / "grid.tin", old = dir / "v2.tin";
+  const std::string bytes = encodeTin(tin, 1);
+  std::ofstream(file, std::ios::binary) << bytes;
+  std::ofstream(old, std::ios::binary) << olderVersionBytes(tin, 2, 1);
+  const double x = 431000, y = 4512000;
+  const tiles::Rect region{x + 100, y + 150, x + 140, y + 170};
+  const tiles::Rect vertices{x + 90, y + 140, x + 150, y + 180};
+  const TinData expected = expectedPart(tin, region, vertices);
+  const TinPart part = readTinFilePart(file, region, vertices);
+  const TinPart whole = readTinFilePart(old, region, vertices);
+  expectSame(part.tin, expected);
+  expectSame(whole.tin, expected);
+  EXPECT_EQ(part.fileCrc, crc32(bytes));
+  EXPECT_LT(part.bytesRead, whole.bytesRead / 5)
+      << part.bytesRead << " against " << whole.bytesRead;
+  // Groups of 7 entries instead of 1 024: the same part, read from more groups.
+  std::ofstream(dir / "g7.tin", std::ios::binary) << encodeTin(tin, 1, 7);
+  expectSame(readTinFilePart(dir / "g7.tin", region, vertices).tin, expected);
+  expectSame(readTinFile(dir / "g7.tin"), tin);
+
+  // Damage in a group of entries the part reads, in one it does not, and in
+  // the summary.
+  const IndexLayout layout = indexLayout(tin, 1, kTinIndexGroupBlocks);
+  const std::size_t insideVertex = 160 * 300 + 120;          // a vertex in the region
+  const std::size_t insideTriangle = 2 * (160 * 299 + 120);  // a triangle in it
+  struct Case {
+    std::size_t at;
+    const char* says;  // "" when the part does not read it
+  };
+  for (const Case c : {Case{layout.entries[0] + 36 * insideVertex + 3, "vertex group"},
+                       Case{layout.entries[1] + 36 * insideTriangle + 33, "triangle group"},
+                       Case{layout.entries[0] + 36 * 5 + 3, ""},  // row 0
+                       Case{layout.groups[1] + 2, "summary checksum"}}) {
+    SCOPED_TRACE(c.at);
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+    damage(file, c.at);
+    const std::string msg = errorOf([&] { (void)readTinFilePart(file, region, vertices); });
+    if (*c.says) {
+      EXPECT_NE(msg.find(c.says), std::string::npos) << msg;
+      EXPECT_NE(msg.find("grid.tin"), std::string::npos) << msg;
+    } else {
+      EXPECT_EQ(msg, "(no error)");
+    }
+    EXPECT_NE(errorOf([&] { (void)readTinFile(file); }).find("checksum"), std::string::npos);
+  }
+}
+
+TEST(TinFile, AVersionTwoPartReadsAnIndexLargerThanItsWindowAndSeesDamageAtItsEnd) {
+  // One record a block: the version 2 index (36 bytes a block, 268 k
+  // blocks, 9.6 MB) is read through in more than one of the reader's 8 MB
+  // windows, its checksum following them; what the part keeps of it is the same.
   const TinData tin = gridTin(300);
   const auto dir = test::scratchDir("tinfile-part-big-index");
   const std::filesystem::path file = dir / "grid.tin";
-  std::string bytes = encodeTin(tin, 1);
+  std::string bytes = olderVersionBytes(tin, 2, 1);
   ASSERT_GT(bytes.size() - kTinHeaderSize - 24 * tin.vertices.size() - 12 * tin.triangles.size(),
             std::size_t{8} << 20);
   const double x = 431000, y = 4512000;
@@ -375,37 +501,41 @@ TEST(TinFile, NoDamagedByteGivesAWrongPart) {
   // Blocks of 64 records: many blocks, some read and some not. A flipped
   // byte anywhere is refused as damage or lies where the part does not read.
   const TinData tin = gridTin(24);
-  const std::string bytes = encodeTin(tin, 64);
+  // Also blocks of 8 in groups of 3 (many groups of the index's summary),
+  // and a version 2 file.
   const double x = 431000, y = 4512000;
   const tiles::Rect region{x + 3, y + 4, x + 9, y + 8}, vertices{x, y, x + 12, y + 12};
   const TinData expected = expectedPart(tin, region, vertices);
   const auto dir = test::scratchDir("tinfile-part-flips");
   const std::filesystem::path file = dir / "flip.tin";
-  std::size_t refused = 0, unread = 0;
-  for (std::size_t i = 0; i < bytes.size(); i += 7) {  // every 7th byte, each bit in turn
-    std::string damaged = bytes;
-    damaged[i] = static_cast<char>(damaged[i] ^ (1 << (i / 7 % 8)));
-    std::ofstream(file, std::ios::binary | std::ios::trunc) << damaged;
-    try {
-      const TinPart part = readTinFilePart(file, region, vertices);
-      SCOPED_TRACE(i);
-      expectSame(part.tin, expected);
-      EXPECT_EQ(part.fileCrc, crc32(bytes));
-      ++unread;
-    } catch (const Error& e) {
-      EXPECT_EQ(e.kind(), ErrorKind::Input) << i << ": " << e.what();
-      ++refused;
+  for (const std::string& bytes :
+       {encodeTin(tin, 64), encodeTin(tin, 8, 3), olderVersionBytes(tin, 2, 64)}) {
+    std::size_t refused = 0, unread = 0;
+    for (std::size_t i = 0; i < bytes.size(); i += 7) {  // every 7th byte, each bit in turn
+      std::string damaged = bytes;
+      damaged[i] = static_cast<char>(damaged[i] ^ (1 << (i / 7 % 8)));
+      std::ofstream(file, std::ios::binary | std::ios::trunc) << damaged;
+      try {
+        const TinPart part = readTinFilePart(file, region, vertices);
+        SCOPED_TRACE(i);
+        expectSame(part.tin, expected);
+        EXPECT_EQ(part.fileCrc, crc32(bytes));
+        ++unread;
+      } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Input) << i << ": " << e.what();
+        ++refused;
+      }
     }
+    EXPECT_GT(refused, 0u);
+    EXPECT_GT(unread, bytes.size() / 14);  // most blocks lie outside the region
   }
-  EXPECT_GT(refused, 0u);
-  EXPECT_GT(unread, bytes.size() / 14);  // most blocks lie outside the region
 }
 
 TEST(TinFile, AnIndexThatDisagreesWithItsSectionsIsRefused) {
   // Valid checksums over a wrong box: a writer's mistake, not damage in transit.
   const TinData tin = gridTin(20);
   std::string bytes = encodeTin(tin);
-  const std::size_t indexAt = bytes.size() - (4 + 4 + 3 * (8 + 36) + 4);
+  const std::size_t indexAt = bytes.size() - (4 + 4 + 3 * (8 + 36) + 4 + 3 * (8 + 36) + 4 + 4);
   bytes[indexAt + 4 + 4 + 8 + 8 * 2] ^= 0x01;  // the first vertex block's x1
   const auto resum = [&bytes](std::size_t from, std::size_t to, std::size_t at) {
     const std::uint32_t c = crc32(std::string_view(bytes).substr(from, to - from));

@@ -232,8 +232,9 @@ TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
             2);
 }
 
-TEST(SlurmCli, AFormatOneTinIsRefusedWithWhatToDo) {
-  // Its shards could not name it as the plan does (by its format 2 bytes).
+TEST(SlurmCli, AnOlderFormatTinIsRefusedWithWhatToDo) {
+  // Its shards could not name it as the plan does (by its bytes in the
+  // current format), nor read their parts through the index's summary.
   const fs::path dir = scratchDir("slurm-cli-format-1");
   const fs::path tin = dir / "hill.tin";
   ASSERT_EQ(makeHillTin(tin, "nx=21&ny=21&spacing=10").exitCode, 0);
@@ -260,8 +261,33 @@ TEST(SlurmCli, AFormatOneTinIsRefusedWithWhatToDo) {
   EXPECT_NE(r.exitCode, 0);
   EXPECT_NE(r.err.find("old.tin"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("format version 1"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("tinsmith tin"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("tinsmith export"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "work"));
+  // A shard given such a file, with the plan of the same TIN, refuses it
+  // too and says the same.
+  const fs::path plan = dir / "tiler.plan";
+  ASSERT_EQ(runTinsmith("tile " + tin.string() + " --tolerance 0.5 --until-zoom 1 --write-plan " +
+                        plan.string() + " -q -o " + (dir / "top.3dtiles").string())
+                .exitCode,
+            0);
+  const auto shard =
+      runTinsmith("tile " + old.string() + " --tolerance 0.5 --plan " + plan.string() +
+                  " --subtree 1/0/0 --unchecked-ancestors -o " + (dir / "shard.3dtiles").string());
+  EXPECT_NE(shard.exitCode, 0);
+  EXPECT_NE(shard.err.find("format version 1"), std::string::npos) << shard.err;
+  EXPECT_NE(shard.err.find("tinsmith export"), std::string::npos) << shard.err;
+  EXPECT_FALSE(fs::exists(dir / "shard.3dtiles"));
+  // What it says to do: the export gives the TIN's bytes in this format,
+  // which the job takes.
+  const fs::path again = dir / "again.tin";
+  const auto exported =
+      runTinsmith("export " + old.string() + " --format tin -o " + again.string());
+  ASSERT_EQ(exported.exitCode, 0) << exported.err;
+  EXPECT_EQ(readFile(again), readFile(tin));
+  EXPECT_EQ(runTinsmith("slurm " + again.string() + " --tolerance 0.5 --shard-zoom 1 --workdir " +
+                        (dir / "work").string() + " -o " + (dir / "out.3dtiles").string())
+                .exitCode,
+            0);
 }
 
 TEST(SlurmCli, ASubtreeOutsideThePyramidIsAnErrorUnlessEmptyIsOk) {

@@ -165,7 +165,7 @@ TEST(TinCli, InfoAndQueryDescribeTheTin) {
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["crs"], "EPSG:26912");
   EXPECT_EQ(j["vertices"], 300);
-  EXPECT_EQ(j["format_version"], 2);
+  EXPECT_EQ(j["format_version"], 3);
   EXPECT_GT(j["z_range"][1].get<double>(), j["z_range"][0].get<double>());
   r = runTinsmith("info " + tin.string());
   EXPECT_NE(r.out.find("EPSG:26912"), std::string::npos) << r.out;

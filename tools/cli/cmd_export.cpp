@@ -61,9 +61,14 @@ void reportGlb(const std::string& path, const ingest::GlbExport& g) {
 void addExportCommand(CLI::App& app) {
   auto opt = std::make_shared<ExportOptions>();
   auto* cmd =
-      app.add_subcommand("export", "Export a TIN: OBJ, PLY, EXR or GeoTIFF heightmap, single glb");
+      app.add_subcommand("export",
+                         "Export a TIN: OBJ, PLY, EXR or GeoTIFF heightmap, single glb, or the "
+                         ".tin itself in this tinsmith's format");
   cmd->add_option("tin", opt->tin, "The .tin file")->required();
-  cmd->add_option("--format", opt->format, "obj | ply | exr | tif | glb")->required();
+  cmd->add_option("--format", opt->format,
+                  "obj | ply | exr | tif | glb | tin (the same TIN in the .tin format this "
+                  "tinsmith writes, e.g. for an older file that tiling in shards refuses)")
+      ->required();
   addOutputOption(*cmd, opt->output, "File to write")->required();
   cmd->add_option("--cell", opt->cell, "Raster cell size in metres (exr, tif)");
   auto* glbGroup =
@@ -84,8 +89,8 @@ void addExportCommand(CLI::App& app) {
                            "(default: z are ellipsoidal heights)")};
   cmd->callback([opt, glbOnly] {
     const std::string& f = opt->format;
-    if (f != "obj" && f != "ply" && f != "exr" && f != "tif" && f != "glb")
-      throw usageError("unknown --format '" + f + "'", "use one of obj, ply, exr, tif, glb");
+    if (f != "obj" && f != "ply" && f != "exr" && f != "tif" && f != "glb" && f != "tin")
+      throw usageError("unknown --format '" + f + "'", "use one of obj, ply, exr, tif, glb, tin");
     if ((f == "exr" || f == "tif") && !opt->cell)
       throw usageError("--format " + f + " needs --cell (the raster cell size in metres)",
                        "e.g. --cell 1.0");
@@ -107,6 +112,8 @@ void addExportCommand(CLI::App& app) {
       ingest::writeObj(opt->output, tin);
     } else if (f == "ply") {
       ingest::writePly(opt->output, tin);
+    } else if (f == "tin") {
+      ingest::writeTinFile(opt->output, tin);
     } else {
       ingest::writeHeightmap(tin, *opt->cell, f, opt->output);
     }

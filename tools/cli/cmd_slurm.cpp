@@ -200,15 +200,9 @@ void runSlurm(const SlurmCliOptions& o) {
                      "give an empty or new --workdir: tinsmith slurm keeps its plan, scripts, "
                      "shards and logs there");
   }
-  // The shards and the plan name the TIN by the CRC of its format 2 bytes,
-  // which a subtree shard takes from the file's header.
-  const ingest::TinFileHeader header = ingest::readTinFileHeader(tin);
-  if (header.version < 2)
-    throw inputError(".tin format version " + std::to_string(header.version) +
-                         " has no block index for the shards to read their parts by",
-                     fileLocation(tin.string()),
-                     "build it again with this tinsmith's `tinsmith tin` (it writes format 2), "
-                     "then tile it in shards");
+  // The shards and the plan name the TIN by the CRC of its bytes in this
+  // format, which a subtree shard takes from the file's header.
+  ingest::requireCurrentTinFormat(tin);
   fs::create_directories(dir / "shards");
   fs::create_directories(dir / "logs");
   const int cpus = std::max(1, f.threads);

@@ -100,6 +100,7 @@ void addTileCommand(CLI::App& app) {
     // A shard below the root reads only its square of the TIN.
     TinData tin;
     if (o.plan && o.subtree && o.subtree->z > 0 && o.uncheckedAncestors) {
+      ingest::requireCurrentTinFormat(opt->tin);
       const tiles::Rect square = o.plan->tiler.geometry.bounds(*o.subtree);
       ingest::TinPart part =
           ingest::readTinFilePart(opt->tin, tiles::tilerReadRegion(square),

@@ -5,8 +5,10 @@
 // larger TIN: SRTM N44W072 (1.44 M vertices) at 1 record a block has the
 // index of a TIN of about 1.5·10⁹ vertices at the usual 1 024.
 //
-//   tin_part_bench write IN.tin OUT.tin RECORDS_PER_BLOCK
-//       the same TIN with another block size (a file every reader reads alike)
+//   tin_part_bench write IN.tin OUT.tin RECORDS_PER_BLOCK [VERSION]
+//       the same TIN with another block size (a file every reader reads
+//       alike), in the current format or an older one (2: the block index
+//       without its summary, which a part reads through)
 //   tin_part_bench square FILE.tin ZOOM X Y
 //       the square x0 y0 x1 y1 of the subtree Z/X/Y of the TIN's bounding square
 //   tin_part_bench read FILE.tin X0 Y0 X1 Y1
@@ -36,7 +38,7 @@ double peakMiB() {
 }
 
 int usage() {
-  std::cerr << "usage: tin_part_bench write IN.tin OUT.tin RECORDS_PER_BLOCK\n"
+  std::cerr << "usage: tin_part_bench write IN.tin OUT.tin RECORDS_PER_BLOCK [VERSION]\n"
                "       tin_part_bench square FILE.tin ZOOM X Y\n"
                "       tin_part_bench read FILE.tin X0 Y0 X1 Y1\n";
   return 2;
@@ -48,10 +50,13 @@ int main(int argc, char** argv) {
   using namespace tinsmith;
   const std::string mode = argc > 1 ? argv[1] : "";
   try {
-    if (mode == "write" && argc == 5) {
+    if (mode == "write" && (argc == 5 || argc == 6)) {
       const TinData tin = ingest::readTinFile(argv[2]);
+      const auto version =
+          argc == 6 ? static_cast<std::uint32_t>(std::stoul(argv[5])) : ingest::kTinFormatVersion;
       const std::string bytes =
-          ingest::encodeTin(tin, static_cast<std::uint32_t>(std::stoul(argv[4])));
+          ingest::encodeTin(tin, static_cast<std::uint32_t>(std::stoul(argv[4])),
+                            ingest::kTinIndexGroupBlocks, version);
       std::ofstream out(argv[3], std::ios::binary | std::ios::trunc);
       out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
       if (!out) throw std::runtime_error(std::string("cannot write ") + argv[3]);
