@@ -248,6 +248,9 @@ TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
   writeTinFile(dir / "grid.tin", tin);
   std::ofstream(dir / "v1.tin", std::ios::binary) << versionOneBytes(tin);
   std::ofstream(dir / "v2.tin", std::ios::binary) << olderVersionBytes(tin, 2);
+  // Small blocks in small groups: a region meets many groups, some in part.
+  std::ofstream(dir / "groups.tin", std::ios::binary) << encodeTin(tin, 16, 3);
+  expectSame(readTinFile(dir / "groups.tin"), tin);
   expectSame(readTinFile(dir / "v1.tin"), tin);
   expectSame(readTinFile(dir / "v2.tin"), tin);
   const auto size = std::filesystem::file_size(dir / "grid.tin");
@@ -289,6 +292,33 @@ TEST(TinFile, APartIsReadThroughTheBlockIndexAsDocumented) {
       EXPECT_LT(two.bytesRead, size / 4);
     } else {
       EXPECT_EQ(two.bytesRead, std::filesystem::file_size(dir / "v2.tin"));
+    }
+    const TinPart grouped = readTinFilePart(dir / "groups.tin", c.region, c.vertices);
+    expectSame(grouped.tin, expected);
+    if (c.region.x0 <= -1e9) {
+      EXPECT_EQ(grouped.bytesRead, std::filesystem::file_size(dir / "groups.tin"));
+    }
+  }
+}
+
+TEST(TinFile, APartOfATinWithoutTrianglesOrVerticesIsRead) {
+  // Sections with no blocks have no groups in the summary.
+  const auto dir = test::scratchDir("tinfile-part-empty");
+  TinData points;
+  points.crs = "EPSG:32612";
+  points.vertices = {{431000, 4512000, 1}, {431005, 4512003, 2}, {431100, 4512100, 3}};
+  TinData none;
+  none.crs = "EPSG:32612";
+  const tiles::Rect region{431000, 4512000, 431010, 4512010};
+  for (const TinData& tin : {points, none}) {
+    for (const std::uint32_t version : {2u, 3u}) {
+      SCOPED_TRACE(testing::Message() << tin.vertices.size() << " vertices, version " << version);
+      const auto file = dir / "t.tin";
+      std::ofstream(file, std::ios::binary | std::ios::trunc)
+          << encodeTin(tin, kTinBlockRecords, kTinIndexGroupBlocks, version);
+      const TinPart part = readTinFilePart(file, region, region);
+      expectSame(part.tin, expectedPart(tin, region, region));
+      EXPECT_EQ(part.tin.vertices.size(), tin.vertices.empty() ? 0u : 2u);
     }
   }
 }
