@@ -290,48 +290,19 @@ std::array<double, 4> thinPlateBetas(const Point2& s, const Point2& t, const Poi
 
 SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const Triangle> triangles) {
   // E = DᵀD with one row d_e = √L_e β_e per interior edge e (4 entries, on the
-  // stencil {s, t, l, r}), so that cᵀEc = Σ_e L_e (T_e f)². Built row by row
-  // (Gustavson): row i of E sums d_e,i · d_e over the edges whose stencil
-  // holds i, found through a vertex → stencil-slot index. The rows go
-  // straight into the matrix's own arrays, sized by a bound on its entries:
-  // at the finest levels of a fit this is the peak of its memory, and a
-  // matrix built aside and then copied held its entries twice.
+  // stencil {s, t, l, r}), so that cᵀEc = Σ_e L_e (T_e f)². At the finest
+  // levels of a fit this is the peak of its memory, so no row of D is
+  // stored: first the pattern of E (row i's columns are the vertices of the
+  // stencils that hold i, found through a vertex → edge index), written
+  // straight into the matrix's own arrays, sized by a bound on its entries;
+  // then each edge's row d_e, computed once in edge order, adds d_e,a · d_e,b
+  // to its 16 entries. Each entry thus sums its terms in edge order from
+  // 0, as a row-by-row product would: the same bits.
   const std::size_t n = vertices.size();
-  struct StencilRow {
-    std::array<std::uint32_t, 4> v;
-    std::array<double, 4> d;
-  };
-  std::vector<StencilRow> rows;
-  std::size_t edgeCount = 0;
-  {
-    const auto edges = meshEdges(n, triangles);  // gone before the matrix is
-    edgeCount = edges.size();
-    std::size_t interior = 0;
-    for (const auto& e : edges) interior += e.right != MeshEdge::kNone;
-    rows.reserve(interior);
-    for (const auto& e : edges) {
-      if (e.right == MeshEdge::kNone) continue;
-      const auto beta =
-          thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
-      const double w = std::sqrt(
-          std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
-      rows.push_back(
-          {{e.s, e.t, e.left, e.right}, {w * beta[0], w * beta[1], w * beta[2], w * beta[3]}});
-    }
-  }
-  // slots[start[i] .. start[i+1]) = 4·row + position of i in that row.
-  std::vector<std::uint32_t> start(n + 1, 0);
-  for (const auto& r : rows) {
-    for (const std::uint32_t v : r.v) ++start[v + 1];
-  }
-  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
-  std::vector<std::uint32_t> slots(start[n]);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-      for (std::uint32_t a = 0; a < 4; ++a) slots[fill[rows[k].v[a]]++] = static_cast<std::uint32_t>(4 * k + a);
-    }
-  }
+  std::vector<MeshEdge> edges = meshEdges(n, triangles);
+  const std::size_t edgeCount = edges.size();
+  std::erase_if(edges, [](const MeshEdge& e) { return e.right == MeshEdge::kNone; });
+  const auto stencil = [](const MeshEdge& e) { return std::array{e.s, e.t, e.left, e.right}; };
   // Row i's columns are i, its neighbours (a stencil of an edge at i lies
   // in i's two triangles) and, per triangle at i, the vertex across its
   // opposite edge: at most 1 + deg(i) + (triangles at i), which sums to
@@ -343,32 +314,56 @@ SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const T
   SparseMatrix::StorageIndex* inner = energy.innerIndexPtr();
   double* value = energy.valuePtr();
   std::size_t entries = 0;
-  std::vector<double> sum(n, 0.0);
-  std::vector<std::uint32_t> seenIn(n, std::numeric_limits<std::uint32_t>::max()), columns;
-  for (std::size_t i = 0; i < n; ++i) {
-    columns.clear();
-    for (std::uint32_t q = start[i]; q < start[i + 1]; ++q) {
-      const StencilRow& r = rows[slots[q] / 4];
-      const double di = r.d[slots[q] % 4];
-      for (int b = 0; b < 4; ++b) {
-        const std::uint32_t j = r.v[b];
-        if (seenIn[j] != i) {
-          seenIn[j] = static_cast<std::uint32_t>(i);
-          sum[j] = 0.0;
-          columns.push_back(j);
-        }
-        sum[j] += di * r.d[b];
+  {
+    // edgesAt[start[i] .. start[i+1]) = the edges whose stencils hold i.
+    std::vector<std::uint32_t> start(n + 1, 0);
+    for (const MeshEdge& e : edges) {
+      for (const std::uint32_t v : stencil(e)) ++start[v + 1];
+    }
+    for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    std::vector<std::uint32_t> edgesAt(start[n]);
+    {
+      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+      for (std::size_t k = 0; k < edges.size(); ++k) {
+        for (const std::uint32_t v : stencil(edges[k]))
+          edgesAt[fill[v]++] = static_cast<std::uint32_t>(k);
       }
     }
-    if (entries + columns.size() > bound)
-      throw internalError("thinPlateEnergy: more entries than the bound");
-    std::sort(columns.begin(), columns.end());
-    for (const std::uint32_t j : columns) {
-      inner[entries] = static_cast<SparseMatrix::StorageIndex>(j);
-      value[entries] = sum[j];
-      ++entries;
+    std::vector<std::uint32_t> seenIn(n, std::numeric_limits<std::uint32_t>::max()), columns;
+    for (std::size_t i = 0; i < n; ++i) {
+      columns.clear();
+      for (std::uint32_t q = start[i]; q < start[i + 1]; ++q) {
+        for (const std::uint32_t j : stencil(edges[edgesAt[q]])) {
+          if (seenIn[j] == i) continue;
+          seenIn[j] = static_cast<std::uint32_t>(i);
+          columns.push_back(j);
+        }
+      }
+      if (entries + columns.size() > bound)
+        throw internalError("thinPlateEnergy: more entries than the bound");
+      std::sort(columns.begin(), columns.end());
+      for (const std::uint32_t j : columns)
+        inner[entries++] = static_cast<SparseMatrix::StorageIndex>(j);
+      outer[i + 1] = static_cast<SparseMatrix::StorageIndex>(entries);
     }
-    outer[i + 1] = static_cast<SparseMatrix::StorageIndex>(entries);
+  }
+  std::fill(value, value + entries, 0.0);
+  for (const MeshEdge& e : edges) {
+    const auto beta =
+        thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
+    const double w =
+        std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
+    const std::array<double, 4> d{w * beta[0], w * beta[1], w * beta[2], w * beta[3]};
+    const auto v = stencil(e);
+    for (int a = 0; a < 4; ++a) {
+      const SparseMatrix::StorageIndex* row = inner + outer[v[a]];
+      const SparseMatrix::StorageIndex* rowEnd = inner + outer[v[a] + 1];
+      for (int b = 0; b < 4; ++b) {
+        const auto* at =
+            std::lower_bound(row, rowEnd, static_cast<SparseMatrix::StorageIndex>(v[b]));
+        value[at - inner] += d[a] * d[b];
+      }
+    }
   }
   energy.data().resize(static_cast<Eigen::Index>(entries));  // keeps the room: no copy
   return energy;

@@ -90,6 +90,42 @@ TEST(FitLeastSquares, ThinPlateNullSpaceIsExactlyTheLinearFunctions) {
   EXPECT_EQ(zero, 3);
 }
 
+TEST(FitLeastSquares, ThinPlateEnergyIsDTransposeDOfTheEdgeStencils) {
+  // D has a row √L_e β_e per interior edge on its stencil {s, t, l, r};
+  // E must be DᵀD, entry for entry, with an entry exactly where two vertices
+  // share a stencil (a jittered mesh with a hole: boundary edges inside).
+  SmallMesh m = jitteredMesh(7, 9);
+  std::erase_if(m.triangles, [&](const Triangle& t) {
+    const Point2& a = m.vertices[t[0]];
+    return std::abs(a.x - 0.5) < 0.2 && std::abs(a.y - 0.5) < 0.2;
+  });
+  ASSERT_LT(m.triangles.size(), jitteredMesh(7, 9).triangles.size());
+  const auto edges = meshEdges(m.vertices.size(), m.triangles);
+  const auto n = static_cast<Eigen::Index>(m.vertices.size());
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(edges.size()), n);
+  Eigen::MatrixXi shared = Eigen::MatrixXi::Zero(n, n);
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const MeshEdge& e = edges[k];
+    if (e.right == MeshEdge::kNone) continue;
+    const auto beta =
+        thinPlateBetas(m.vertices[e.s], m.vertices[e.t], m.vertices[e.left], m.vertices[e.right]);
+    const double w = std::sqrt(
+        std::hypot(m.vertices[e.t].x - m.vertices[e.s].x, m.vertices[e.t].y - m.vertices[e.s].y));
+    const std::array<std::uint32_t, 4> v{e.s, e.t, e.left, e.right};
+    for (int a = 0; a < 4; ++a) {
+      d(static_cast<Eigen::Index>(k), v[a]) = w * beta[a];
+      for (int b = 0; b < 4; ++b) shared(v[a], v[b]) = 1;
+    }
+  }
+  const SparseMatrix e = thinPlateEnergy(m.vertices, m.triangles);
+  const Eigen::MatrixXd expected = d.transpose() * d;
+  EXPECT_LE((dense(e) - expected).norm(), 1e-12 * expected.norm());
+  EXPECT_EQ(e.nonZeros(), shared.sum());
+  for (Eigen::Index c = 0; c < e.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(e, c); it; ++it) EXPECT_EQ(shared(it.row(), it.col()), 1);
+  EXPECT_TRUE(e.isCompressed());
+}
+
 TEST(FitLeastSquares, ConstantDataIsReproducedForEverySmoothingAndLambda) {
   const SmallMesh m = jitteredMesh(6, 3);
   const auto samples = samplesOf(m, 60, 8, constantFunction, 0.5, 0.5);  // data in one corner only
