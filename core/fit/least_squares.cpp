@@ -353,15 +353,16 @@ SparseMatrix thinPlateEnergy(std::span<const Point2> vertices, std::span<const T
         thinPlateBetas(vertices[e.s], vertices[e.t], vertices[e.left], vertices[e.right]);
     const double w =
         std::sqrt(std::hypot(vertices[e.t].x - vertices[e.s].x, vertices[e.t].y - vertices[e.s].y));
-    const std::array<double, 4> d{w * beta[0], w * beta[1], w * beta[2], w * beta[3]};
-    const auto v = stencil(e);
-    for (int a = 0; a < 4; ++a) {
-      const SparseMatrix::StorageIndex* row = inner + outer[v[a]];
-      const SparseMatrix::StorageIndex* rowEnd = inner + outer[v[a] + 1];
-      for (int b = 0; b < 4; ++b) {
-        const auto* at =
-            std::lower_bound(row, rowEnd, static_cast<SparseMatrix::StorageIndex>(v[b]));
-        value[at - inner] += d[a] * d[b];
+    // The stencil by vertex, each with its d: a row's four columns are then
+    // found in one walk along it (its columns are sorted).
+    std::array<std::pair<std::uint32_t, double>, 4> stencilD{
+        {{e.s, w * beta[0]}, {e.t, w * beta[1]}, {e.left, w * beta[2]}, {e.right, w * beta[3]}}};
+    std::sort(stencilD.begin(), stencilD.end());
+    for (const auto& [i, di] : stencilD) {
+      const SparseMatrix::StorageIndex* at = inner + outer[i];
+      for (const auto& [j, dj] : stencilD) {
+        while (static_cast<std::uint32_t>(*at) < j) ++at;
+        value[at - inner] += di * dj;
       }
     }
   }

@@ -180,7 +180,8 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     SparseMatrix().swap(a);  // solved: let go before the errors are measured
     Vector().swap(rhs);
 
-    const LevelErrors errors = levelErrors(data, triOf, triVerts, positions, coefficients, level, gridLevels, threads);
+    const LevelErrors errors = levelErrors(mesh, data, triOf, triVerts, positions, coefficients,
+                                           level, gridLevels, threads);
     st.maxError = errors.maxError;
     st.rmsError = errors.rmsError;
     const std::vector<std::uint64_t> refine =

@@ -91,11 +91,22 @@ DataExtent measureData(std::span<const Point3> input, std::span<const double> we
   return {all.xmin, all.ymin, all.zmin, all.xmax, all.ymax, all.zmax};
 }
 
-std::uint64_t fineCellCode(const BinaryTriangulation& mesh, Point2 g) {
+namespace {
+/// The column and row of the finest-grid cell holding grid point g (clamped
+/// into the grid).
+std::array<std::uint64_t, 2> fineCell(const BinaryTriangulation& mesh, Point2 g) {
   const double lim = static_cast<double>(mesh.side() - 1);
-  const auto ci = static_cast<std::uint64_t>(std::clamp(std::floor(g.x), 0.0, lim));
-  const auto cj = static_cast<std::uint64_t>(std::clamp(std::floor(g.y), 0.0, lim));
-  return geometry::spreadBits(ci) | (geometry::spreadBits(cj) << 1);
+  return {static_cast<std::uint64_t>(std::clamp(std::floor(g.x), 0.0, lim)),
+          static_cast<std::uint64_t>(std::clamp(std::floor(g.y), 0.0, lim))};
+}
+std::uint64_t mortonCode(std::uint64_t column, std::uint64_t row) {
+  return geometry::spreadBits(column) | (geometry::spreadBits(row) << 1);
+}
+}  // namespace
+
+std::uint64_t fineCellCode(const BinaryTriangulation& mesh, Point2 g) {
+  const auto [ci, cj] = fineCell(mesh, g);
+  return mortonCode(ci, cj);
 }
 
 SortedData sortAlongMortonCurve(std::span<const Point3> input, std::span<const double> weights,
@@ -120,11 +131,7 @@ SortedData sortAlongMortonCurve(std::span<const Point3> input, std::span<const d
   geometry::radixSortByCode(order, 2 * mesh.gridLevels());
   // Split the pairs before permuting the points (lower peak memory).
   std::vector<std::uint32_t> permutation(n);
-  sorted.codes.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    sorted.codes[i] = order[i].first;
-    permutation[i] = order[i].second;
-  }
+  for (std::size_t i = 0; i < n; ++i) permutation[i] = order[i].second;
   std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(order);  // frees (assigning {} keeps the capacity)
   sorted.points.resize(n);
   forEachPart(n, threads, [&](std::size_t b, std::size_t e, unsigned) {
@@ -263,9 +270,10 @@ const std::vector<TriangleMoments>& levelMoments(
   return previousMoments;
 }
 
-LevelErrors levelErrors(const SortedData& data, std::span<const std::uint32_t> triOf,
-                        std::span<const Triangle> triVerts, std::span<const Point2> positions,
-                        const Vector& coefficients, int level, int gridLevels, unsigned threads) {
+LevelErrors levelErrors(const BinaryTriangulation& mesh, const SortedData& data,
+                        std::span<const std::uint32_t> triOf, std::span<const Triangle> triVerts,
+                        std::span<const Point2> positions, const Vector& coefficients, int level,
+                        int gridLevels, unsigned threads) {
   // f on each triangle as a plane through its vertex l:
   // f(p) = c_l + g_x (x − x_l) + g_y (y − y_l) with the gradient of 8.1.
   // Made as the points come (in Morton order a triangle's points are mostly
@@ -300,14 +308,23 @@ LevelErrors levelErrors(const SortedData& data, std::span<const std::uint32_t> t
     double mx = 0.0, ss = 0.0;
     std::uint32_t planeTriangle = std::numeric_limits<std::uint32_t>::max();
     Plane pl{};
+    std::uint64_t runColumn = 0, runRow = 0;  // of the cell of rec.back()
     for (std::size_t i = b; i < e; ++i) {
       if (triOf[i] != planeTriangle) pl = planeOf(planeTriangle = triOf[i]);
       const double f = pl.z0 + pl.gx * (pts[i].x - pl.x0) + pl.gy * (pts[i].y - pl.y0);
       const double err = std::abs(f - pts[i].z);
       mx = std::max(mx, err);
       ss += err * err;
-      const std::uint64_t cell = data.codes[i] >> shift;
-      if (rec.empty() || rec.back().cell != cell) rec.push_back({cell, 0, 0.0});
+      // The cell of Ψ_level: fineCellCode >> shift is the Morton code of the
+      // fine cell's column and row each shifted by half as much, made only
+      // when a run of points in one cell begins.
+      const auto [ci, cj] = fineCell(mesh, mesh.toGrid(pts[i].xy()));
+      const std::uint64_t column = ci >> (shift / 2), row = cj >> (shift / 2);
+      if (rec.empty() || column != runColumn || row != runRow) {
+        rec.push_back({mortonCode(column, row), 0, 0.0});
+        runColumn = column;
+        runRow = row;
+      }
       rec.back().count += 1;
       rec.back().maxError = std::max(rec.back().maxError, err);
     }

@@ -41,11 +41,12 @@ DataExtent measureData(std::span<const Point3> input, std::span<const double> we
 /// the grid). The cell of Ψ_k holding it is code >> 2(K − k).
 std::uint64_t fineCellCode(const BinaryTriangulation& mesh, Point2 grid);
 
-/// The data in Morton order of the finest grid, z lowered by zShift.
+/// The data in Morton order of the finest grid, z lowered by zShift. A
+/// point's fineCellCode is computed again where it is needed (8 bytes a
+/// point fewer to hold through the fit).
 struct SortedData {
   std::vector<Point3> points;
-  std::vector<double> weights;      ///< empty: all 1
-  std::vector<std::uint64_t> codes;  ///< fineCellCode of each point
+  std::vector<double> weights;  ///< empty: all 1
 };
 /// Throws inputError naming the first point outside the mesh's square.
 SortedData sortAlongMortonCurve(std::span<const Point3> input, std::span<const double> weights,
@@ -83,9 +84,10 @@ struct LevelErrors {
   double maxError = 0.0, rmsError = 0.0;
 };
 /// The fit's errors at the data, overall and per cell of Ψ_level.
-LevelErrors levelErrors(const SortedData& data, std::span<const std::uint32_t> triOf,
-                        std::span<const Triangle> triVerts, std::span<const Point2> positions,
-                        const Vector& coefficients, int level, int gridLevels, unsigned threads);
+LevelErrors levelErrors(const BinaryTriangulation& mesh, const SortedData& data,
+                        std::span<const std::uint32_t> triOf, std::span<const Triangle> triVerts,
+                        std::span<const Point2> positions, const Vector& coefficients, int level,
+                        int gridLevels, unsigned threads);
 
 /// The cells of Ψ_level (Morton codes) that fail every criterion that is set
 /// (8.1): count, error above epsilon, curvature |T_e f| > τ of an interior
