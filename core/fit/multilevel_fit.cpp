@@ -151,14 +151,6 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
     std::vector<Point2> positions(nv);
     for (std::size_t i = 0; i < nv; ++i) positions[i] = mesh.position(keys[i]);
 
-    // The smoothing matrix first: its temporaries are gone before the
-    // moments are summed, and the triangles' index is made after it (lower
-    // peak memory).
-    std::optional<SparseMatrix> energy;
-    if (options.smoothing != Smoothing::None) {
-      SparseMatrix built = smoothingMatrix(options.smoothing, positions, triVerts);
-      energy.emplace().swap(built);  // swapped, not copied (see assembleSystem)
-    }
     KeyIndexMap triIndex;
     triIndex.reserve(tris.size());
     for (std::size_t t = 0; t < tris.size(); ++t)
@@ -167,6 +159,14 @@ MultilevelFit fitMultilevel(std::span<const Point3> input, const MultilevelOptio
         levelMoments(mesh, level, data, std::move(tris), triIndex, triVerts, positions, triOf,
                      previousTris, previousMoments, threads);
     triIndex = KeyIndexMap();  // served the moments alone: let go before the solve
+    // The smoothing matrix after the moments: its construction then meets
+    // neither the triangles' index nor the previous level's moments, which
+    // are let go by now (lower peak memory; it depends on neither).
+    std::optional<SparseMatrix> energy;
+    if (options.smoothing != Smoothing::None) {
+      SparseMatrix built = smoothingMatrix(options.smoothing, positions, triVerts);
+      energy.emplace().swap(built);  // swapped, not copied (see assembleSystem)
+    }
     PenalizedSystem sys = assembleSystem(nv, triVerts, moments, std::move(energy),
                                          options.lambdaFactor, options.lambdaAbsolute);
     st.lambda = sys.lambda;
