@@ -294,7 +294,7 @@ LevelErrors levelErrors(const BinaryTriangulation& mesh, const SortedData& data,
   // The points of a cell are one contiguous run (Morton order): per part a
   // list of runs, joined across the part boundaries.
   const auto& pts = data.points;
-  const int shift = 2 * (gridLevels - level);
+  const int coarser = gridLevels - level;  // a fine cell's column and row >> this: Ψ_level's
   // A part has at most one record a point. The first part's room holds
   // every part's records, which are then appended to it in place: no record
   // is copied twice or held in a vector grown by doubling (at the finest
@@ -315,11 +315,10 @@ LevelErrors levelErrors(const BinaryTriangulation& mesh, const SortedData& data,
       const double err = std::abs(f - pts[i].z);
       mx = std::max(mx, err);
       ss += err * err;
-      // The cell of Ψ_level: fineCellCode >> shift is the Morton code of the
-      // fine cell's column and row each shifted by half as much, made only
-      // when a run of points in one cell begins.
+      // The cell of Ψ_level (its Morton code, fineCellCode >> 2·coarser,
+      // made only when a run of points in one cell begins).
       const auto [ci, cj] = fineCell(mesh, mesh.toGrid(pts[i].xy()));
-      const std::uint64_t column = ci >> (shift / 2), row = cj >> (shift / 2);
+      const std::uint64_t column = ci >> coarser, row = cj >> coarser;
       if (rec.empty() || column != runColumn || row != runRow) {
         rec.push_back({mortonCode(column, row), 0, 0.0});
         runColumn = column;

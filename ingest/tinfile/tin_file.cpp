@@ -1106,6 +1106,23 @@ BlockEntry blockEntryAt(const std::uint8_t* p) {
           getLe<std::uint32_t>(p + 32)};
 }
 
+/// Reads the index's head (k and the frame's CRC) into `index`.
+void readIndexHead(PayloadReader& r, PartIndex& index) {
+  index.perBlock = r.get<std::uint32_t>("block index");
+  if (index.perBlock == 0) r.corrupt("the block index has blocks of 0 records");
+  index.frameCrc = r.get<std::uint32_t>("block index");
+}
+
+/// Reads a section's block count, which must be that of its records.
+std::size_t readBlockCount(PayloadReader& r, std::size_t section, std::size_t records,
+                           std::size_t perBlock) {
+  const std::size_t blocks = r.getCount(kBlockEntrySize, "block index");
+  if (blocks != blockCount(records, perBlock))
+    r.corrupt("the block index lists " + std::to_string(blocks) + " " +
+              kBlockSectionNames[section] + " blocks for " + std::to_string(records) + " records");
+  return blocks;
+}
+
 /// A version 2 block index, read through once, its CRC following, and given
 /// back to the kernel as it goes (at 10⁹ vertices it is about 105 MB): every
 /// vertex block is kept, and the triangle and edge blocks that meet the region.
@@ -1121,15 +1138,10 @@ PartIndex readWholeIndex(const MappedFile& file, PayloadReader& r,
     crcUpTo = r.position();
     file.release(crcUpTo);
   };
-  index.perBlock = r.get<std::uint32_t>("block index");
-  if (index.perBlock == 0) r.corrupt("the block index has blocks of 0 records");
-  index.frameCrc = r.get<std::uint32_t>("block index");
+  readIndexHead(r, index);
   constexpr std::size_t kIndexWindow = std::size_t{8} << 20;
   for (std::size_t s = 0; s < 3; ++s) {
-    const std::size_t blocks = r.getCount(kBlockEntrySize, "block index");
-    if (blocks != blockCount(records[s], index.perBlock))
-      r.corrupt("the block index lists " + std::to_string(blocks) + " " + kBlockSectionNames[s] +
-                " blocks for " + std::to_string(records[s]) + " records");
+    const std::size_t blocks = readBlockCount(r, s, records[s], index.perBlock);
     std::vector<PartIndex::VertexBlock> vertexBlocks;
     if (s == kVertexBlocks) vertexBlocks.reserve(blocks);
     for (std::size_t b = 0; b < blocks; ++b) {
@@ -1165,16 +1177,11 @@ PartIndex readIndexSummary(const MappedFile& file, PayloadReader& r,
                            const tiles::Rect& vertexRegion, std::uint64_t& bytesRead) {
   PartIndex index;
   const std::uint8_t* head = r.position();
-  index.perBlock = r.get<std::uint32_t>("block index");
-  if (index.perBlock == 0) r.corrupt("the block index has blocks of 0 records");
-  index.frameCrc = r.get<std::uint32_t>("block index");
+  readIndexHead(r, index);
   std::array<std::size_t, 3> blocks{};
   std::array<const std::uint8_t*, 3> entries{};
   for (std::size_t s = 0; s < 3; ++s) {
-    blocks[s] = r.getCount(kBlockEntrySize, "block index");
-    if (blocks[s] != blockCount(records[s], index.perBlock))
-      r.corrupt("the block index lists " + std::to_string(blocks[s]) + " " + kBlockSectionNames[s] +
-                " blocks for " + std::to_string(records[s]) + " records");
+    blocks[s] = readBlockCount(r, s, records[s], index.perBlock);
     entries[s] = r.skip(blocks[s], kBlockEntrySize, "block index");
   }
   const std::uint8_t* summary = r.position();
