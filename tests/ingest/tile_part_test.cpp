@@ -6,9 +6,11 @@
 // that the fit data sample.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <tuple>
 
@@ -65,83 +67,180 @@ TinData holedTin() {
   return tin;
 }
 
+/// A regular 10 m grid over 1 280 m × 1 280 m at UTM-sized coordinates, so
+/// that its rows and columns lie on every tile side to zoom 7 and each cell's
+/// four corners are cocircular, made to break the shard sides: a flat
+/// plateau (z 500) west of a cliff 80 m high and 2 cm wide on the zoom-1 side
+/// x = 640, a river along the zoom-1 side y = 640 and on across the cliff,
+/// a road from corner to corner through the centre where the four zoom-1
+/// tiles meet (it crosses the river there), a flat lake shore astride a
+/// zoom-2 side, and one-vertex pits 30 m deep on a zoom-2 corner and 5 mm
+/// inside a zoom-2 side (within the side margin: out of reach).
+TinData sideBreakingTin() {
+  Cdt cdt;
+  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+  const double x0 = 430000, y0 = 4515000;
+  auto ground = [](double x, double y) {
+    return x <= 640 ? 500.0 : 420 - 0.01 * (x - 640) + 4 * std::sin(y / 90);
+  };
+  std::vector<Point3> points;
+  for (int j = 0; j <= 128; ++j) {
+    for (int i = 0; i <= 128; ++i) {
+      const double x = i * 10.0, y = j * 10.0;
+      const bool pit = i == 32 && j == 96;  // on a zoom-2 corner
+      points.push_back({x0 + x, y0 + y, pit ? 470 : ground(x, y)});
+    }
+    // The cliff's foot, 2 cm east of its top on the side.
+    points.push_back({x0 + 640.02, y0 + j * 10.0, ground(640.02, j * 10.0)});
+  }
+  points.push_back({x0 + 960.005, y0 + 335, 390});  // a pit 5 mm inside a zoom-2 side
+  cdt.insertPoints(points, spots);
+  std::vector<Point3> river;
+  for (int k = 0; k <= 64; ++k) {
+    const double x = 20.0 * k;
+    river.push_back({x0 + x, y0 + 640, ground(x, 640) - 3 - 0.02 * k});
+  }
+  cdt.insertConstraint(river, cdt.addFeature(FeatureKind::River, "river"));
+  std::vector<Point3> road;
+  for (int k = 0; k <= 32; ++k) {
+    const double t = 5 + 1270.0 * k / 32;
+    road.push_back({x0 + t, y0 + t, ground(t, t) + 1});
+  }
+  cdt.insertConstraint(road, cdt.addFeature(FeatureKind::Road, "road"));
+  std::vector<Point3> shore;
+  for (int k = 0; k < 24; ++k) {
+    const double a = 2 * std::numbers::pi * k / 24;
+    shore.push_back({x0 + 960 + 70 * std::cos(a), y0 + 1000 + 50 * std::sin(a), 412});
+  }
+  cdt.insertConstraint(shore, cdt.addFeature(FeatureKind::Lake, "lake"), true);
+  cdt.finalize();
+  return cdt.toTinData();
+}
+
 void expectSameTile(const tiles::TileSurface& a, const tiles::TileSurface& b) {
   SCOPED_TRACE(a.id.name());
   EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.triangles, b.triangles);
   EXPECT_EQ(a.flags, b.flags);
   EXPECT_EQ(a.heldEdges, b.heldEdges);
+  EXPECT_EQ(a.riverEdges, b.riverEdges);
+  EXPECT_EQ(a.outOfReach, b.outOfReach);
   EXPECT_EQ(a.error, b.error);
   EXPECT_EQ(a.triangleErrors, b.triangleErrors);
 }
 
-TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
-  const fs::path dir = fs::path(testing::TempDir()) / "tile_part";
+struct PartComparison {
+  std::size_t compared = 0;       ///< tiles built both ways
+  std::size_t offTinCorners = 0;  ///< corners of tiles with terrain in no triangle
+  std::size_t outOfReach = 0;     ///< tiles with triangles the refiner could not bring in
+  int finestZoom = 0;
+};
+
+/// Writes `whole` in blocks of 128 records, plans it with the corners off the
+/// TIN to `cornerZoom`, and builds every tile of zooms `shardZoom` to the
+/// finest + 1 twice: from the whole TIN, and from the part of the file a
+/// subtree shard at `shardZoom` reads with the plan read back — expecting
+/// the same tiles, bit for bit.
+PartComparison expectPartsBuildTheWholeTinsTiles(const std::string& name, const TinData& whole,
+                                                 const tiles::TilerOptions& options, int shardZoom,
+                                                 int cornerZoom) {
+  const fs::path dir = fs::path(testing::TempDir()) / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const TinData whole = holedTin();
   // Blocks of 128 records: a subtree's part reads some of them, not all.
-  std::ofstream(dir / "site.tin", std::ios::binary) << encodeTin(whole, 128);
+  const std::string bytes = encodeTin(whole, 128);
+  std::ofstream(dir / "site.tin", std::ios::binary) << bytes;
 
-  tiles::TilerOptions options;
-  options.tolerance = 0.1;
-  options.maxTriangles = 512;
-  options.threads = 1;
+  PartComparison result;
   const tiles::Tiler wholeTiler(whole, options);
-  ASSERT_GE(wholeTiler.finestZoom(), 2);
-  // The corners off the TIN to zoom 3 in the plan: a part holds the
-  // vertices only half a subtree's width around it (tilerVertexRegion).
-  const TilingPlan plan = makeTilingPlan(whole, options, 3);
-  EXPECT_EQ(plan.tiler.cornerZoom, 3);
-  EXPECT_FALSE(plan.tiler.offTinCorners.empty());
-  writeTilingPlan(dir / "tiler.plan", plan);
+  result.finestZoom = wholeTiler.finestZoom();
+  writeTilingPlan(dir / "tiler.plan", makeTilingPlan(whole, options, cornerZoom));
   const auto read = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
+  EXPECT_EQ(read->tiler.cornerZoom, cornerZoom);
   EXPECT_EQ(read->tiler.zoomLines.size(), static_cast<std::size_t>(wholeTiler.finestZoom()) + 1);
   EXPECT_NO_THROW(requirePlannedOptions(*read, options, "tiler.plan"));
-  tiles::TilerOptions other = options;
-  other.tolerance = 1;
-  EXPECT_THROW(requirePlannedOptions(*read, other, "tiler.plan"), Error);
 
   const tiles::TinIndex wholeIndex(whole);
-  std::size_t compared = 0, offTinCorners = 0;  // corners of tiles with terrain
-  for (std::uint32_t y = 0; y < 2; ++y) {
-    for (std::uint32_t x = 0; x < 2; ++x) {
-      const tiles::TileId subtree{1, x, y};
+  const std::uint32_t shards = 1U << shardZoom;
+  for (std::uint32_t y = 0; y < shards; ++y) {
+    for (std::uint32_t x = 0; x < shards; ++x) {
+      const tiles::TileId subtree{shardZoom, x, y};
+      SCOPED_TRACE("subtree " + subtree.name());
       const tiles::Rect square = read->tiler.geometry.bounds(subtree);
       const TinPart part = readTinFilePart(dir / "site.tin", tiles::tilerReadRegion(square),
                                            tiles::tilerVertexRegion(read->tiler, square));
-      EXPECT_EQ(part.fileCrc, crc32(encodeTin(whole, 128)));
+      EXPECT_EQ(part.fileCrc, crc32(bytes));
       EXPECT_EQ(part.triangles, whole.triangles.size());
       EXPECT_EQ(part.vertices, whole.vertices.size());
       EXPECT_LT(part.tin.vertices.size(), whole.vertices.size());
       EXPECT_LT(part.tin.triangles.size(), whole.triangles.size());
-      EXPECT_LT(part.bytesRead, fs::file_size(dir / "site.tin"));
+      EXPECT_LT(part.bytesRead, bytes.size());
       tiles::TilerOptions partOptions = options;
       partOptions.plan = std::shared_ptr<const tiles::TilerPlan>(read, &read->tiler);
       partOptions.region = square;
       const tiles::Tiler partTiler(part.tin, partOptions);
       EXPECT_EQ(partTiler.geometry().size(), wholeTiler.geometry().size());
       EXPECT_EQ(partTiler.finestZoom(), wholeTiler.finestZoom());
-      for (int z = 1; z <= wholeTiler.finestZoom() + 1; ++z) {
-        const int dz = z - 1;
+      for (int z = shardZoom; z <= wholeTiler.finestZoom() + 1; ++z) {
+        const int dz = z - shardZoom;
         for (std::uint32_t j = 0; j < (1U << dz); ++j) {
           for (std::uint32_t i = 0; i < (1U << dz); ++i) {
             const tiles::TileId id{z, (x << dz) + i, (y << dz) + j};
             const tiles::TileSurface a = wholeTiler.buildTile(id);
             expectSameTile(a, partTiler.buildTile(id));
-            ++compared;
-            const tiles::Rect r = read->tiler.geometry.bounds(id);
+            ++result.compared;
             if (a.empty()) continue;
+            if (std::count(a.outOfReach.begin(), a.outOfReach.end(), 1) > 0) ++result.outOfReach;
+            const tiles::Rect r = read->tiler.geometry.bounds(id);
             for (const Point2 corner :
                  {Point2{r.x0, r.y0}, Point2{r.x1, r.y0}, Point2{r.x0, r.y1}, Point2{r.x1, r.y1}})
-              if (!wholeIndex.z(corner)) ++offTinCorners;
+              if (!wholeIndex.z(corner)) ++result.offTinCorners;
           }
         }
       }
     }
   }
-  EXPECT_GT(compared, 20u);
-  EXPECT_GT(offTinCorners, 0u);  // the hole's tiles were among them
+  return result;
+}
+
+TEST(TilePart, AShardsPartOfTheTinWithThePlanBuildsTheWholeTinsTilesBitForBit) {
+  tiles::TilerOptions options;
+  options.tolerance = 0.1;
+  options.maxTriangles = 512;
+  options.threads = 1;
+  // The corners off the TIN to zoom 3 in the plan: a part holds the
+  // vertices only half a subtree's width around it (tilerVertexRegion).
+  const PartComparison c =
+      expectPartsBuildTheWholeTinsTiles("tile_part", holedTin(), options, 1, 3);
+  EXPECT_GE(c.finestZoom, 2);
+  EXPECT_GT(c.compared, 20u);
+  EXPECT_GT(c.offTinCorners, 0u);  // the hole's tiles were among them
+
+  const TilingPlan plan = makeTilingPlan(holedTin(), options, 3);
+  EXPECT_FALSE(plan.tiler.offTinCorners.empty());
+  tiles::TilerOptions other = options;
+  other.tolerance = 1;
+  EXPECT_THROW(requirePlannedOptions(plan, other, "tiler.plan"), Error);
+}
+
+// Terrain made to break the shards where they meet: every vertex row on a
+// tile side, a cliff, a river and a road along and across the sides and
+// corners, a flat plateau and lake, pits on a corner and within a side's
+// margin — at shard zooms 1 and 2.
+TEST(TilePart, SidesCornersCliffsAndPitsAreBuiltTheSameFromEveryPart) {
+  const TinData whole = sideBreakingTin();
+  tiles::TilerOptions options;
+  options.tolerance = 0.5;
+  options.maxTriangles = 512;
+  options.threads = 1;
+  for (const int shardZoom : {1, 2}) {
+    SCOPED_TRACE("shard zoom " + std::to_string(shardZoom));
+    const PartComparison c = expectPartsBuildTheWholeTinsTiles(
+        "tile_part_sides_" + std::to_string(shardZoom), whole, options, shardZoom, 3);
+    EXPECT_GE(c.finestZoom, shardZoom + 1);
+    EXPECT_GT(c.compared, 40u);
+    EXPECT_GT(c.outOfReach, 0u);  // the pit within the side margin
+  }
 }
 
 TEST(TilePart, ThePlansCornersOffTheTinTakeTheNearestVertex) {

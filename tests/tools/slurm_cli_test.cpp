@@ -174,6 +174,35 @@ TEST(SlurmCli, AnyShardZoomGivesTheBytesOfOneRunOnCliffsAndBreakLines) {
   }
 }
 
+TEST(SlurmCli, ShardsAcrossTheAntimeridianGiveTheBytesOfOneRun) {
+  // 100 km × 100 km in UTM 60S, about 180° E ± 0.5° (Fiji): the subtrees'
+  // sides and the pyramid's middle cross the antimeridian, where longitude
+  // jumps from 180 to −180.
+  const fs::path dir = scratchDir("slurm-cli-antimeridian");
+  const fs::path tin = dir / "site.tin";
+  const auto built = runTinsmith(
+      "tin --points 'synthetic:grid?nx=201&ny=201&spacing=500&x0=780000&y0=8080000"
+      "&surface=hill&z0=300&scale=400&noise=0.5' --crs EPSG:32760 -q -o " +
+      tin.string());
+  ASSERT_EQ(built.exitCode, 0) << built.err;
+  const std::string options = " --tolerance 2 --max-triangles 512 -q";
+  const auto one =
+      runTinsmith("tile " + tin.string() + options + " -o " + (dir / "one.3dtiles").string());
+  ASSERT_EQ(one.exitCode, 0) << one.err;
+  const auto root = store::openStoreForReading(dir / "one.3dtiles")->get("tileset.json");
+  ASSERT_TRUE(root);
+  const auto region = nlohmann::json::parse(*root)["root"]["boundingVolume"]["region"];
+  EXPECT_GT(region[0].get<double>(), region[2].get<double>()) << region;  // west > east
+  const fs::path work = dir / "work";
+  const fs::path merged = dir / "merged.3dtiles";
+  const auto planned =
+      runTinsmith("slurm " + tin.string() + options + " --shard-zoom 2 --workdir " + work.string() +
+                  " -o " + merged.string());
+  ASSERT_EQ(planned.exitCode, 0) << planned.err;
+  runAsSlurmWould(work, 17);
+  EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+}
+
 TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
   const fs::path dir = scratchDir("slurm-cli-tin");
   const std::string points =
