@@ -245,11 +245,14 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   encode::GlbOptions glb;
   glb.compression = options.compression;
   // Quantization takes at most half of the tolerance's encoding share (the
-  // tiler left kEncodingShare of it), and a tenth of an error well within it.
-  const double quantization =
-      tile.tolerance > 0 ? std::min(0.1 * tile.error, 0.5 * kEncodingShare * tile.tolerance)
-                         : 0.1 * tile.error;
-  glb.maxPositionError = std::clamp(quantization, 0.0005, kMaxQuantization);
+  // tiler left kEncodingShare of it), and a tenth of an error well within
+  // it; no finer than minQuantization where the share allows, nor coarser
+  // than half the side margin the refiner kept.
+  const double width = tile.bounds.width();
+  const double share = tile.tolerance > 0 ? 0.5 * kEncodingShare * tile.tolerance : HUGE_VAL;
+  const double finest = std::max(0.0005, std::min(minQuantization(width), share));
+  glb.maxPositionError =
+      std::clamp(std::min(0.1 * tile.error, share), finest, maxQuantization(width, tile.tolerance));
   // The record states the requested bound, which the encoder's actual one
   // never exceeds (the checkers compare decoded tiles against it).
   record.positionErrorBound =

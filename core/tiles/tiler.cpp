@@ -221,15 +221,14 @@ struct SidePoint {
   bool onLine;
 };
 
-/// How far a new vertex keeps from a tile's sides (RefineOptions::sideMargin):
-/// twice the farthest Draco may move a position (tile_content.cpp: at most
-/// 1 cm), so quantization cannot carry one across a side and fold a triangle
-/// there, or 1e-7 of the tile's width on a tile too wide for that to be above
-/// rounding. A margin of 1e-4 of the width kept a wall's or a pit's vertex
-/// half a metre from a 5 km tile's side out of reach, and the tile over its
-/// tolerance.
-double sideMargin(const Rect& rect) {
-  return std::max(2 * kMaxQuantization, 1e-7 * rect.width());
+/// How far a new vertex keeps from the sides of a tile at a zoom of
+/// `tolerance` (RefineOptions::sideMargin): twice the farthest Draco may move
+/// a position (maxQuantization), so quantization cannot carry one across a
+/// side and fold a triangle there. A margin of 1e-4 of the width kept a
+/// wall's or a pit's vertex half a metre from a 5 km tile's side out of
+/// reach, and the tile over its tolerance.
+double sideMargin(const Rect& rect, double tolerance) {
+  return 2 * maxQuantization(rect.width(), tolerance);
 }
 
 /// A point of a tile side's profile: its position along the side, the TIN's
@@ -524,7 +523,7 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   refine.tolerance = std::max((1 - kEncodingShare) * zd.tolerance - encodingAllowance,
                               0.5 * (1 - kEncodingShare) * zd.tolerance);
   refine.maxTriangles = options_.maxTriangles;
-  refine.sideMargin = sideMargin(rect);
+  refine.sideMargin = sideMargin(rect, zd.tolerance);
   refine.earthRadius = kEarthRadiusOfCurvature;
   tile.heldPoints = refineTile(tile, *index_, refine);
   tile.tolerance = zd.tolerance;
@@ -679,7 +678,7 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
   std::array<std::vector<Point3>, 4> sideLines;
   // L² / 8R within kSideSagShare of the tolerance.
   const double maxSideChord = std::sqrt(8 * kEarthRadiusOfCurvature * kSideSagShare * zd.tolerance);
-  const double margin = sideMargin(rect);
+  const double margin = sideMargin(rect, zd.tolerance);
   for (int k = 0; k < 4; ++k) {
     auto& side = sides[k];
     const bool horizontal = k == 0 || k == 2;

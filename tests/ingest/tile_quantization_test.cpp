@@ -1,0 +1,105 @@
+// How finely a tile's positions are quantized: within half of its zoom's
+// encoding share, never finer than a millionth of its width where the share
+// allows, and without a 1 cm cap on wide coarse tiles. A 3 000 km tile at 1 cm
+// took 29 bits a coordinate, and Draco's encoder an array of 2^29 counts for
+// them (1 GB and seconds a tile); a small tile keeps its fine steps.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/cdt/cdt.hpp"
+#include "core/encode/glb.hpp"
+#include "core/tiles/pyramid_build.hpp"
+#include "core/tiles/tile_content.hpp"
+#include "core/tiles/tiler.hpp"
+#include "ingest/tiles/proj_georeference.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+/// An n × n grid `spacing` metres apart in CONUS Albers (EPSG:5070), heights
+/// from `z`.
+template <typename Height>
+TinData albersGrid(int n, double spacing, Height z) {
+  Cdt cdt;
+  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+  std::vector<Point3> points;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = i * spacing, y = j * spacing;
+      points.push_back({-2000000 + x, 300000 + y, z(x, y)});
+    }
+  }
+  cdt.insertPoints(points, spots);
+  cdt.finalize();
+  TinData tin = cdt.toTinData();
+  tin.crs = "EPSG:5070";
+  return tin;
+}
+
+struct Encoded {
+  tiles::TileRecord record;
+  double tolerance = 0;
+  double width = 0;
+};
+
+Encoded encodeRoot(const TinData& tin, double tolerance) {
+  tiles::TilerOptions options;
+  options.tolerance = tolerance;
+  options.maxTriangles = 512;
+  options.threads = 1;
+  const tiles::Tiler tiler(tin, options);
+  const ProjGeoReference geo(tin.crs, "");
+  tiles::ContentOptions content;
+  content.geo = &geo;
+  const tiles::TileSurface root = tiler.buildTile({});
+  EXPECT_FALSE(root.empty());
+  const tiles::TileContent c =
+      tiles::encodeTile(root, tiles::skirtDepth(tiler, root.id, root.error), content);
+  // Draco decodes it.
+  const encode::DecodedGlb glb = encode::decodeGlb(c.glb, "root");
+  EXPECT_TRUE(glb.draco);
+  return {c.record, root.tolerance, root.bounds.width()};
+}
+
+TEST(TileQuantization, AWideTileIsQuantizedToItsToleranceNotToACentimetre) {
+  // 3 000 km of rolling hills at 20 m (the root's zoom: 80 m, or more).
+  // The root's own error is mostly chord sag (512 triangles cannot follow
+  // the Earth's curve across 3 000 km): its encoding is what counts here.
+  const TinData hills = albersGrid(41, 75000, [](double x, double y) {
+    return 500 + 800 * std::sin(x / 4e5) * std::cos(y / 3e5);
+  });
+  const Encoded wide = encodeRoot(hills, 20);
+  EXPECT_NEAR(wide.width, 3e6, 1);
+  EXPECT_LE(wide.record.positionErrorBound, 0.5 * tiles::kEncodingShare * wide.tolerance);
+  EXPECT_GT(wide.record.positionErrorBound, 0.1);  // not 1 cm
+  EXPECT_LE(wide.record.positionBits, 24);         // 29 at 1 cm
+
+  // Flat, the tile measures no error, and a tenth of it would be no step at
+  // all: a millionth of the width, 3 m, within the share of 1 km or more.
+  const TinData flat = albersGrid(41, 75000, [](double, double) { return 200.0; });
+  const Encoded plain = encodeRoot(flat, 1000);
+  EXPECT_LE(plain.record.positionErrorBound, 1e-6 * plain.width);
+  EXPECT_GT(plain.record.positionErrorBound, 0.5e-6 * plain.width);
+  EXPECT_LE(plain.record.positionBits, 20);
+  // Where the share is tighter than the width's step, the share rules.
+  const Encoded tight = encodeRoot(flat, 5);
+  ASSERT_LT(0.5 * tiles::kEncodingShare * tight.tolerance, 1e-6 * tight.width);
+  EXPECT_LE(tight.record.positionErrorBound, 0.5 * tiles::kEncodingShare * tight.tolerance);
+  EXPECT_GT(tight.record.positionErrorBound, 0.02);
+}
+
+TEST(TileQuantization, ASmallTileKeepsItsFineSteps) {
+  // 600 m at 0.2 m (the root's zoom at 0.8 m): within half the share and
+  // 1 cm, as before wide tiles were, and within the tolerance.
+  const TinData ridge = albersGrid(
+      21, 30, [](double x, double y) { return 1700 + 60 * std::exp(-std::pow(x - y, 2) / 4e4); });
+  const Encoded small = encodeRoot(ridge, 0.2);
+  EXPECT_LE(small.record.positionErrorBound, 0.5 * tiles::kEncodingShare * small.tolerance);
+  EXPECT_LE(small.record.positionErrorBound, 0.01);
+  EXPECT_GE(small.record.positionErrorBound, 0.0005);
+  EXPECT_LE(small.record.error, small.tolerance);
+}
+
+}  // namespace
+}  // namespace tinsmith::ingest
