@@ -25,6 +25,12 @@ using tiles::TileRecord;
 namespace {
 
 constexpr const char* kBuildKey = "tinsmith/build.json";
+/// The build records' format: raised whenever the tiles of one TIN and one
+/// set of options change, so that a store of an older tinsmith is not resumed,
+/// merged or rebuilt on demand with tiles that do not fit it (2: positions
+/// quantized to the zoom's encoding share, not to 1 cm, and the side margins
+/// with them).
+constexpr const char* kBuildFormat = "tinsmith-tiles/2";
 /// A shard's part of the pyramid: {"subtree": "Z/X/Y"} or {"untilZoom": Z}.
 /// Only shard stores hold it; merge reads it to know which tiles a shard
 /// answers for (a refined tile's child missing from its shard is empty).
@@ -37,7 +43,7 @@ std::string buildRecord(const TinIdentity& identity, const std::string& crs,
                         const std::string& tinName, const TileJobOptions& o,
                         const tiles::Tiler* tiler, const tiles::ContentOptions& content) {
   nlohmann::ordered_json j;
-  j["format"] = "tinsmith-tiles/1";
+  j["format"] = kBuildFormat;
   j["tin"] = {{"name", fs::path(tinName).filename().string()},
               {"crc32", identity.crc32},
               {"vertices", identity.vertices},
@@ -67,6 +73,49 @@ std::string buildRecord(const TinIdentity& identity, const std::string& crs,
     j["pyramid"]["enuOrigin"] = {g.lon, g.lat, g.height};
   }
   return j.dump(2) + "\n";
+}
+
+/// Why a store's build record is not `wanted`, for an error that follows
+/// "was built ": another tinsmith's tiles, or what differs of the TIN, the
+/// options and the pyramid (each with its value in `storedName` and in
+/// `wantedName`).
+std::string buildDifference(const std::string& stored, const std::string& wanted,
+                            const std::string& storedName, const std::string& wantedName) {
+  const auto there = nlohmann::json::parse(stored, nullptr, false);
+  const auto here = nlohmann::json::parse(wanted, nullptr, false);
+  if (!there.is_object()) return "with a build record this tinsmith cannot read";
+  auto value = [](const nlohmann::json& j, const char* key) {
+    const auto it = j.find(key);
+    return it == j.end()     ? std::string("none")
+           : it->is_string() ? it->get<std::string>()
+                             : it->dump();
+  };
+  if (there.value("format", "") != here.value("format", ""))
+    return "by another version of tinsmith (its tiles are " + value(there, "format") +
+           ", this tinsmith makes " + value(here, "format") + ")";
+  auto differences = [&](const char* section) {
+    std::string out;
+    const auto a = there.value(section, nlohmann::json::object());
+    const auto b = here.value(section, nlohmann::json::object());
+    std::set<std::string> keys;
+    for (const auto& [k, v] : a.items()) keys.insert(k);
+    for (const auto& [k, v] : b.items()) keys.insert(k);
+    for (const auto& k : keys) {
+      const std::string va = value(a, k.c_str()), vb = value(b, k.c_str());
+      if (va != vb)
+        out += (out.empty() ? "" : "; ") + k + " " + va + " " + storedName + ", " + vb + " " +
+               wantedName;
+    }
+    return out;
+  };
+  std::string out;
+  for (const auto& [section, says] :
+       {std::pair{"tin", "from another TIN"}, std::pair{"options", "with other options"},
+        std::pair{"pyramid", "with another pyramid"}}) {
+    if (const std::string d = differences(section); !d.empty())
+      out += (out.empty() ? "" : ", and ") + std::string(says) + " (" + d + ")";
+  }
+  return out.empty() ? "from another TIN or other options" : out;
 }
 
 /// The shard record of a run: empty for a whole pyramid.
@@ -255,8 +304,10 @@ std::unique_ptr<store::TileStore> resumableStore(const fs::path& path, const std
   const auto previousBuild = st->get(kBuildKey);
   if (!previousBuild) return nullptr;  // an empty store (a run stopped at its start)
   if (*previousBuild != build)
-    throw usageError("the store " + path.string() + " was built from another TIN or other options",
-                     "run without --resume to start over, or with the options it was built with");
+    throw usageError("the store " + path.string() + " was built " +
+                         buildDifference(*previousBuild, build, "in it", "in this run"),
+                     "run without --resume to start over, or with the TIN and options it was "
+                     "built with");
   if (!shard.empty() && st->get(kShardKey).value_or("") != shard)
     throw usageError("the store " + path.string() + " was built as another shard",
                      "resume with the --subtree / --until-zoom it was built with");
@@ -584,8 +635,10 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
       build = *b;
     } else if (*b != build) {
       throw usageError(
-          path.string() + " was built from another TIN or other options than " + inputs[0].string(),
-          "merge only shards of one job");
+          path.string() + " was built " +
+              buildDifference(*b, build, "in it", "in " + inputs[0].filename().string()) +
+              " than " + inputs[0].string(),
+          "merge only shards of one job, made by one tinsmith");
     }
     coverage.push_back(coverageOf(*in));
     shards.push_back(std::move(in));

@@ -52,9 +52,12 @@ struct BuildRecord {
 TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const std::string& store)
     : state_(std::make_unique<State>()) {
   BuildRecord r{nlohmann::json::parse(build, nullptr, false), store};
-  if (!r.j.is_object() || r.j.value("format", "") != "tinsmith-tiles/1")
-    throw inputError(store + ": tinsmith/build.json is not a tinsmith-tiles/1 build record", {},
-                     "rebuild the store with this version's tinsmith tile");
+  if (!r.j.is_object() || r.j.value("format", "") != "tinsmith-tiles/2")
+    throw inputError(store + ": tinsmith/build.json is not a tinsmith-tiles/2 build record (" +
+                         (r.j.is_object() ? r.j.value("format", "no format") : "not JSON") +
+                         "): its tiles were made by another version of tinsmith, and tiles "
+                         "built now would not fit them",
+                     {}, "rebuild the store with this version's tinsmith tile");
   if (crc32(tin) != static_cast<std::uint32_t>(r.number("/tin/crc32")))
     throw inputError(store + ": the TIN is not the one its tiles were built from (CRC differs)", {},
                      "rebuild the store with tinsmith tile");

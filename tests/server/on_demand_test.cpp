@@ -162,6 +162,30 @@ TEST(OnDemand, WithoutTheOptionAMissingTileIs404) {
   EXPECT_EQ(server.server().metrics().tilesBuilt(), 0u);
 }
 
+TEST(OnDemand, AStoreOfAnOlderTinsmithBuildsNoTileThatWouldNotFitIt) {
+  // Its build record's format says its tiles follow other rules (before
+  // tinsmith-tiles/2, quantized to 1 cm with other side margins): a tile
+  // built now would not share its sides with the stored ones bit for bit.
+  const auto all = storedTiles();
+  std::string deep, top;
+  for (const auto& [k, bytes] : all) (zoomOf(k) >= 2 ? deep : top) = k;
+  const auto path = testStoreCopy("server-on-demand-older", "older.3dtiles", aboveZoom2);
+  {
+    auto st = store::openStoreForWriting(path, true);
+    std::string build = st->get("tinsmith/build.json").value();
+    const auto at = build.find("tinsmith-tiles/2");
+    ASSERT_NE(at, std::string::npos) << build;
+    build.replace(at, 16, "tinsmith-tiles/1");
+    st->put("tinsmith/build.json", build);
+  }
+  RunningServer server(onDemandOptions(path));
+  const auto r = httpGet(server.port(), "/tilesets/older/" + deep);
+  EXPECT_GE(r.status, 500) << r.body;
+  EXPECT_EQ(server.server().metrics().tilesBuilt(), 0u);
+  EXPECT_FALSE(store::openStoreForReading(path)->contains(deep));
+  EXPECT_EQ(httpGet(server.port(), "/tilesets/older/" + top).status, 200);  // the stored ones
+}
+
 TEST(OnDemand, TileStoreUntilZoomWritesTheWholeTilesetAndOnlyTheTilesAbove) {
   const auto dir = scratchDir("server-store-until-" + std::to_string(::getpid()));
   const auto lazy = dir / "lazy.3dtiles";

@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "ingest/store/tile_store.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -237,16 +238,46 @@ TEST(StoreSafety, ARefusedOptionTouchesNothing) {
   const auto archive = dir / "site.3dtiles";
   ASSERT_EQ(runTinsmith(tileArgs(tin, 0.5) + " -o " + archive.string()).exitCode, 0);
   const std::string bytes = readFile(archive);
-  for (const std::string& bad : {std::string(" --subtree 9/0/0"), std::string(" --subtree 1/5/0"),
-                                 std::string(" --resume --tolerance 0.3")}) {
-    const auto r = runTinsmith(tileArgs(tin, 0.5) + bad + " -o " + archive.string());
+  for (const std::string& bad :
+       {tileArgs(tin, 0.5) + " --subtree 9/0/0", tileArgs(tin, 0.5) + " --subtree 1/5/0",
+        tileArgs(tin, 0.3) + " --resume"}) {
+    const auto r = runTinsmith(bad + " -o " + archive.string());
     EXPECT_EQ(r.exitCode, 2) << bad << ": " << r.err;
     EXPECT_EQ(readFile(archive), bytes) << bad;
     EXPECT_EQ(namesIn(dir), (std::vector<std::string>{"hill.tin", "site.3dtiles"})) << bad;
+    // The resumed store's refusal says what differs.
+    if (bad.ends_with("--resume"))
+      EXPECT_NE(r.err.find("with other options (tolerance 0.5 in it, 0.3 in this run)"),
+                std::string::npos)
+          << r.err;
   }
+  // A store of an older tinsmith (its build record's format) is refused by
+  // --resume and by merge, naming the version, not "another TIN".
+  {
+    auto st = store::openStoreForWriting(archive, true);
+    std::string build = *st->get("tinsmith/build.json");
+    const auto at = build.find("tinsmith-tiles/2");
+    ASSERT_NE(at, std::string::npos) << build;
+    build.replace(at, 16, "tinsmith-tiles/1");
+    st->put("tinsmith/build.json", build);
+  }
+  const std::string older = readFile(archive);
+  auto r = runTinsmith(tileArgs(tin, 0.5) + " --resume -o " + archive.string());
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("by another version of tinsmith (its tiles are tinsmith-tiles/1, this "
+                       "tinsmith makes tinsmith-tiles/2)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(readFile(archive), older);
+  ASSERT_EQ(runTinsmith(tileArgs(tin, 0.5) + " -o " + (dir / "now.3dtiles").string()).exitCode, 0);
+  r = runTinsmith("merge -q " + (dir / "now.3dtiles").string() + " " + archive.string() + " -o " +
+                  (dir / "merged.3dtiles").string());
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("by another version of tinsmith"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "merged.3dtiles"));
+  fs::remove(dir / "now.3dtiles");
   // Nor on a new output: no staging archive is left.
-  const auto r =
-      runTinsmith(tileArgs(tin, 0.5) + " --subtree 9/0/0 -o " + (dir / "new.3dtiles").string());
+  r = runTinsmith(tileArgs(tin, 0.5) + " --subtree 9/0/0 -o " + (dir / "new.3dtiles").string());
   EXPECT_EQ(r.exitCode, 2) << r.err;
   EXPECT_EQ(namesIn(dir), (std::vector<std::string>{"hill.tin", "site.3dtiles"}));
 }
