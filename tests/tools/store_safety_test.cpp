@@ -246,10 +246,11 @@ TEST(StoreSafety, ARefusedOptionTouchesNothing) {
     EXPECT_EQ(readFile(archive), bytes) << bad;
     EXPECT_EQ(namesIn(dir), (std::vector<std::string>{"hill.tin", "site.3dtiles"})) << bad;
     // The resumed store's refusal says what differs.
-    if (bad.ends_with("--resume"))
+    if (bad.ends_with("--resume")) {
       EXPECT_NE(r.err.find("with other options (tolerance 0.5 in it, 0.3 in this run)"),
                 std::string::npos)
           << r.err;
+    }
   }
   // A store of an older tinsmith (its build record's format) is refused by
   // --resume and by merge, naming the version, not "another TIN".
