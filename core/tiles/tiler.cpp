@@ -339,6 +339,8 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   int d = 0;
   while (2.0 * std::pow(4.0, d + 2) <= static_cast<double>(options_.maxTriangles) / 2) ++d;
   levelsPerTile_ = std::max(d, 1);
+  earthRadius_ =
+      options_.geo ? chordSagRadius(*options_.geo, geometry_.bounds({})) : kEarthRadiusOfCurvature;
   if (options_.region) within_ = tilerReadRegion(*options_.region);
   const Rect dataBox = options_.region ? within_ : extent;  // holds the data, if it has no box
   FitData data = fitData(tin, plan, within_);
@@ -524,7 +526,7 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
                               0.5 * (1 - kEncodingShare) * zd.tolerance);
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = sideMargin(rect, zd.tolerance);
-  refine.earthRadius = kEarthRadiusOfCurvature;
+  refine.earthRadius = earthRadius_;
   tile.heldPoints = refineTile(tile, *index_, refine);
   tile.tolerance = zd.tolerance;
   return tile;
@@ -677,7 +679,7 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
   std::vector<SideSample> samples, kept;
   std::array<std::vector<Point3>, 4> sideLines;
   // L² / 8R within kSideSagShare of the tolerance.
-  const double maxSideChord = std::sqrt(8 * kEarthRadiusOfCurvature * kSideSagShare * zd.tolerance);
+  const double maxSideChord = std::sqrt(8 * earthRadius_ * kSideSagShare * zd.tolerance);
   const double margin = sideMargin(rect, zd.tolerance);
   for (int k = 0; k < 4; ++k) {
     auto& side = sides[k];

@@ -112,6 +112,8 @@ inline constexpr int kMaxCornerZoom = 10;
 /// coarsest zoom in it whose corners the plan does not hold.
 Rect tilerVertexRegion(const TilerPlan& plan, const Rect& region);
 
+class GeoReference;  // tile_content.hpp
+
 struct TilerOptions {
   double tolerance = 1.0;            ///< metres; what the finest zoom meets
   std::size_t maxTriangles = 32768;  ///< per tile, sets levelsPerTile
@@ -149,6 +151,11 @@ struct TilerOptions {
   /// (ingest::readTinFilePart): the fit data, the index and the lines are
   /// those of the square, not of the whole TIN.
   std::optional<Rect> region;
+  /// The project CRS's place on the Earth: chord sag is then planned with the
+  /// radius chordSagRadius gives over the pyramid's square (a projection
+  /// that bends straight lines more than the sphere allows for), else with
+  /// kEarthRadiusOfCurvature. Must outlive the Tiler.
+  const GeoReference* geo = nullptr;
 };
 
 /// One tile's surface, in the project CRS.
@@ -301,6 +308,7 @@ class Tiler {
   int finestZoom_ = 0;
   int maxZoom_ = 0;
   int levelsPerTile_ = 5;
+  double earthRadius_ = 0.0;                ///< the sphere chord sag is planned on (chordSagRadius)
   mutable std::array<ZoomSlot, 31> zooms_;  // by zoom (PyramidGeometry::inside: z < 31)
   // The lines simplified to the finest zoom's tolerance, which every zoom
   // from finestZoom_ on has: simplified once (each zoom snaps them to its own

@@ -29,7 +29,7 @@ constexpr const char* kBuildKey = "tinsmith/build.json";
 /// set of options change, so that a store of an older tinsmith is not resumed,
 /// merged or rebuilt on demand with tiles that do not fit it (2: positions
 /// quantized to the zoom's encoding share, not to 1 cm, and the side margins
-/// with them).
+/// with them; chord sag planned as the CRS bends it, chordSagRadius).
 constexpr const char* kBuildFormat = "tinsmith-tiles/2";
 /// A shard's part of the pyramid: {"subtree": "Z/X/Y"} or {"untilZoom": Z}.
 /// Only shard stores hold it; merge reads it to know which tiles a shard
@@ -424,6 +424,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   const bool tiles3d = writesTiles3D(options.scheme);
   tiles::TilerOptions tilerOptions = options.tiler;
   tilerOptions.threads = options.threads;
+  tilerOptions.geo = &geo;  // chord sag as the CRS bends it (chordSagRadius)
   // The TIN as the build record names it: the file's bytes (written with
   // the root), or the plan's whole TIN, of which `tin` is a part.
   const TileId root = options.subtree.value_or(TileId{});

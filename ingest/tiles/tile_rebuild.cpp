@@ -83,6 +83,7 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const
 
   // As runTileJob does it: the same georeference, content options and tiler.
   state_->geo = std::make_unique<ProjGeoReference>(state_->tin.crs, o.geoid);
+  o.tiler.geo = state_->geo.get();  // as runTileJob plans chord sag
   state_->tiler = std::make_unique<tiles::Tiler>(state_->tin, o.tiler);
   const tiles::Tiler& tiler = *state_->tiler;
   auto& content = state_->content;

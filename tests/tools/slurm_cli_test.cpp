@@ -203,6 +203,31 @@ TEST(SlurmCli, ShardsAcrossTheAntimeridianGiveTheBytesOfOneRun) {
   EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
 }
 
+TEST(SlurmCli, ShardsOfAWideAlbersMosaicGiveTheBytesOfOneRun) {
+  // 3 000 km in CONUS Albers, which bends its straight lines away from the
+  // ground: task 0 and every subtree plan chord sag with the same radius,
+  // measured over the plan's square (not over the part a shard reads).
+  const fs::path dir = scratchDir("slurm-cli-albers");
+  const fs::path tin = dir / "site.tin";
+  const auto built = runTinsmith(
+      "tin --points 'synthetic:grid?nx=101&ny=101&spacing=30000&x0=-2000000&y0=300000"
+      "&surface=hill&z0=300&scale=2000&noise=5' --crs EPSG:5070 -q -o " +
+      tin.string());
+  ASSERT_EQ(built.exitCode, 0) << built.err;
+  const std::string options = " --tolerance 20 --max-triangles 4096 -q";
+  const auto one =
+      runTinsmith("tile " + tin.string() + options + " -o " + (dir / "one.3dtiles").string());
+  ASSERT_EQ(one.exitCode, 0) << one.err;
+  const fs::path work = dir / "work";
+  const fs::path merged = dir / "merged.3dtiles";
+  const auto planned =
+      runTinsmith("slurm " + tin.string() + options + " --shard-zoom 1 --workdir " + work.string() +
+                  " -o " + merged.string());
+  ASSERT_EQ(planned.exitCode, 0) << planned.err;
+  runAsSlurmWould(work, 5);
+  EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+}
+
 TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
   const fs::path dir = scratchDir("slurm-cli-tin");
   const std::string points =

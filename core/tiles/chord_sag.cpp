@@ -1,0 +1,45 @@
+#include "core/tiles/chord_sag.hpp"
+
+#include <array>
+#include <cmath>
+
+#include "core/encode/frames.hpp"
+#include "core/tiles/pyramid.hpp"
+#include "core/tiles/tile_content.hpp"
+
+namespace tinsmith::tiles {
+
+double chordSagRadius(const GeoReference& geo, const Rect& square) {
+  const double width = std::max(square.width(), square.height());
+  const double length = std::clamp(width / 8, 1000.0, 20000.0);
+  const double half = 0.5 * length;
+  constexpr int kPlaces = 5;
+  double worst = 0.0;  // the largest gap ÷ L²/8R
+  for (int j = 0; j < kPlaces; ++j) {
+    for (int i = 0; i < kPlaces; ++i) {
+      // From a segment's half length inside the square's sides to the same
+      // inside the opposite ones.
+      const auto along = [&](double from, double to, int k) {
+        const double inner = std::min(half, 0.5 * (to - from));
+        return from + inner + (to - from - 2 * inner) * k / (kPlaces - 1);
+      };
+      const Point2 c{along(square.x0, square.x1, i), along(square.y0, square.y1, j)};
+      for (const double angle : {0.0, 0.25 * M_PI, 0.5 * M_PI, 0.75 * M_PI}) {
+        const double dx = half * std::cos(angle), dy = half * std::sin(angle);
+        const std::array<Point3, 3> at{Point3{c.x - dx, c.y - dy, 0.0}, Point3{c.x, c.y, 0.0},
+                                       Point3{c.x + dx, c.y + dy, 0.0}};
+        std::array<encode::Geodetic, 3> g;
+        geo.toGeodetic(at, g);
+        const Point3 a = encode::geodeticToEcef(g[0]), m = encode::geodeticToEcef(g[1]),
+                     b = encode::geodeticToEcef(g[2]);
+        const double gap =
+            std::hypot(m.x - 0.5 * (a.x + b.x), m.y - 0.5 * (a.y + b.y), m.z - 0.5 * (a.z + b.z));
+        if (std::isfinite(gap))
+          worst = std::max(worst, gap * 8 * kEarthRadiusOfCurvature / (length * length));
+      }
+    }
+  }
+  return worst > 1.01 ? kEarthRadiusOfCurvature / (1.05 * worst) : kEarthRadiusOfCurvature;
+}
+
+}  // namespace tinsmith::tiles
