@@ -62,8 +62,12 @@ DecodedTile decodeTile(const fs::path& file) {
                    m[2] * x + m[6] * y + m[10] * z + m[14]};
     out.ecef.push_back({q.x, -q.z, q.y});
   }
-  // A skirt triangle has two corners one above the other (within the
-  // rounding); two surface vertices never share x, y.
+  // A skirt triangle has two corners one above the other, within the
+  // rounding: each is rounded on its own, by up to the record's
+  // positionErrorBound (1 % of the tolerance on a coarse tile). Two surface
+  // vertices that close across, 10 cm apart in height, would be a wall
+  // narrower than the rounding.
+  const double rounding = 0.05 + 4 * out.record.positionErrorBound;
   const auto& ix = glb.mesh.indices;
   for (std::size_t t = 0; t + 2 < ix.size(); t += 3) {
     const std::array<std::uint32_t, 3> tri{ix[t], ix[t + 1], ix[t + 2]};
@@ -74,7 +78,7 @@ DecodedTile decodeTile(const fs::path& file) {
       const encode::Geodetic ga = encode::ecefToGeodetic(a), gb = encode::ecefToGeodetic(b);
       const double across = std::hypot((ga.lon - gb.lon) * kDeg * 6.4e6 * std::cos(ga.lat * kDeg),
                                        (ga.lat - gb.lat) * kDeg * 6.4e6);
-      if (across < 0.05 && std::abs(ga.height - gb.height) > 0.1) skirt = true;
+      if (across < rounding && std::abs(ga.height - gb.height) > 0.1) skirt = true;
     }
     (skirt ? out.skirts : out.surface).push_back(tri);
   }
@@ -162,6 +166,40 @@ TEST(TileDecodedError, OnSteepWallsTheDecodedSurfaceIsWithinTheDeclaredError) {
     EXPECT_LE(m.worst, m.record.error * 1.001 + 1e-6)
         << "tile " << m.record.id.name() << ": drawn " << m.worst << " m from the TIN, declared "
         << m.record.error;
+  }
+}
+
+TEST(TileDecodedError, AWideAreaRoundedToItsToleranceIsDrawnWithinTheDeclaredError) {
+  // 1 500 km of CONUS Albers, a TIN vertex every 30 km: its tiles are
+  // rounded to 1 % of their tolerance (5 cm to 1 m here, not 1 cm), their
+  // chords sag metres below the ground, and Albers bends its straight lines.
+  const fs::path dir = test::scratchDir("tile-decoded-wide");
+  const fs::path tinPath = dir / "t.tin";
+  ASSERT_EQ(test::runTinsmith("tin --points "
+                              "'synthetic:grid?nx=51&ny=51&spacing=30000&x0=-2000000&y0=300000&"
+                              "surface=hill&z0=300&scale=2000&noise=5' --crs EPSG:5070 -q -o " +
+                              tinPath.string())
+                .exitCode,
+            0);
+  const auto r =
+      test::runTinsmith("tile " + tinPath.string() + " --tolerance 5 --max-triangles 4096 -q -o " +
+                        (dir / "store").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto measured = measureStore(dir / "store", readTinFile(tinPath));
+  ASSERT_GE(measured.size(), 21u);
+  for (const auto& m : measured) {
+    EXPECT_LE(m.worst, m.record.error * 1.001 + 1e-6)
+        << "tile " << m.record.id.name() << ": drawn " << m.worst << " m from the TIN, declared "
+        << m.record.error;
+  }
+  // The skirts are told apart from the surface, though their corners are
+  // rounded apart by more than 5 cm: every tile has them (two triangles a
+  // piece of its sides), and nothing else is counted as one.
+  for (const DecodedTile& tile : decodeStore(dir / "store")) {
+    EXPECT_GT(tile.record.positionErrorBound, 0.04) << tile.record.id.name();
+    EXPECT_GT(tile.skirts.size(), tile.surface.size() / 8) << tile.record.id.name();
+    EXPECT_EQ(tile.skirts.size() + tile.surface.size(), tile.record.triangles)
+        << tile.record.id.name();
   }
 }
 
