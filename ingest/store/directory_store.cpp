@@ -2,7 +2,7 @@
 //
 // Threads: every member may be called from several threads at once; the
 // store keeps no state beyond its root, and each put writes its own uniquely
-// named temporary file ("<file>.tmp-<pid>-<counter>") and renames it over the
+// named temporary file ("<file>.tmp-<pid>-<counter>.<host>") and renames it over the
 // target, so readers see the old bytes or the new ones, never a mix. Puts are
 // not fsynced one by one (a tileset has many thousands of files): they are
 // atomic against readers and failures, not against a power cut.
@@ -168,7 +168,7 @@ class DirectoryStore final : public TileStore {
     if (isTempName(file.filename().string()))
       throw inputError("the tile key '" + std::string(key) + "' ends like a temporary file's name",
                        fileLocation(root_),
-                       "rename the tile; names ending in .tmp-N-N are reserved");
+                       "rename the tile; names ending in .tmp-N-N or .tmp-N-N.HOST are reserved");
     createFolderFor(file.parent_path(), root_);
     const fs::path temp = tempSibling(file);
     Fd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -24,12 +25,28 @@ enum class Access {
 /// Throws inputError naming the store and the key when !isValidKey(key).
 void requireValidKey(std::string_view key, const std::filesystem::path& store);
 
-/// "<target>.tmp-<pid>-<counter>": unique within the machine while this process
-/// lives, in the target's folder so that a rename onto the target is atomic.
+/// "<target>.tmp-<pid>-<counter>.<host>": unique among the machines sharing
+/// the folder while this process lives (<host>, thisHostTag, names the
+/// machine and its process-id space), in the target's folder so that a
+/// rename onto the target is atomic.
 std::filesystem::path tempSibling(const std::filesystem::path& target);
 
-/// Whether a file or folder name ends the way tempSibling's names end.
-bool isTempName(std::string_view name);
+/// Eight hex digits of the host name and the process-id namespace: a
+/// process id means a process only on the machine whose tag it carries.
+const std::string& thisHostTag();
+
+/// What a temporary name says of its writer: its process id, and its host's
+/// tag (empty for a name an older tinsmith gave, "<pid>-<counter>").
+struct TempWriter {
+  long pid = 0;
+  std::string host;
+};
+/// The writer of a name that ends the way tempSibling's names end (or an
+/// older tinsmith's), or nothing.
+std::optional<TempWriter> tempWriter(std::string_view name);
+inline bool isTempName(std::string_view name) {
+  return tempWriter(name).has_value();
+}
 
 /// Creates `folder` and its parents; throws ioError naming `target` when it
 /// cannot (a parent that is a regular file, no permission).

@@ -12,6 +12,8 @@
 #include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -89,16 +91,49 @@ std::filesystem::path tempSibling(const std::filesystem::path& target) {
   name += std::to_string(::getpid());
   name += '-';
   name += std::to_string(counter.fetch_add(1, std::memory_order_relaxed));
+  name += '.';
+  name += thisHostTag();
   return base.parent_path() / name;
 }
 
-bool isTempName(std::string_view name) {
+const std::string& thisHostTag() {
+  static const std::string tag = [] {
+    std::string identity(256, '\0');
+    if (::gethostname(identity.data(), identity.size()) != 0) identity.clear();
+    identity.resize(identity.find('\0') == std::string::npos ? identity.size()
+                                                             : identity.find('\0'));
+    std::error_code ec;
+    identity += '\n' + std::filesystem::read_symlink("/proc/self/ns/pid", ec).string();
+    std::uint32_t hash = 2166136261U;  // FNV-1a
+    for (const unsigned char c : identity) hash = (hash ^ c) * 16777619U;
+    char hex[9];
+    std::snprintf(hex, sizeof hex, "%08x", hash);
+    return std::string(hex);
+  }();
+  return tag;
+}
+
+std::optional<TempWriter> tempWriter(std::string_view name) {
   const std::size_t marker = name.rfind(kTempMarker);
-  if (marker == std::string_view::npos || marker == 0) return false;
-  const std::string_view numbers = name.substr(marker + kTempMarker.size());
-  const std::size_t dash = numbers.find('-');
-  if (dash == std::string_view::npos) return false;
-  return allDigits(numbers.substr(0, dash)) && allDigits(numbers.substr(dash + 1));
+  if (marker == std::string_view::npos || marker == 0) return std::nullopt;
+  std::string_view rest = name.substr(marker + kTempMarker.size());
+  TempWriter writer;
+  // "<pid>-<counter>.<host>", or an older tinsmith's "<pid>-<counter>".
+  if (rest.size() > 9 && rest[rest.size() - 9] == '.') {
+    const std::string_view host = rest.substr(rest.size() - 8);
+    if (!std::all_of(host.begin(), host.end(), [](char c) {
+          return std::isdigit(static_cast<unsigned char>(c)) || (c >= 'a' && c <= 'f');
+        }))
+      return std::nullopt;
+    writer.host = host;
+    rest.remove_suffix(9);
+  }
+  const std::size_t dash = rest.find('-');
+  if (dash == std::string_view::npos || !allDigits(rest.substr(0, dash)) ||
+      !allDigits(rest.substr(dash + 1)) || dash > 18)
+    return std::nullopt;
+  writer.pid = std::stol(std::string(rest.substr(0, dash)));
+  return writer;
 }
 
 void createFolderFor(const std::filesystem::path& folder, const std::filesystem::path& target) {
@@ -320,10 +355,12 @@ void removeStaleTemps(const std::filesystem::path& target) {
     if (!name.starts_with(prefix)) continue;
     for (const std::string_view sidecar : {"-journal", "-wal", "-shm"})
       if (name.ends_with(sidecar)) name.resize(name.size() - sidecar.size());
-    if (!detail::isTempName(name) || name.rfind(kTempMarker) != prefix.size() - kTempMarker.size())
-      continue;
-    const std::string numbers = name.substr(prefix.size());
-    const long pid = std::stol(numbers.substr(0, numbers.find('-')));
+    const auto writer = detail::tempWriter(name);
+    if (!writer || name.rfind(kTempMarker) != prefix.size() - kTempMarker.size()) continue;
+    // A process id tells of a process on this machine only: another
+    // machine's writer, on a shared filesystem, may still run.
+    if (!writer->host.empty() && writer->host != detail::thisHostTag()) continue;
+    const long pid = writer->pid;
     if (pid <= 0 || pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
       continue;  // its writer may still run
     std::error_code entry;

@@ -35,6 +35,10 @@ constexpr const char* kBuildFormat = "tinsmith-tiles/2";
 /// Only shard stores hold it; merge reads it to know which tiles a shard
 /// answers for (a refined tile's child missing from its shard is empty).
 constexpr const char* kShardKey = "tinsmith/shard.json";
+/// A shard that finished: {"tiles": N}, its number of tiles, put in the
+/// stage just before it takes the output's name. A killed or running
+/// shard's stage holds kShardKey but not this, and merge refuses it.
+constexpr const char* kShardFinishedKey = "tinsmith/shard-finished.json";
 static_assert(std::string_view(kBuildKey) == store::kStoreMarkerKey);
 
 /// What the tiles are a function of (and nothing else: no subtree, no
@@ -141,7 +145,7 @@ std::vector<std::string> canonicalKeys(const store::TileStore& stage,
                                        const std::vector<std::string>& terrainKeys = {}) {
   std::vector<std::string> out{kBuildKey};
   for (auto& key : store::storedTinKeys(stage)) out.push_back(std::move(key));
-  if (shard) out.push_back(kShardKey);
+  if (shard) out.insert(out.end(), {kShardKey, kShardFinishedKey});
   for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
   std::sort(tilesetKeys.begin(), tilesetKeys.end());
   out.insert(out.end(), tilesetKeys.begin(), tilesetKeys.end());
@@ -563,6 +567,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     finish(stage, stagePath, out, records, build, storeUntilZoom, terrainKeys);
   } else {
     // A shard: no tileset.json of its own; `tinsmith merge` writes it.
+    stage->put(kShardFinishedKey, nlohmann::json{{"tiles", records.size()}}.dump() + "\n");
     publish(stage, stagePath, out, canonicalKeys(*stage, records, {}, true));
   }
   TileJobSummary summary = summarize(records, build);
@@ -590,6 +595,25 @@ struct ShardCoverage {
   }
 };
 
+/// Why `in`, a shard's store (it holds kShardKey), is not a finished one —
+/// a stage its run left (killed, failed or still running), or a store that
+/// lost tiles — or nothing.
+std::optional<std::string> unfinishedShard(const store::TileStore& in) {
+  const auto finished = in.get(kShardFinishedKey);
+  if (!finished)
+    return "the shard did not finish (no " + std::string(kShardFinishedKey) +
+           "): it is the stage of a run that was killed, failed or is still running";
+  const auto j = nlohmann::json::parse(*finished, nullptr, false);
+  if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned())
+    return "its " + std::string(kShardFinishedKey) + " is not one tinsmith writes";
+  std::size_t tiles = 0;
+  for (const auto& key : in.keys()) tiles += key.rfind("tiles/", 0) == 0 ? 1 : 0;
+  if (tiles != j["tiles"].get<std::size_t>())
+    return "it holds " + std::to_string(tiles) + " of the " +
+           std::to_string(j["tiles"].get<std::size_t>()) + " tiles its shard finished with";
+  return std::nullopt;
+}
+
 ShardCoverage coverageOf(const store::TileStore& in) {
   const auto record = in.get(kShardKey);
   if (!record) {
@@ -599,6 +623,10 @@ ShardCoverage coverageOf(const store::TileStore& in) {
                      fileLocation(in.path().string()),
                      "build the shard again with tinsmith tile --subtree or --until-zoom");
   }
+  if (const auto why = unfinishedShard(in))
+    throw inputError(*why, fileLocation(in.path().string()),
+                     "run that shard again (tinsmith slurm … --resume --submit, or its tinsmith "
+                     "tile command with --resume) and merge its finished store");
   const auto j = nlohmann::json::parse(*record, nullptr, false);
   ShardCoverage c;
   if (j.is_object() && j.contains("subtree") && j["subtree"].is_string()) {
@@ -613,6 +641,17 @@ ShardCoverage coverageOf(const store::TileStore& in) {
 }
 
 }  // namespace
+
+bool isFinishedShard(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return false;
+  try {
+    const auto in = store::openStoreForReading(path);
+    return in->contains(kShardKey) && !unfinishedShard(*in);
+  } catch (const Error&) {
+    return false;
+  }
+}
 
 TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::path& output) {
   if (inputs.empty())
@@ -644,6 +683,15 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     coverage.push_back(coverageOf(*in));
     shards.push_back(std::move(in));
   }
+  // The pyramid's root is answered for by some input: the top shard, or a
+  // finished store.
+  if (std::none_of(coverage.begin(), coverage.end(),
+                   [](const ShardCoverage& s) { return s.covers(TileId{}); }))
+    throw usageError(
+        "none of the stores is the top of the pyramid (tile 0/0/0 and the tiles "
+        "above the subtrees)",
+        "add the top shard, built with tinsmith tile --until-zoom (task 0 of "
+        "tinsmith slurm: shards/0.3dtiles)");
   store::requireReplaceable(out);
   store::requireReplaceable(stagePath);
   store::removeStaleTemps(out);

@@ -22,7 +22,7 @@
 // name or the stage is replaced only when it is a tinsmith store
 // (store::requireReplaceable), and every option is checked before either is
 // touched. A shard's store also holds tinsmith/shard.json, the part of the
-// pyramid it answers for.
+// pyramid it answers for, and once finished tinsmith/shard-finished.json.
 #pragma once
 
 #include <cstddef>
@@ -178,10 +178,17 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
                           const std::filesystem::path& output, const TileJobOptions& options,
                           const Progress* progress = nullptr);
 
+/// Whether `path` is a shard's store that finished, as merge takes it: not a
+/// stage left by a shard that was killed, failed or is still running, nor
+/// one that lost tiles, nor a damaged or missing store.
+bool isFinishedShard(const std::filesystem::path& path);
+
 /// Joins stores built from the same TIN and options (shards: subtrees and the
 /// tiles above them) into one, as one run would have written it. Throws
 /// usageError, before the output is touched, when the output is one of the
-/// inputs or they disagree (other input or options), and without leaving a
+/// inputs, they disagree (other input or options) or none is the top of the
+/// pyramid, inputError when one is a shard that did not finish
+/// (isFinishedShard), and without leaving a
 /// stage when a tile differs between them or a child of a refined tile is in
 /// none of them (a shard that answers for the child and lacks it found it
 /// empty).

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -13,6 +14,7 @@
 #include <thread>
 
 #include "core/base/error.hpp"
+#include "ingest/store/store_detail.hpp"
 #include "ingest/store/stored_tin.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "tests/support/run_command.hpp"
@@ -753,6 +755,32 @@ TEST(StaleTemps, OnlyTheLeftoversOfProcessesThatAreGoneAreRemoved) {
   EXPECT_EQ(treeOf(dir),
             (std::vector<std::string>{"other.3dtiles.tmp-" + gone + "-1", "site.3dtiles",
                                       "site.3dtiles.tmp-" + alive + "-3", "site.3dtiles.tmp-x-1"}));
+}
+
+TEST(StaleTemps, AWriterOnAnotherMachineIsNeverTakenForGone) {
+  // On a shared filesystem a process id means a process on the machine that
+  // named the file: another machine's writer, whatever its id, may still run.
+  const fs::path dir = test::scratchDir("stale-temps-hosts");
+  const std::string gone = "4194399", here = detail::thisHostTag();
+  const std::string elsewhere = here == "0badf00d" ? "0badf00e" : "0badf00d";
+  ASSERT_EQ(here.size(), 8u);
+  std::ofstream(dir / "site.3dtiles") << "x";
+  for (const std::string& name :
+       std::vector<std::string>{"site.3dtiles.tmp-" + gone + "-0." + here,
+                                "site.3dtiles.tmp-" + gone + "-0." + here + "-wal",
+                                "site.3dtiles.tmp-" + gone + "-1." + elsewhere,
+                                "site.3dtiles.tmp-" + gone + "-1." + elsewhere + "-shm"})
+    std::ofstream(dir / name) << "x";
+  removeStaleTemps(dir / "site.3dtiles");
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{
+                             "site.3dtiles", "site.3dtiles.tmp-" + gone + "-1." + elsewhere,
+                             "site.3dtiles.tmp-" + gone + "-1." + elsewhere + "-shm"}));
+  // This process names its own temporaries with its machine's tag.
+  const auto writer =
+      detail::tempWriter(detail::tempSibling(dir / "a.3dtiles").filename().string());
+  ASSERT_TRUE(writer);
+  EXPECT_EQ(writer->pid, static_cast<long>(::getpid()));
+  EXPECT_EQ(writer->host, here);
 }
 
 }  // namespace

@@ -15,7 +15,8 @@
 #   ancestors, with task 0's plan) and a merge after them all, which leaves
 #   out the subtrees not in the pyramid; the merged store holds the same
 #   bytes under every key as one.3dtiles;
-# - into a fresh workdir, the jobs submitted on hold, one shard's store path
+# - into a fresh workdir (its name with a space and a quote), the jobs
+#   submitted on hold, and --resume refused while they wait; one shard's store path
 #   then taken by a folder holding a foreign file (tinsmith will not replace
 #   it) and the jobs released: that task fails, the merge is CANCELLED
 #   (DependencyNeverSatisfied) and writes nothing;
@@ -156,7 +157,9 @@ done
 # submitted on hold (--sbatch-args, passed to both), then one subtree's
 # store path taken by a folder holding a foreign file, then the jobs
 # released: tinsmith tile will not replace that folder.
-again="$work/again"
+# A space and a quote in the folder's name: the scripts, the logs' paths
+# (sbatch --output) and the merge take any path.
+again="$work/again it's"
 t0=$(date +%s.%N)
 rc=0
 run_slurm "$again" "$work/merged-again.3dtiles" --submit --json --sbatch-args=--hold || rc=$?
@@ -169,6 +172,14 @@ held=$(scontrol -o show job "$array" 2>/dev/null | grep -o 'Reason=[A-Za-z]*' | 
 expect "--sbatch-args=--hold reaches the top job $top ($(job_field "$top" Reason)), the array job $array ($held) and the merge job $merge ($(job_field "$merge" Reason))" \
   test "$held" = Reason=JobHeldUser -a "$(job_field "$merge" Reason)" = JobHeldUser \
   -a "$(job_field "$top" Reason)" = JobHeldUser
+# While they wait, --resume refuses to submit them again.
+held_top=$top held_array=$array held_merge=$merge
+rc=0
+run_slurm "$again" "$work/merged-again.3dtiles" --resume --submit --json || rc=$?
+expect "--resume while the jobs are queued: refused (exit $rc), naming them, and nothing more queued" \
+  test "$rc" -eq 2 -a "$(squeue -h -o %i | cut -d_ -f1 | sort -u | wc -l)" -eq 3
+grep -q "still queued or running" "$again.err" || show "$again.err"
+top=$held_top array=$held_array merge=$held_merge
 fail_one_shard "$again" "$array" "$merge" "$victim" 240
 phase "failing run (release → merge cancelled)" "$t0"
 expect_failed_shard "$again" "$array" "$merge" "$victim" "$work/merged-again.3dtiles"

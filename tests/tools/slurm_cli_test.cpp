@@ -73,7 +73,16 @@ TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   // after every task.
   const auto commands = out.at("commands").get<std::vector<std::string>>();
   ASSERT_EQ(commands.size(), 3u) << planned.out;
-  EXPECT_EQ(commands[0].rfind("H=$(sbatch --parsable --array=0 '", 0), 0u) << commands[0];
+  // The logs' paths on the command line, quoted by the shell.
+  EXPECT_EQ(
+      commands[0].rfind("H=$(sbatch --parsable --array=0 --output='" +
+                            (work / "logs" / "shard-%a.log").string() + "' --open-mode=append '",
+                        0),
+      0u)
+      << commands[0];
+  EXPECT_NE(commands[2].find("--output='" + (work / "logs" / "merge.log").string() + "'"),
+            std::string::npos)
+      << commands[2];
   EXPECT_NE(commands[1].find("--array=1-16 --dependency=afterok:${H}_0 --kill-on-invalid-dep=yes"),
             std::string::npos)
       << commands[1];
@@ -454,6 +463,77 @@ TEST(SlurmCli, MergeLeavesOutSubtreesUnderATileThatDoesNotRefine) {
   // --unchecked-ancestors is for subtrees.
   EXPECT_EQ(
       runTinsmith(tile + " --unchecked-ancestors -o " + (dir / "u.3dtiles").string()).exitCode, 2);
+}
+
+TEST(SlurmCli, MergeRefusesAnUnfinishedShardAndAJobWithoutItsTop) {
+  const fs::path dir = scratchDir("slurm-merge-refusals");
+  const fs::path tin = dir / "site.tin";
+  ASSERT_EQ(makeHillTin(tin, "nx=61&ny=61&spacing=10&noise=0.5").exitCode, 0);
+  const std::string tile = "tile " + tin.string() + " --tolerance 0.2 --max-triangles 512 -q";
+  ASSERT_EQ(runTinsmith(tile + " -o " + (dir / "one.3dtiles").string()).exitCode, 0);
+  std::vector<fs::path> shards{dir / "0.3dtiles"};
+  ASSERT_EQ(runTinsmith(tile + " --until-zoom 1 -o " + shards[0].string()).exitCode, 0);
+  for (int k = 0; k < 4; ++k) {
+    shards.push_back(dir / (std::to_string(k + 1) + ".3dtiles"));
+    const std::string id = "1/" + std::to_string(k % 2) + "/" + std::to_string(k / 2);
+    ASSERT_EQ(runTinsmith(tile + " --subtree " + id + " --unchecked-ancestors -o " +
+                          shards.back().string())
+                  .exitCode,
+              0);
+  }
+  const auto merge = [&](const std::vector<fs::path>& inputs) {
+    std::string all;
+    for (const auto& s : inputs) all += " " + s.string();
+    return runTinsmith("merge" + all + " -q -o " + (dir / "merged.3dtiles").string());
+  };
+  // A killed shard's stage: its record, some tiles, no mark of a finish
+  // (made here from the finished store less the mark, as the stage was).
+  const fs::path stage = dir / "2.partial.3dtiles";
+  {
+    const auto finished = store::openStoreForReading(shards[2]);
+    std::vector<std::string> keys;
+    for (const auto& key : finished->keys())
+      if (key != "tinsmith/shard-finished.json") keys.push_back(key);
+    ASSERT_LT(keys.size(), finished->keys().size());
+    store::writeStore(*finished, keys, stage);
+  }
+  auto r = merge({shards[0], shards[1], stage, shards[3], shards[4]});
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("did not finish"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("2.partial.3dtiles"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "merged.3dtiles"));
+  // A finished shard that lost a tile.
+  const fs::path lost = dir / "lost.3dtiles";
+  {
+    const auto finished = store::openStoreForReading(shards[2]);
+    std::vector<std::string> keys;
+    bool dropped = false;
+    for (const auto& key : finished->keys()) {
+      if (!dropped && key.rfind("tiles/", 0) == 0) {
+        dropped = true;
+        continue;
+      }
+      keys.push_back(key);
+    }
+    ASSERT_TRUE(dropped);
+    store::writeStore(*finished, keys, lost);
+  }
+  r = merge({shards[0], shards[1], lost, shards[3], shards[4]});
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("tiles its shard finished with"), std::string::npos) << r.err;
+  // The subtrees without the top, or one alone: no pyramid's root.
+  for (const auto& inputs : {std::vector<fs::path>(shards.begin() + 1, shards.end()),
+                             std::vector<fs::path>{shards[1]}}) {
+    r = merge(inputs);
+    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_NE(r.err.find("none of the stores is the top of the pyramid"), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(dir / "merged.3dtiles"));
+  }
+  // The finished shards: one run's bytes.
+  r = merge(shards);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(readFile(dir / "merged.3dtiles"), readFile(dir / "one.3dtiles"));
 }
 
 }  // namespace

@@ -22,8 +22,8 @@
 // and with --submit runs `sbatch --array=0` (the top), `sbatch --array` of
 // the subtrees after it and `sbatch` of the merge after every task (afterok).
 // Nothing heavy runs where tinsmith slurm runs (a login node): it reads the
-// TIN's header only. --resume resubmits only the tasks that left no store
-// (a failed, cancelled or lost shard; the top too when tiler.plan is gone
+// TIN's header only. --resume resubmits only the tasks that left no finished
+// store (a failed, cancelled, lost or damaged shard; the top too when tiler.plan is gone
 // and a subtree still needs it),
 // and a new merge after them. Shards are built exactly as `tinsmith tile
 // --subtree` builds them, so the merged store has the bytes of one run.
@@ -94,8 +94,7 @@ std::string shardScript(const std::string& tinsmith, const fs::path& tin, const 
     << (1 << shardZoom) << " + x.\n"
     << "#SBATCH --job-name=tinsmith-shard\n"
     << "#SBATCH --cpus-per-task=" << cpus << "\n"
-    << "#SBATCH --output=" << (dir / "logs" / "shard-%a.log").string() << "\n"
-    << "#SBATCH --open-mode=append\n"  // a resubmitted task's log follows its failed one
+    << "# Its log: logs/shard-TASK.log (sbatch --output, on the command line).\n"
     << "set -euo pipefail\n"
     << "task=${SLURM_ARRAY_TASK_ID:?run by sbatch --array}\n"
     << "shards=" << shellQuote((dir / "shards").string()) << "\n"
@@ -120,8 +119,7 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
   s << "#!/usr/bin/env bash\n"
     << "# The merge of a tinsmith tiling job's shards (written by tinsmith slurm).\n"
     << "#SBATCH --job-name=tinsmith-merge\n"
-    << "#SBATCH --output=" << (dir / "logs" / "merge.log").string() << "\n"
-    << "#SBATCH --open-mode=append\n"
+    << "# Its log: logs/merge.log (sbatch --output, on the command line).\n"
     << "set -euo pipefail\n"
     << "shards=" << shellQuote((dir / "shards").string()) << "\n"
     << "stores=()\n"
@@ -141,13 +139,16 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
   return s.str();
 }
 
-/// The tasks that have left no store, and the top when a subtree among them
-/// needs the plan the top writes and it is gone (the merge does not read it:
-/// with every store there, nothing is rerun for it).
+/// The tasks that have left no finished store (ingest::isFinishedShard: a
+/// store that is missing, damaged or lost tiles is built again), and the
+/// top when a subtree among them needs the plan the top writes and it is
+/// gone (the merge does not read it: with every store there, nothing is
+/// rerun for it).
 std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
   std::vector<int> out;
   for (int k = 0; k < tasks; ++k)
-    if (!fs::exists(dir / "shards" / (std::to_string(k) + ".3dtiles"))) out.push_back(k);
+    if (!ingest::isFinishedShard(dir / "shards" / (std::to_string(k) + ".3dtiles")))
+      out.push_back(k);
   if (!out.empty() && out.front() != 0 && !fs::exists(dir / "tiler.plan"))
     out.insert(out.begin(), 0);
   return out;
@@ -203,34 +204,69 @@ void runSlurm(const SlurmCliOptions& o) {
   // The shards and the plan name the TIN by the CRC of its bytes in this
   // format, which a subtree shard takes from the file's header.
   ingest::requireCurrentTinFormat(tin);
-  fs::create_directories(dir / "shards");
-  fs::create_directories(dir / "logs");
+  makeFolder(dir / "shards");
+  makeFolder(dir / "logs");
   const int cpus = std::max(1, f.threads);
   writeAtomically(dir / "shard.sh", shardScript(tinsmith, tin, dir, args, o.shardZoom, cpus), true);
   writeAtomically(dir / "merge.sh", mergeScript(tinsmith, dir, output, tasks), true);
 
   std::vector<int> todo;
   if (f.resume) {
+    // A shard still queued or running would be run twice, and its stage
+    // taken from under it.
+    std::vector<std::string> submitted;
+    if (previous.is_object() && previous.contains("submissions") &&
+        previous["submissions"].is_array() && !previous["submissions"].empty()) {
+      for (const char* key : {"top", "array", "merge"}) {
+        const auto& last = previous["submissions"].back();
+        if (last.contains(key) && last[key].is_string()) submitted.push_back(last[key]);
+      }
+    }
+    if (const auto queued = queuedJobs(submitted); !queued.empty()) {
+      std::string jobs;
+      for (const auto& id : queued) jobs += (jobs.empty() ? "" : " ") + id;
+      throw usageError("jobs of this tiling job are still queued or running: " + jobs,
+                       "wait for them (squeue), or cancel them (scancel " + jobs +
+                           "), then submit again with --resume");
+    }
     todo = unfinishedTasks(dir, tasks);
   } else {
     for (int k = 0; k < tasks; ++k) todo.push_back(k);
   }
   // The top (task 0) writes the plan the subtrees read: they wait for it.
-  ArrayThenJob jobs{{}, dir / "shard.sh", dir / "merge.sh", o.sbatchArgs, {}, {}, {}, {}};
+  ArrayThenJob jobs;
+  jobs.arrayScript = dir / "shard.sh";
+  jobs.afterScript = dir / "merge.sh";
+  jobs.arrayLog = dir / "logs" / "shard-%a.log";
+  jobs.afterLog = dir / "logs" / "merge.log";
+  jobs.sbatchArgs = o.sbatchArgs;
   for (const int k : todo) (k == 0 ? jobs.headTasks : jobs.tasks).push_back(k);
   nlohmann::ordered_json submission;
   submission["tasks"] = todo;
-  if (o.submit) {
-    jobs.submit();
-    if (!jobs.headId.empty()) submission["top"] = jobs.headId;
-    if (!jobs.arrayId.empty()) submission["array"] = jobs.arrayId;
-    submission["merge"] = jobs.afterId;
-  }
   plan["submissions"] = previous.is_object() && previous.contains("submissions")
                             ? previous["submissions"]
                             : nlohmann::ordered_json::array();
-  if (o.submit) plan["submissions"].push_back(submission);
+  // The plan is written before anything is submitted, and again with the
+  // ids of what was queued — also when a submission fails half way, so the
+  // folder is this job's and --resume takes it.
   writeAtomically(planPath, plan.dump(2) + "\n", false);
+  const auto record = [&] {
+    if (!jobs.headId.empty()) submission["top"] = jobs.headId;
+    if (!jobs.arrayId.empty()) submission["array"] = jobs.arrayId;
+    if (!jobs.afterId.empty()) submission["merge"] = jobs.afterId;
+    nlohmann::ordered_json written = plan;
+    written["submissions"].push_back(submission);
+    writeAtomically(planPath, written.dump(2) + "\n", false);
+  };
+  if (o.submit) {
+    try {
+      jobs.submit();
+    } catch (const Error&) {
+      if (!jobs.headId.empty() || !jobs.arrayId.empty()) record();
+      throw;
+    }
+    record();
+  }
 
   if (f.json) {
     nlohmann::ordered_json out = submission;
@@ -259,8 +295,7 @@ void runSlurm(const SlurmCliOptions& o) {
   else
     std::cerr << "submitted the subtrees";
   if (!jobs.tasks.empty())
-    std::cerr << (jobs.headId.empty() ? "" : " ") << "as array job " << jobs.arrayId << " (tasks "
-              << arrayList(jobs.tasks) << ")";
+    std::cerr << " as array job " << jobs.arrayId << " (tasks " << arrayList(jobs.tasks) << ")";
   std::cerr << ", and the merge as job " << jobs.afterId << " after every one of them\n"
             << "follow with: squeue; the merged store is " << output.string()
             << "; a failed shard: tinsmith slurm … --resume --submit\n";

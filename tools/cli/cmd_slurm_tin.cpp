@@ -63,8 +63,7 @@ std::string blockScript(const std::string& tinsmith, const fs::path& dir, unsign
     << "# One block of a TIN built by blocks (written by tinsmith slurm-tin; see plan.json).\n"
     << "#SBATCH --job-name=tinsmith-block\n"
     << "#SBATCH --cpus-per-task=" << cpus << "\n"
-    << "#SBATCH --output=" << (dir / "logs" / "block-%a.log").string() << "\n"
-    << "#SBATCH --open-mode=append\n"  // a resubmitted task's log follows its failed one
+    << "# Its log: logs/block-TASK.log (sbatch --output, on the command line).\n"
     << "set -euo pipefail\n"
     << "task=${SLURM_ARRAY_TASK_ID:?run by sbatch --array}\n"
     << "echo \"tinsmith block task $task on $(hostname) at $(date -u +%FT%TZ)\"\n"
@@ -79,8 +78,7 @@ std::string assembleScript(const std::string& tinsmith, const fs::path& dir, con
   s << "#!/usr/bin/env bash\n"
     << "# The assembly of a TIN built by blocks (written by tinsmith slurm-tin).\n"
     << "#SBATCH --job-name=tinsmith-assemble\n"
-    << "#SBATCH --output=" << (dir / "logs" / "assemble.log").string() << "\n"
-    << "#SBATCH --open-mode=append\n"
+    << "# Its log: logs/assemble.log (sbatch --output, on the command line).\n"
     << "set -euo pipefail\n"
     << shellQuote(tinsmith) << " tin --blocks " << shellQuote(dir.string()) << " -o "
     << shellQuote(output.string()) << "\n"
@@ -139,7 +137,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
   if (!prepared) {
     // plan.json first, without the tasks: a preparation cut short leaves a
     // folder that this job's rerun prepares again.
-    fs::create_directories(dir);
+    makeFolder(dir);
     for (const auto* sub : {"points", "triangles"}) fs::remove_all(dir / sub);
     fs::remove(dir / "blocks.json");
     writeAtomically(planPath, plan.dump(2) + "\n", false);
@@ -159,7 +157,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
   }
   const std::size_t tasks = ingest::blockTasks(dir);
   plan["tasks"] = tasks;
-  fs::create_directories(dir / "logs");
+  makeFolder(dir / "logs");
   const unsigned cpus = std::max(1u, o.threads);
   writeAtomically(dir / "block.sh", blockScript(tinsmith, dir, cpus), true);
   writeAtomically(dir / "assemble.sh", assembleScript(tinsmith, dir, output, tasks), true);
@@ -171,7 +169,13 @@ void runSlurmTin(const SlurmTinOptions& o) {
   } else {
     for (std::size_t k = 0; k < tasks; ++k) todo.push_back(static_cast<int>(k));
   }
-  ArrayThenJob jobs{todo, dir / "block.sh", dir / "assemble.sh", o.sbatchArgs, {}, {}, {}, {}};
+  ArrayThenJob jobs;
+  jobs.tasks = todo;
+  jobs.arrayScript = dir / "block.sh";
+  jobs.afterScript = dir / "assemble.sh";
+  jobs.arrayLog = dir / "logs" / "block-%a.log";
+  jobs.afterLog = dir / "logs" / "assemble.log";
+  jobs.sbatchArgs = o.sbatchArgs;
   nlohmann::ordered_json submission;
   submission["tasks"] = todo;
   if (o.submit) {

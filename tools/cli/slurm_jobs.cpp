@@ -1,9 +1,14 @@
 #include "tools/cli/slurm_jobs.hpp"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 #include <utility>
 
 #include "core/base/error.hpp"
@@ -28,25 +33,104 @@ void writeAtomically(const fs::path& path, const std::string& text, bool executa
       throw ioError("cannot write '" + temp.string() + "'", fileLocation(temp.string()),
                     "check that the work folder is writable and has room");
   }
+  std::error_code ec;
   if (executable)
     fs::permissions(temp, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
-                    fs::perm_options::add);
-  fs::rename(temp, path);
+                    fs::perm_options::add, ec);
+  if (!ec) fs::rename(temp, path, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    throw ioError("cannot write '" + path.string() + "'", fileLocation(path.string()),
+                  "check that the work folder is writable");
+  }
+}
+
+void makeFolder(const fs::path& folder) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec || !fs::is_directory(folder))
+    throw ioError("cannot create the folder '" + folder.string() + "'" +
+                      (ec ? ": " + ec.message() : std::string()),
+                  fileLocation(folder.string()),
+                  "give a --workdir where you may write, on a filesystem the nodes share");
 }
 
 std::string runForOutput(const std::string& command) {
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) throw ioError("cannot run: " + command, {}, "check that sbatch is on PATH");
+  // Its stderr apart: sbatch (and a site's job_submit plugin) may warn there
+  // on success, and only stdout holds the id.
+  char errName[] = "/tmp/tinsmith-sbatch-XXXXXX";
+  const int errFd = ::mkstemp(errName);
+  if (errFd < 0) throw ioError("cannot make a temporary file in /tmp", {}, "check /tmp");
+  ::close(errFd);
+  FILE* pipe = ::popen((command + " 2>" + shellQuote(errName)).c_str(), "r");
+  if (!pipe) {
+    ::unlink(errName);
+    throw ioError("cannot run: " + command, {}, "check that sbatch is on PATH");
+  }
   std::string out;
   char buffer[4096];
   std::size_t n = 0;
   while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
   const int status = ::pclose(pipe);
+  std::string err;
+  {
+    std::ifstream in(errName, std::ios::binary);
+    err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ::unlink(errName);
+  const auto trimmed = [](std::string t) {
+    while (!t.empty() && (t.back() == '\n' || t.back() == '\r' || t.back() == ' ')) t.pop_back();
+    return t;
+  };
   if (status != 0)
-    throw ioError("`" + command + "` failed: " + out, {},
-                  "check that Slurm's clients reach the controller (SLURM_CONF, sinfo)");
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out.substr(0, out.find(';'));
+    throw ioError("`" + command + "` failed: " + trimmed(err + out), {},
+                  "check the sbatch arguments and that Slurm's clients reach the controller "
+                  "(SLURM_CONF, sinfo)");
+  // --parsable: "ID" or "ID;CLUSTER" on the last line.
+  out = trimmed(out);
+  const std::string last =
+      out.substr(out.find_last_of('\n') == std::string::npos ? 0 : out.find_last_of('\n') + 1);
+  const std::string id = last.substr(0, last.find(';'));
+  if (id.empty() || !std::all_of(id.begin(), id.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    throw ioError("`" + command + "` printed no job id: " + trimmed(out + "\n" + err), {},
+                  "check sbatch --parsable by hand");
+  return id;
+}
+
+int maxArraySize() {
+  FILE* pipe = ::popen("scontrol show config 2>/dev/null", "r");
+  if (!pipe) return 0;
+  std::string out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
+  if (::pclose(pipe) != 0) return 0;
+  const std::size_t at = out.find("MaxArraySize");
+  if (at == std::string::npos) return 0;
+  const std::size_t eq = out.find('=', at);
+  if (eq == std::string::npos) return 0;
+  return std::atoi(out.c_str() + eq + 1);
+}
+
+std::vector<std::string> queuedJobs(const std::vector<std::string>& ids) {
+  std::vector<std::string> out;
+  if (ids.empty()) return out;
+  FILE* pipe = ::popen("squeue -h -o %i 2>/dev/null", "r");
+  if (!pipe) return out;
+  std::string listed;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) listed.append(buffer, n);
+  if (::pclose(pipe) != 0) return out;
+  std::istringstream lines(listed);
+  for (std::string line; std::getline(lines, line);) {
+    // "17", "18_3" or "18_[4-9]": the job, or a task of array job 18.
+    const std::string job = line.substr(0, line.find('_'));
+    if (std::find(ids.begin(), ids.end(), job) != ids.end() &&
+        std::find(out.begin(), out.end(), job) == out.end())
+      out.push_back(job);
+  }
+  return out;
 }
 
 std::string arrayList(const std::vector<int>& tasks) {
@@ -105,20 +189,33 @@ std::string afterEvery(const std::vector<std::pair<std::string, std::vector<int>
 
 }  // namespace
 
+namespace {
+
+/// " --output=LOG --open-mode=append": the log on the command line, where
+/// the shell quotes it (an #SBATCH line takes no path with a space or a
+/// quote); a resubmitted task's log follows its failed one.
+std::string logArguments(const fs::path& log) {
+  return " --output=" + shellQuote(log.string()) + " --open-mode=append";
+}
+
+}  // namespace
+
 std::string ArrayThenJob::headCommand() const {
   if (headTasks.empty()) return "";
-  return "sbatch --parsable --array=" + arrayList(headTasks) +
+  return "sbatch --parsable --array=" + arrayList(headTasks) + logArguments(arrayLog) +
          (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(arrayScript.string());
 }
 
 std::string ArrayThenJob::arrayCommand(const std::string& head) const {
   return "sbatch --parsable --array=" + arrayList(tasks) + afterEvery({{head, headTasks}}) +
-         (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(arrayScript.string());
+         logArguments(arrayLog) + (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " +
+         shellQuote(arrayScript.string());
 }
 
 std::string ArrayThenJob::afterCommand(const std::string& id, const std::string& head) const {
   return "sbatch --parsable" + afterEvery({{head, headTasks}, {id, tasks}}) +
-         (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " + shellQuote(afterScript.string());
+         logArguments(afterLog) + (sbatchArgs.empty() ? "" : " " + sbatchArgs) + " " +
+         shellQuote(afterScript.string());
 }
 
 std::vector<std::string> ArrayThenJob::shellLines() const {
@@ -130,9 +227,27 @@ std::vector<std::string> ArrayThenJob::shellLines() const {
 }
 
 void ArrayThenJob::submit() {
-  headId = headTasks.empty() ? "" : runForOutput(headCommand());
-  arrayId = tasks.empty() ? "" : runForOutput(arrayCommand(headId));
-  afterId = runForOutput(afterCommand(arrayId, headId));
+  const int largest =
+      std::max(headTasks.empty() ? 0 : headTasks.back(), tasks.empty() ? 0 : tasks.back());
+  if (const int limit = maxArraySize(); limit > 0 && largest >= limit)
+    throw usageError("the cluster's MaxArraySize is " + std::to_string(limit) +
+                         " (array task ids below it), and this job's tasks go to " +
+                         std::to_string(largest),
+                     "ask for fewer tasks (a smaller --shard-zoom, larger blocks), or ask the "
+                     "cluster's admins to raise MaxArraySize; nothing was submitted");
+  try {
+    if (!headTasks.empty()) headId = runForOutput(headCommand());
+    if (!tasks.empty()) arrayId = runForOutput(arrayCommand(headId));
+    afterId = runForOutput(afterCommand(arrayId, headId));
+  } catch (const Error& e) {
+    std::string queued;
+    for (const auto& id : {headId, arrayId})
+      if (!id.empty()) queued += (queued.empty() ? "" : " ") + id;
+    if (queued.empty()) throw;
+    throw ioError(e.problem() + "; already queued: job " + queued, {},
+                  "cancel it (scancel " + queued +
+                      ") or let it run, then submit again with --resume --submit");
+  }
 }
 
 ProcessCost processCost() {

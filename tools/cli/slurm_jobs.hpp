@@ -15,10 +15,17 @@ namespace tinsmith::cli {
 std::string shellQuote(const std::string& text);
 /// Writes `text` to `path` through a temporary sibling and a rename.
 void writeAtomically(const std::filesystem::path& path, const std::string& text, bool executable);
+/// Creates `folder` and its parents; throws ioError naming it when it cannot.
+void makeFolder(const std::filesystem::path& folder);
 /// Runs `command` (/bin/sh) and returns its stdout up to a ';' (sbatch
 /// --parsable's "ID;CLUSTER"); throws ioError naming it and what it printed
 /// on a non-zero exit.
 std::string runForOutput(const std::string& command);
+/// The cluster's MaxArraySize (scontrol show config), or 0 when unknown.
+int maxArraySize();
+/// Those of `ids` that squeue still lists (pending or running, or a task of
+/// such an array); none when squeue cannot be run.
+std::vector<std::string> queuedJobs(const std::vector<std::string>& ids);
 /// "0-16" or "3,5,9": sbatch --array's list.
 std::string arrayList(const std::vector<int>& tasks);
 /// "afterok:A_3:A_5…": every listed task of array job `arrayId`.
@@ -38,6 +45,8 @@ std::string taskCostLines(const std::filesystem::path& logs, const std::string& 
 struct ArrayThenJob {
   std::vector<int> tasks;
   std::filesystem::path arrayScript, afterScript;
+  /// Their logs (sbatch --output; %a is the task).
+  std::filesystem::path arrayLog, afterLog;
   std::string sbatchArgs;  ///< more arguments for every job, as one string
   std::vector<int> headTasks;
   std::string headId, arrayId, afterId;
@@ -52,7 +61,10 @@ struct ArrayThenJob {
   /// The commands to run in order, as shell lines that keep each id in a
   /// variable (H, A) for the next.
   [[nodiscard]] std::vector<std::string> shellLines() const;
-  /// Runs them with sbatch --parsable; throws ioError as runForOutput.
+  /// Runs them with sbatch --parsable, the ids kept as each is queued.
+  /// Throws usageError, submitting nothing, when the cluster's MaxArraySize
+  /// is too small for the tasks; ioError as runForOutput, naming the jobs
+  /// already queued.
   void submit();
 };
 
