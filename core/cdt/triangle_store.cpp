@@ -27,6 +27,12 @@ void TriangleStore::reserveTriangles(std::size_t triangles) {
 }
 
 void TriangleStore::lop(std::vector<std::pair<VertexId, VertexId>>& todo) {
+  // Lawson's flips end: a flipped edge never comes back (each flip lowers
+  // the lifted surface), so there are fewer than one a pair of vertices.
+  // More is a bug, not a long run (a fan of thousands of points along a
+  // tile's side takes more than a few flips a point).
+  const std::size_t n = xy.size();
+  const std::size_t limit = 64 + n * (n - 1) / 2;
   std::size_t flips = 0;
   while (!todo.empty()) {
     const auto [p, q] = todo.back();
@@ -37,7 +43,7 @@ void TriangleStore::lop(std::vector<std::pair<VertexId, VertexId>>& todo) {
     const VertexId c = origin(prv(h)), d = origin(prv(twin(h)));
     if (c == kInfinite || d == kInfinite) continue;
     if (geometry::incircle(xy[p], xy[q], xy[c], xy[d]) > 0) {
-      if (++flips > 64 + 64 * xy.size()) {
+      if (++flips > limit) {
         throw internalError("edge legalization did not terminate");
       }
       flip(h);

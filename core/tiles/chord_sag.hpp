@@ -21,14 +21,16 @@ inline constexpr double kEarthRadiusOfCurvature = 6335439.327;
 class GeoReference;  // tile_content.hpp
 struct Rect;         // pyramid.hpp
 
-/// The radius the tiler plans chord sag with over `square` of a project CRS:
+/// The radius the tiler plans chord sag with over `square` of a project CRS
+/// (a tile's: the bending of a projection varies over a continent):
 /// kEarthRadiusOfCurvature, unless the projection bends its straight lines
 /// away from the ground so that a segment's chord (between its ends' places
 /// on the ellipsoid) lies more than 1 % farther from the ground at its middle
 /// than L²/8R says — then that radius shrunk to bound the farthest, with 5 %
 /// to spare. Measured at the middles of segments in four directions at 25
-/// places over the square (1/8 of its width long, from 1 to 20 km). CONUS
-/// Albers across 3 000 km: 0.84 of it; a UTM zone: the sphere's.
+/// places over the square (1/8 of its width long, from 1 to 20 km); places
+/// off the CRS's domain are left out. CONUS Albers across 3 000 km: 0.84 of
+/// it; a UTM zone: the sphere's.
 double chordSagRadius(const GeoReference& geo, const Rect& square);
 
 /// Where the plane through a triangle's corners lies deepest below a sphere

@@ -339,8 +339,6 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   int d = 0;
   while (2.0 * std::pow(4.0, d + 2) <= static_cast<double>(options_.maxTriangles) / 2) ++d;
   levelsPerTile_ = std::max(d, 1);
-  earthRadius_ =
-      options_.geo ? chordSagRadius(*options_.geo, geometry_.bounds({})) : kEarthRadiusOfCurvature;
   if (options_.region) within_ = tilerReadRegion(*options_.region);
   const Rect dataBox = options_.region ? within_ : extent;  // holds the data, if it has no box
   FitData data = fitData(tin, plan, within_);
@@ -373,6 +371,10 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   if (plan && plan->zoomLines.size() != static_cast<std::size_t>(finestZoom_) + 1)
     throw internalError("Tiler: the plan's lines are not one set a zoom to the finest");
   index_.emplace(tin);
+}
+
+double Tiler::sagRadius(const Rect& square) const {
+  return options_.geo ? chordSagRadius(*options_.geo, square) : kEarthRadiusOfCurvature;
 }
 
 Rect tilerReadRegion(const Rect& region) {
@@ -526,7 +528,7 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
                               0.5 * (1 - kEncodingShare) * zd.tolerance);
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = sideMargin(rect, zd.tolerance);
-  refine.earthRadius = earthRadius_;
+  refine.earthRadius = sagRadius(rect);
   tile.heldPoints = refineTile(tile, *index_, refine);
   tile.tolerance = zd.tolerance;
   return tile;
@@ -678,12 +680,23 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
   SectionProfile onSide, left, right;
   std::vector<SideSample> samples, kept;
   std::array<std::vector<Point3>, 4> sideLines;
-  // L² / 8R within kSideSagShare of the tolerance.
-  const double maxSideChord = std::sqrt(8 * earthRadius_ * kSideSagShare * zd.tolerance);
   const double margin = sideMargin(rect, zd.tolerance);
   for (int k = 0; k < 4; ++k) {
     auto& side = sides[k];
     const bool horizontal = k == 0 || k == 2;
+    // L² / 8R within kSideSagShare of the tolerance, R the smaller of the two
+    // tiles' that share the side, so that both cut it alike (a side on the
+    // pyramid's edge: its one tile's).
+    const double w = rect.width(), h = rect.height();
+    const Rect across = k == 0   ? Rect{rect.x0, rect.y0 - h, rect.x1, rect.y0}
+                        : k == 1 ? Rect{rect.x1, rect.y0, rect.x1 + w, rect.y1}
+                        : k == 2 ? Rect{rect.x0, rect.y1, rect.x1, rect.y1 + h}
+                                 : Rect{rect.x0 - w, rect.y0, rect.x0, rect.y1};
+    const Rect square = geometry_.bounds({});
+    const bool shared = across.x0 >= square.x0 && across.x1 <= square.x1 &&
+                        across.y0 >= square.y0 && across.y1 <= square.y1;
+    const double radius = shared ? std::min(sagRadius(rect), sagRadius(across)) : sagRadius(rect);
+    const double maxSideChord = std::sqrt(8 * radius * kSideSagShare * zd.tolerance);
     const double fixed = k == 0 ? rect.y0 : k == 1 ? rect.x1 : k == 2 ? rect.y1 : rect.x0;
     const double u0 = horizontal ? rect.x0 : rect.y0, u1 = horizontal ? rect.x1 : rect.y1;
     auto at = [&](double u, double offset = 0.0) {

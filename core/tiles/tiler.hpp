@@ -152,8 +152,9 @@ struct TilerOptions {
   /// those of the square, not of the whole TIN.
   std::optional<Rect> region;
   /// The project CRS's place on the Earth: chord sag is then planned with the
-  /// radius chordSagRadius gives over the pyramid's square (a projection
-  /// that bends straight lines more than the sphere allows for), else with
+  /// radius chordSagRadius gives over each tile's square, a side with the
+  /// smaller of its two tiles' (a projection that bends straight lines more
+  /// than the sphere allows for), else with
   /// kEarthRadiusOfCurvature. Must outlive the Tiler.
   const GeoReference* geo = nullptr;
 };
@@ -263,6 +264,9 @@ class Tiler {
   /// The lines simplified to zoom z's tolerance (not snapped to its sides).
   [[nodiscard]] std::vector<TerrainLine> simplifiedLines(int z) const;
   [[nodiscard]] int planFinestZoom() const;
+  /// The radius chord sag is planned with over a tile's square
+  /// (chordSagRadius; the sphere's without a georeference).
+  [[nodiscard]] double sagRadius(const Rect& square) const;
   /// The tile's own fit: Algorithm 8.1 over the tile's square, levelsPerTile
   /// levels, to the zoom's tolerance, of the fit data inside the square
   /// (nullopt when fewer than 3): a function of the tile alone.
@@ -308,7 +312,6 @@ class Tiler {
   int finestZoom_ = 0;
   int maxZoom_ = 0;
   int levelsPerTile_ = 5;
-  double earthRadius_ = 0.0;                ///< the sphere chord sag is planned on (chordSagRadius)
   mutable std::array<ZoomSlot, 31> zooms_;  // by zoom (PyramidGeometry::inside: z < 31)
   // The lines simplified to the finest zoom's tolerance, which every zoom
   // from finestZoom_ on has: simplified once (each zoom snaps them to its own

@@ -64,10 +64,14 @@ DecodedTile decodeTile(const fs::path& file) {
   }
   // A skirt triangle has two corners one above the other, within the
   // rounding: each is rounded on its own, by up to the record's
-  // positionErrorBound (1 % of the tolerance on a coarse tile). Two surface
-  // vertices that close across, 10 cm apart in height, would be a wall
+  // positionErrorBound (1 % of the tolerance on a coarse tile) or, without
+  // Draco, float32's step at its distance from the centre. Two surface
+  // vertices that close across, and steeper than 2:1, would be a wall
   // narrower than the rounding.
-  const double rounding = 0.05 + 4 * out.record.positionErrorBound;
+  double farthest = 0.0;
+  for (const auto& p : glb.mesh.positions)
+    farthest = std::max(farthest, std::hypot(double(p[0]), double(p[1]), double(p[2])));
+  const double rounding = 0.05 + 4 * out.record.positionErrorBound + 5e-7 * farthest;
   const auto& ix = glb.mesh.indices;
   for (std::size_t t = 0; t + 2 < ix.size(); t += 3) {
     const std::array<std::uint32_t, 3> tri{ix[t], ix[t + 1], ix[t + 2]};
@@ -78,7 +82,8 @@ DecodedTile decodeTile(const fs::path& file) {
       const encode::Geodetic ga = encode::ecefToGeodetic(a), gb = encode::ecefToGeodetic(b);
       const double across = std::hypot((ga.lon - gb.lon) * kDeg * 6.4e6 * std::cos(ga.lat * kDeg),
                                        (ga.lat - gb.lat) * kDeg * 6.4e6);
-      if (across < rounding && std::abs(ga.height - gb.height) > 0.1) skirt = true;
+      const double drop = std::abs(ga.height - gb.height);
+      if (across < rounding && drop > 2 * across && drop > 1e-3) skirt = true;
     }
     (skirt ? out.skirts : out.surface).push_back(tri);
   }
