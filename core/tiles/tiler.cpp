@@ -514,7 +514,8 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   const Zoom& zd = zoom(id.z);
   const Rect rect = geometry_.bounds(id);
   const std::optional<fit::MultilevelFit> fit = tileFit(id, zd.tolerance);
-  const TileInput input = tileInput(id, zd, fit ? &*fit : nullptr);
+  const double radius = sagRadius(rect);
+  const TileInput input = tileInput(id, zd, fit ? &*fit : nullptr, radius);
   TileSurface tile = triangulateTile(id, rect, input, zd.lines);
   if (tile.empty()) return tile;
   fitTile(tile, fit ? &*fit : nullptr);
@@ -528,7 +529,7 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
                               0.5 * (1 - kEncodingShare) * zd.tolerance);
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = sideMargin(rect, zd.tolerance);
-  refine.earthRadius = sagRadius(rect);
+  refine.earthRadius = radius;
   tile.heldPoints = refineTile(tile, *index_, refine);
   tile.tolerance = zd.tolerance;
   return tile;
@@ -614,8 +615,8 @@ double Tiler::offTinZ(int z, std::uint64_t column, std::uint64_t row) const {
   return 0.0;
 }
 
-Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
-                                  const fit::MultilevelFit* fit) const {
+Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd, const fit::MultilevelFit* fit,
+                                  double radius) const {
   const Rect rect = geometry_.bounds(id);
   const double snap = rect.width() * 1e-9;
   TileInput input;
@@ -695,8 +696,8 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd,
     const Rect square = geometry_.bounds({});
     const bool shared = across.x0 >= square.x0 && across.x1 <= square.x1 &&
                         across.y0 >= square.y0 && across.y1 <= square.y1;
-    const double radius = shared ? std::min(sagRadius(rect), sagRadius(across)) : sagRadius(rect);
-    const double maxSideChord = std::sqrt(8 * radius * kSideSagShare * zd.tolerance);
+    const double sideRadius = shared ? std::min(radius, sagRadius(across)) : radius;
+    const double maxSideChord = std::sqrt(8 * sideRadius * kSideSagShare * zd.tolerance);
     const double fixed = k == 0 ? rect.y0 : k == 1 ? rect.x1 : k == 2 ? rect.y1 : rect.x0;
     const double u0 = horizontal ? rect.x0 : rect.y0, u1 = horizontal ? rect.x1 : rect.y1;
     auto at = [&](double u, double offset = 0.0) {

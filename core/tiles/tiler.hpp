@@ -277,8 +277,9 @@ class Tiler {
   /// A z for a tile corner of zoom z off the TIN that every tile holding it
   /// agrees on: the nearest TIN vertex's (the plan's, to its cornerZoom).
   [[nodiscard]] double offTinZ(int z, std::uint64_t column, std::uint64_t row) const;
-  [[nodiscard]] TileInput tileInput(const TileId& id, const Zoom& zd,
-                                    const fit::MultilevelFit* fit) const;
+  /// `radius`: sagRadius of the tile's square.
+  [[nodiscard]] TileInput tileInput(const TileId& id, const Zoom& zd, const fit::MultilevelFit* fit,
+                                    double radius) const;
   [[nodiscard]] TileSurface triangulateTile(const TileId& id, const Rect& rect,
                                             const TileInput& input,
                                             const std::vector<TerrainLine>& zoomLines) const;

@@ -55,6 +55,21 @@ void makeFolder(const fs::path& folder) {
                   "give a --workdir where you may write, on a filesystem the nodes share");
 }
 
+namespace {
+
+/// Runs `command` (/bin/sh) and returns pclose's status, its stdout in `out`;
+/// −1 when it cannot be started.
+int runReading(const std::string& command, std::string& out) {
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) return -1;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
+  return ::pclose(pipe);
+}
+
+}  // namespace
+
 std::string runForOutput(const std::string& command) {
   // Its stderr apart: sbatch (and a site's job_submit plugin) may warn there
   // on success, and only stdout holds the id.
@@ -62,16 +77,12 @@ std::string runForOutput(const std::string& command) {
   const int errFd = ::mkstemp(errName);
   if (errFd < 0) throw ioError("cannot make a temporary file in /tmp", {}, "check /tmp");
   ::close(errFd);
-  FILE* pipe = ::popen((command + " 2>" + shellQuote(errName)).c_str(), "r");
-  if (!pipe) {
+  std::string out;
+  const int status = runReading(command + " 2>" + shellQuote(errName), out);
+  if (status == -1) {
     ::unlink(errName);
     throw ioError("cannot run: " + command, {}, "check that sbatch is on PATH");
   }
-  std::string out;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
-  const int status = ::pclose(pipe);
   std::string err;
   {
     std::ifstream in(errName, std::ios::binary);
@@ -98,13 +109,8 @@ std::string runForOutput(const std::string& command) {
 }
 
 int maxArraySize() {
-  FILE* pipe = ::popen("scontrol show config 2>/dev/null", "r");
-  if (!pipe) return 0;
   std::string out;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
-  if (::pclose(pipe) != 0) return 0;
+  if (runReading("scontrol show config 2>/dev/null", out) != 0) return 0;
   const std::size_t at = out.find("MaxArraySize");
   if (at == std::string::npos) return 0;
   const std::size_t eq = out.find('=', at);
@@ -115,13 +121,8 @@ int maxArraySize() {
 std::vector<std::string> queuedJobs(const std::vector<std::string>& ids) {
   std::vector<std::string> out;
   if (ids.empty()) return out;
-  FILE* pipe = ::popen("squeue -h -o %i 2>/dev/null", "r");
-  if (!pipe) return out;
   std::string listed;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) listed.append(buffer, n);
-  if (::pclose(pipe) != 0) return out;
+  if (runReading("squeue -h -o %i 2>/dev/null", listed) != 0) return out;
   std::istringstream lines(listed);
   for (std::string line; std::getline(lines, line);) {
     // "17", "18_3" or "18_[4-9]": the job, or a task of array job 18.
