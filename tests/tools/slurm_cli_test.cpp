@@ -536,5 +536,47 @@ TEST(SlurmCli, MergeRefusesAnUnfinishedShardAndAJobWithoutItsTop) {
   EXPECT_EQ(readFile(dir / "merged.3dtiles"), readFile(dir / "one.3dtiles"));
 }
 
+TEST(SlurmCli, StrictEndsTheMergeWithExitOneWhenATileMissesItsTolerance) {
+  // 64 triangles a tile cannot hold the hill within 5 cm: tiles miss their
+  // zoom's tolerance. The shards do not fail for it (the merge runs after
+  // them); with --strict the merge writes the store, tells what it holds and
+  // what the shards cost, and ends with exit code 1.
+  const fs::path dir = scratchDir("slurm-cli-strict");
+  const fs::path tin = dir / "site.tin";
+  ASSERT_EQ(makeHillTin(tin, "nx=61&ny=61&spacing=10&noise=0.5").exitCode, 0);
+  const std::string tight = " --tolerance 0.05 --max-triangles 64 -q";
+  ASSERT_EQ(runTinsmith("tile " + tin.string() + tight + " -o " + (dir / "one.3dtiles").string())
+                .exitCode,
+            0);
+  for (const bool strict : {false, true}) {
+    SCOPED_TRACE(strict);
+    const std::string name = strict ? "strict" : "lenient";
+    const fs::path work = dir / name;
+    const fs::path merged = dir / (name + ".3dtiles");
+    const auto planned =
+        runTinsmith("slurm " + tin.string() + tight + (strict ? " --strict" : "") +
+                    " --shard-zoom 1 --workdir " + work.string() + " -o " + merged.string());
+    ASSERT_EQ(planned.exitCode, 0) << planned.err;
+    for (int k = 0; k < 5; ++k) {
+      const auto task = runCommand("SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " +
+                                   (work / "shard.sh").string());
+      EXPECT_EQ(task.exitCode, 0) << "task " << k << ": " << task.err;
+    }
+    const auto merge = runCommand("bash " + (work / "merge.sh").string());
+    EXPECT_EQ(merge.exitCode, strict ? 1 : 0) << merge.err;
+    EXPECT_NE(merge.err.find("over their zoom's tolerance"), std::string::npos) << merge.err;
+    EXPECT_NE(merge.out.find("  all: CPU "), std::string::npos) << merge.out;
+    EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+    // merge --strict itself, on the same shards.
+    std::string stores;
+    for (int k = 0; k < 5; ++k)
+      stores += " " + (work / "shards" / (std::to_string(k) + ".3dtiles")).string();
+    const auto again = runTinsmith("merge" + stores + (strict ? " --strict" : "") + " -q -o " +
+                                   (dir / (name + "-again.3dtiles")).string());
+    EXPECT_EQ(again.exitCode, strict ? 1 : 0) << again.err;
+    EXPECT_EQ(readFile(dir / (name + "-again.3dtiles")), readFile(dir / "one.3dtiles"));
+  }
+}
+
 }  // namespace
 }  // namespace tinsmith::test

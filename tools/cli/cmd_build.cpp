@@ -149,7 +149,7 @@ void run(const BuildCliOptions& o) {
   } else {
     std::cerr << missedToleranceText(tiles);
   }
-  requireWithinTolerance(tiles, f);
+  requireWithinTolerance(tiles, f.strict);
 }
 
 }  // namespace

@@ -114,7 +114,7 @@ std::string shardScript(const std::string& tinsmith, const fs::path& tin, const 
 }
 
 std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const fs::path& output,
-                        int tasks) {
+                        int tasks, bool strict) {
   std::ostringstream s;
   s << "#!/usr/bin/env bash\n"
     << "# The merge of a tinsmith tiling job's shards (written by tinsmith slurm).\n"
@@ -131,11 +131,17 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     << "  fi\n"
     << "  stores+=(\"$shards/$task.3dtiles\")\n"
     << "done\n"
-    << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string()) << "\n"
+    // With --strict the merge's exit code 1 (a tile over its zoom's
+    // tolerance) is the job's, after the store, info and the costs.
+    << "merged=0\n"
+    << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string())
+    << (strict ? " --strict" : "") << " || merged=$?\n"
+    << "if [ \"$merged\" -ne 0 ] && [ \"$merged\" -ne 1 ]; then exit \"$merged\"; fi\n"
     << shellQuote(tinsmith) << " info " << shellQuote(output.string())
     << "\n"
     // What each shard cost, from tinsmith tile's "process:" line in its log.
-    << taskCostLines(dir / "logs", "shard", "shard", static_cast<std::size_t>(tasks));
+    << taskCostLines(dir / "logs", "shard", "shard", static_cast<std::size_t>(tasks))
+    << "exit \"$merged\"\n";
   return s.str();
 }
 
@@ -208,7 +214,7 @@ void runSlurm(const SlurmCliOptions& o) {
   makeFolder(dir / "logs");
   const int cpus = std::max(1, f.threads);
   writeAtomically(dir / "shard.sh", shardScript(tinsmith, tin, dir, args, o.shardZoom, cpus), true);
-  writeAtomically(dir / "merge.sh", mergeScript(tinsmith, dir, output, tasks), true);
+  writeAtomically(dir / "merge.sh", mergeScript(tinsmith, dir, output, tasks, f.strict), true);
 
   std::vector<int> todo;
   if (f.resume) {
@@ -324,6 +330,10 @@ void addSlurmCommand(CLI::App& app) {
       ->description(
           "With --submit: submit only the shards that left no store (failed, cancelled or lost) "
           "and a merge after them");
+  cmd->get_option("--strict")
+      ->description(
+          "The merge job ends with exit code 1 (the merged store is still written) when a tile's "
+          "measured error is over its zoom's tolerance (the shards do not fail for it)");
   cmd->get_option("--threads")
       ->description("Cores each shard asks Slurm for (--cpus-per-task) and runs on (default 1)");
   cmd->callback([opt] { runSlurm(*opt); });

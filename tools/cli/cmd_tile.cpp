@@ -49,6 +49,7 @@ struct MergeCliOptions {
   std::string output;
   bool json = false;
   bool quiet = false;
+  bool strict = false;
 };
 
 }  // namespace
@@ -134,7 +135,7 @@ void addTileCommand(CLI::App& app) {
       return;
     }
     reportTileJob(summary, opt->output, f.json, f.quiet);
-    requireWithinTolerance(summary, f);
+    requireWithinTolerance(summary, f.strict);
   });
 
   auto merge = std::make_shared<MergeCliOptions>();
@@ -145,10 +146,14 @@ void addTileCommand(CLI::App& app) {
   addOutputOption(*mcmd, merge->output, "The joined store (.3dtiles or a directory)")->required();
   addQuietFlag(*mcmd, merge->quiet, "No summary");
   addJsonFlag(*mcmd, merge->json, "Print the summary as JSON on stdout");
+  mcmd->add_flag("--strict", merge->strict,
+                 "Exit with code 1 (the store is still written) when a tile's measured error is "
+                 "over its zoom's tolerance");
   mcmd->callback([merge] {
     std::vector<std::filesystem::path> inputs(merge->inputs.begin(), merge->inputs.end());
     const auto summary = ingest::mergeTileStores(inputs, merge->output);
     reportTileJob(summary, merge->output, merge->json, merge->quiet);
+    requireWithinTolerance(summary, merge->strict);
   });
 }
 

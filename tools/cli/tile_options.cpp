@@ -91,8 +91,8 @@ void reportTileJob(ingest::TileJobSummary summary, const std::string& output, bo
   std::cerr << missedToleranceText(summary);
 }
 
-void requireWithinTolerance(const ingest::TileJobSummary& summary, const TileFlags& flags) {
-  if (flags.strict && (!summary.missed.empty() || (summary.terrain && !summary.terrain->missed.empty())))
+void requireWithinTolerance(const ingest::TileJobSummary& summary, bool strict) {
+  if (strict && (!summary.missed.empty() || (summary.terrain && !summary.terrain->missed.empty())))
     throw CheckFailed{};
 }
 

@@ -42,8 +42,8 @@ ingest::TileJobOptions withTileFlags(ingest::TileJobOptions base, const TileFlag
 void reportTileJob(ingest::TileJobSummary summary, const std::string& output, bool json,
                    bool quiet);
 
-/// With --strict, throws CheckFailed (exit code 1) when a tile is over its
-/// zoom's tolerance; the store is written and reported first.
-void requireWithinTolerance(const ingest::TileJobSummary& summary, const TileFlags& flags);
+/// When `strict` (--strict), throws CheckFailed (exit code 1) when a tile is
+/// over its zoom's tolerance; the store is written and reported first.
+void requireWithinTolerance(const ingest::TileJobSummary& summary, bool strict);
 
 }  // namespace tinsmith::cli
