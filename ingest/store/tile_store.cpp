@@ -235,6 +235,17 @@ void recoverInterruptedWrite(const std::filesystem::path& path) {
   sqlite3_close_v2(db);
 }
 
+// Whether another connection holds `path` locked now (a run writing it, in
+// SQLite's exclusive locking mode, or any process in a transaction on it).
+bool lockedByAnother(const std::filesystem::path& path) {
+  sqlite3* db = nullptr;
+  int rc = sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+  if (rc == SQLITE_OK)
+    rc = sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr);
+  sqlite3_close_v2(db);
+  return (rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED;
+}
+
 std::string foreignText(std::size_t count, const std::string& first) {
   return "it holds '" + first + "'" +
          (count > 1 ? " and " + std::to_string(count - 1) + " other file" + (count > 2 ? "s" : "") +
@@ -272,6 +283,12 @@ void requireReplaceable(const std::filesystem::path& path) {
   try {
     keys = detail::openArchive(clean, detail::Access::Read)->keys();
   } catch (const Error& e) {
+    // Most likely a run that is writing it: not to be moved away.
+    if (lockedByAnother(clean))
+      throw ioError("is locked by another process (" + e.problem() + ")", fileLocation(clean),
+                    "another run is probably writing it (tinsmith tile, merge or build to the "
+                    "same output): wait for it to end, or give another output path; moving or "
+                    "removing the archive while it runs loses that run's tiles");
     refuseReplacing(clean, "is not a tinsmith tile archive (" + e.problem() + ")");
   }
   std::size_t foreign = 0;

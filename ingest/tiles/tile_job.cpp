@@ -761,13 +761,15 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     }
     finish(stage, stagePath, out, records, build);
   } catch (...) {
-    // The stage was made by this merge and is of no use to another.
+    // The stage was made by this merge and is of no use to another; an
+    // archive's SQLite files too (left when the disk filled up).
     stage.reset();
     std::error_code ec;
     if (fs::is_directory(stagePath, ec)) {
       fs::remove_all(stagePath, ec);
     } else {
-      fs::remove(stagePath, ec);
+      for (const char* suffix : {"", "-journal", "-wal", "-shm"})
+        fs::remove(stagePath.string() + suffix, ec);
     }
     throw;
   }

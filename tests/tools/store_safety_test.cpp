@@ -3,8 +3,10 @@
 // never emptied or replaced (not even the working folder); an option that is
 // refused touches nothing; a run killed at any moment, a full disk, a file-size
 // limit and a read-only filesystem leave the old store whole and readable,
-// with the error naming the path. Merge refuses an input as its output and a
-// refined tile without all its children; --resume reuses a finished store.
+// with the error naming the path (a merge leaves none of its stage's files);
+// an archive another process holds locked is said to be in use, not foreign.
+// Merge refuses an input as its output and a refined tile without all its
+// children; --resume reuses a finished store.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -404,6 +406,32 @@ TEST(StoreSafety, AnArchiveWithAKilledWritersJournalIsStillReplaced) {
   EXPECT_TRUE(readable(store));
 }
 
+TEST(StoreSafety, AnArchiveAnotherProcessHoldsLockedIsLeftAloneAndSaidSo) {
+  // Another process (a run writing the archive, in SQLite's exclusive mode)
+  // holds the store locked: the error says so and what to do, and never
+  // asks for it to be moved away; the store is untouched.
+  const auto dir = scratchDir("safety-locked");
+  const auto tin = hillTin(dir);
+  const auto store = dir / "site.3dtiles";
+  ASSERT_EQ(runTinsmith(tileArgs(tin, 0.5) + " -o " + store.string()).exitCode, 0);
+  const std::string bytes = readFile(store);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(store.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "PRAGMA locking_mode = EXCLUSIVE; BEGIN EXCLUSIVE;", nullptr, nullptr,
+                         nullptr),
+            SQLITE_OK);
+  const auto r = runTinsmith(tileArgs(tin, 0.2) + " -o " + store.string());
+  sqlite3_exec(db, "ROLLBACK;", nullptr, nullptr, nullptr);
+  sqlite3_close_v2(db);
+  EXPECT_EQ(r.exitCode, 5) << r.err;
+  EXPECT_NE(r.err.find(store.string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("locked by another process"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("wait for it to end"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("move what is there away"), std::string::npos) << r.err;
+  EXPECT_EQ(readFile(store), bytes);
+  EXPECT_TRUE(readable(store));
+}
+
 TEST(StoreSafety, AFileSizeLimitIsAnErrorNamingTheFileAndTheOldStoreStays) {
   const auto dir = scratchDir("safety-ulimit");
   const auto tin = hillTin(dir);
@@ -468,6 +496,24 @@ TEST(StoreSafety, AFullDiskOrAReadOnlyFilesystemLeavesTheOldStoreWhole) {
     EXPECT_NE(r.err.find(mount.string()), std::string::npos) << r.err;
     EXPECT_EQ(snapshot(store), before) << megabytes << " MB, " << name;
     EXPECT_TRUE(readable(store));
+  }
+  // A merge that fills the disk: the old store whole, and nothing of the
+  // merge's stage left beside it (SQLite's -wal and -shm neither).
+  {
+    const auto shards = makeShards(dir, tileArgs(tin, 0.2));
+    const auto mount = dir / "disk-merge";
+    SmallFilesystem disk(mount, std::size_t(3) << 20);
+    ASSERT_TRUE(disk.mounted());
+    const auto store = mount / "site.3dtiles";
+    fs::copy(dir / "old-site.3dtiles", store);
+    const std::string bytes = readFile(store);
+    std::string inputs;
+    for (const auto& s : shards) inputs += " " + s;
+    const auto r = runTinsmith("merge" + inputs + " -q -o " + store.string());
+    EXPECT_EQ(r.exitCode, 5) << r.err;
+    EXPECT_NE(r.err.find(mount.string()), std::string::npos) << r.err;
+    EXPECT_EQ(readFile(store), bytes);
+    EXPECT_EQ(namesIn(mount), std::vector<std::string>{"site.3dtiles"});
   }
   const auto mount = dir / "read-only";
   SmallFilesystem disk(mount, std::size_t(8) << 20);
