@@ -415,10 +415,19 @@ void checkTileJobOptions(const TileJobOptions& o) {
                      "shard the 3D Tiles with --scheme 3d-tiles");
 }
 
+void requireTinCrs(const std::string& crs, const std::string& tinName) {
+  if (crs.empty())
+    throw inputError("the TIN has no CRS, so its tiles cannot be placed on the globe",
+                     fileLocation(tinName),
+                     "build it again with one: tinsmith tin … --crs EPSG:… (e.g. EPSG:32612 for "
+                     "UTM 12N), or a config's project.crs");
+}
+
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const fs::path& output,
                           const TileJobOptions& options, const Progress* progress) {
   checkTileJobOptions(options);
   const auto start = std::chrono::steady_clock::now();
+  requireTinCrs(tin.crs, tinName);
   // Heights and tolerances are metres: a TIN in a CRS of feet is refused.
   checkProjectCrs(tin.crs, "the CRS of " + tinName);
   // Both frames place the tiles through the TIN's CRS (the local frame's

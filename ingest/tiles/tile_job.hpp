@@ -168,6 +168,10 @@ struct TileJobSummary {
   std::size_t peakMemoryBytes = 0;
 };
 
+/// Throws inputError naming `tinName` when its CRS is empty (a TIN built
+/// without --crs): tiles are placed on the globe through it.
+void requireTinCrs(const std::string& crs, const std::string& tinName);
+
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into
 /// `output`. With `resume`, tiles are taken from the stage and from a
 /// finished store at `output`. Throws usageError for bad options (a --resume

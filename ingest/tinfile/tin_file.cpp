@@ -1406,7 +1406,8 @@ TinFileHeader readTinFileHeader(const std::filesystem::path& path) {
   requireReadableFile(path, name);
   const MappedFile file(path, name);
   const CheckedPayload payload = checkedPayload(file.bytes(), name);
-  return {payload.version, payload.fileCrc};
+  PayloadReader r(payload.bytes.data(), payload.bytes.size(), name);
+  return {payload.version, payload.fileCrc, r.getString("CRS text")};
 }
 
 void requireCurrentTinFormat(const std::filesystem::path& path) {

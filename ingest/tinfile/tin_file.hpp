@@ -116,6 +116,9 @@ TinData readTinFile(const std::filesystem::path& path);
 struct TinFileHeader {
   std::uint32_t version = 0;
   std::uint32_t fileCrc = 0;  ///< CRC-32 of the whole file, from the header alone
+  /// The payload's first section, which follows the header (unchecked: the
+  /// frame's CRC covers it, checked when the file is read).
+  std::string crs;
 };
 TinFileHeader readTinFileHeader(const std::filesystem::path& path);
 /// Throws inputError naming the file unless it is of kTinFormatVersion, as

@@ -83,7 +83,25 @@ TEST(TileCli, BadInputFailsClearlyAndLeavesNoStore) {
   EXPECT_EQ(r.exitCode, 3) << r.err;
   r = runTinsmith("tile " + tin.string() + " --subtree 9/999/0 -o " + (dir / "d.3dtiles").string());
   EXPECT_EQ(r.exitCode, 2) << r.err;
-  for (const char* name : {"a.3dtiles", "b.3dtiles", "c.3dtiles", "d.3dtiles"}) {
+  // A TIN built without --crs: what to do, from tile and from slurm (which
+  // reads the CRS from the file's head, before it writes anything).
+  const auto bare = dir / "bare.tin";
+  r = runTinsmith(
+      "tin --points 'synthetic:grid?nx=31&ny=31&spacing=25&surface=hill&z0=100&scale=20' -q -o " +
+      bare.string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::vector<std::string> commands = {
+      "tile " + bare.string() + " -o " + (dir / "e.3dtiles").string(),
+      "slurm " + bare.string() + " --shard-zoom 1 --workdir " + (dir / "work").string() + " -o " +
+          (dir / "f.3dtiles").string()};
+  for (const auto& command : commands) {
+    r = runTinsmith(command);
+    EXPECT_EQ(r.exitCode, 3) << command << ": " << r.err;
+    EXPECT_NE(r.err.find(bare.string() + ": the TIN has no CRS"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--crs EPSG:"), std::string::npos) << r.err;
+  }
+  for (const char* name :
+       {"a.3dtiles", "b.3dtiles", "c.3dtiles", "d.3dtiles", "e.3dtiles", "f.3dtiles", "work"}) {
     EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
   }
 }
