@@ -578,5 +578,88 @@ TEST(SlurmCli, StrictEndsTheMergeWithExitOneWhenATileMissesItsTolerance) {
   }
 }
 
+/// A folder of stand-ins for sbatch and squeue, first on PATH: sbatch
+/// queues job 101, 102, … and fails on its call number `failAt` (the queue
+/// refusing a job) with a message on stderr; squeue lists the ids written in
+/// `queue`. Slurm itself cannot be made to fail half way on purpose.
+struct FailingSbatch {
+  fs::path bin;
+  FailingSbatch(const fs::path& dir, int failAt) : bin(dir / "bin") {
+    fs::create_directories(bin);
+    std::ofstream(bin / "sbatch") << "#!/bin/sh\n"
+                                  << "n=$(cat '" << (bin / "calls").string()
+                                  << "' 2>/dev/null || echo 0); n=$((n + 1))\n"
+                                  << "echo $n > '" << (bin / "calls").string() << "'\n"
+                                  << "if [ $n -eq " << failAt
+                                  << " ]; then echo 'sbatch: error: QOSMaxSubmitJobPerUserLimit' "
+                                     ">&2; exit 1; fi\n"
+                                  << "echo $((100 + n))\n";
+    std::ofstream(bin / "squeue") << "#!/bin/sh\ncat '" << (bin / "queue").string()
+                                  << "' 2>/dev/null\n";
+    std::ofstream(bin / "queue");
+    for (const char* name : {"sbatch", "squeue"})
+      fs::permissions(bin / name, fs::perms::owner_all, fs::perm_options::add);
+  }
+  [[nodiscard]] CommandResult run(const std::string& arguments) const {
+    return runCommand("PATH='" + bin.string() + "':\"$PATH\" " + TINSMITH_BINARY + " " + arguments);
+  }
+  void queue(const std::string& ids) const { std::ofstream(bin / "queue") << ids; }
+};
+
+TEST(SlurmCli, ASubmissionThatFailsHalfWayIsRecordedAndResumedOnlyOnceItsJobsAreGone) {
+  // tinsmith slurm (three sbatch calls: the top, the subtrees, the merge)
+  // and slurm-tin (two: the blocks, the assembly), the second call failing:
+  // the error names what was queued and how to cancel it, plan.json records
+  // it, and --resume refuses while it is queued and submits once it is gone.
+  const fs::path dir = scratchDir("slurm-cli-half-submitted");
+  const fs::path tin = dir / "site.tin";
+  ASSERT_EQ(makeHillTin(tin, "nx=41&ny=41&spacing=10").exitCode, 0);
+  struct Job {
+    std::string name, arguments, afterKey;
+    std::vector<std::string> queued;  ///< the ids recorded before the failure
+  };
+  const std::vector<Job> jobs = {
+      {"slurm",
+       "slurm " + tin.string() + " --shard-zoom 1 -o " + (dir / "a.3dtiles").string(),
+       "merge",
+       {"top"}},
+      {"slurm-tin",
+       "slurm-tin --points 'synthetic:random?n=3000&seed=3&width=600&height=500&x0=431000"
+       "&y0=4512000' --crs EPSG:26912 --block-points 1000 --max-circumradius 60 -o " +
+           (dir / "b.tin").string(),
+       "assemble",
+       {"array"}}};
+  for (const auto& job : jobs) {
+    SCOPED_TRACE(job.name);
+    const FailingSbatch sbatch(dir / job.name, 2);
+    const fs::path work = dir / job.name / "work";
+    const std::string args = job.arguments + " -q --workdir " + work.string() + " --submit";
+    auto r = sbatch.run(args);
+    EXPECT_EQ(r.exitCode, 5) << r.err;
+    EXPECT_NE(r.err.find("QOSMaxSubmitJobPerUserLimit"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("scancel 101"), std::string::npos) << r.err;
+    auto plan = nlohmann::json::parse(readFile(work / "plan.json"));
+    ASSERT_EQ(plan.at("submissions").size(), 1u) << plan.dump(2);
+    const auto& first = plan["submissions"][0];
+    EXPECT_EQ(first.at(job.queued[0]).get<std::string>(), "101") << first;
+    EXPECT_FALSE(first.contains(job.afterKey)) << first;
+    // While job 101 is queued, --resume submits nothing.
+    sbatch.queue("101\n");
+    r = sbatch.run(args + " --resume");
+    EXPECT_EQ(r.exitCode, 2) << r.err;
+    EXPECT_NE(r.err.find("still queued or running: 101"), std::string::npos) << r.err;
+    EXPECT_EQ(readFile(sbatch.bin / "calls"), "2\n");
+    // Once it is gone (cancelled), --resume submits the job whole again:
+    // nothing it queued ran.
+    sbatch.queue("");
+    r = sbatch.run(args + " --resume");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    plan = nlohmann::json::parse(readFile(work / "plan.json"));
+    ASSERT_EQ(plan.at("submissions").size(), 2u) << plan.dump(2);
+    EXPECT_EQ(plan["submissions"][1].at("tasks"), plan["submissions"][0].at("tasks"));
+    EXPECT_TRUE(plan["submissions"][1].contains(job.afterKey)) << plan.dump(2);
+  }
+}
+
 }  // namespace
 }  // namespace tinsmith::test

@@ -25,7 +25,9 @@
 // TIN's header only. --resume resubmits only the tasks that left no finished
 // store (a failed, cancelled, lost or damaged shard; the top too when tiler.plan is gone
 // and a subtree still needs it),
-// and a new merge after them. Shards are built exactly as `tinsmith tile
+// and a new merge after them, and refuses while the last submission's jobs
+// are queued or running (plan.json records their ids, also of a submission
+// that failed half way). Shards are built exactly as `tinsmith tile
 // --subtree` builds them, so the merged store has the bytes of one run.
 #include <charconv>
 #include <cstdio>
@@ -219,23 +221,7 @@ void runSlurm(const SlurmCliOptions& o) {
 
   std::vector<int> todo;
   if (f.resume) {
-    // A shard still queued or running would be run twice, and its stage
-    // taken from under it.
-    std::vector<std::string> submitted;
-    if (previous.is_object() && previous.contains("submissions") &&
-        previous["submissions"].is_array() && !previous["submissions"].empty()) {
-      for (const char* key : {"top", "array", "merge"}) {
-        const auto& last = previous["submissions"].back();
-        if (last.contains(key) && last[key].is_string()) submitted.push_back(last[key]);
-      }
-    }
-    if (const auto queued = queuedJobs(submitted); !queued.empty()) {
-      std::string jobs;
-      for (const auto& id : queued) jobs += (jobs.empty() ? "" : " ") + id;
-      throw usageError("jobs of this tiling job are still queued or running: " + jobs,
-                       "wait for them (squeue), or cancel them (scancel " + jobs +
-                           "), then submit again with --resume");
-    }
+    refuseWhileQueued(previous);
     todo = unfinishedTasks(dir, tasks);
   } else {
     for (int k = 0; k < tasks; ++k) todo.push_back(k);
@@ -248,32 +234,9 @@ void runSlurm(const SlurmCliOptions& o) {
   jobs.afterLog = dir / "logs" / "merge.log";
   jobs.sbatchArgs = o.sbatchArgs;
   for (const int k : todo) (k == 0 ? jobs.headTasks : jobs.tasks).push_back(k);
-  nlohmann::ordered_json submission;
-  submission["tasks"] = todo;
-  plan["submissions"] = previous.is_object() && previous.contains("submissions")
-                            ? previous["submissions"]
-                            : nlohmann::ordered_json::array();
-  // The plan is written before anything is submitted, and again with the
-  // ids of what was queued — also when a submission fails half way, so the
-  // folder is this job's and --resume takes it.
-  writeAtomically(planPath, plan.dump(2) + "\n", false);
-  const auto record = [&] {
-    if (!jobs.headId.empty()) submission["top"] = jobs.headId;
-    if (!jobs.arrayId.empty()) submission["array"] = jobs.arrayId;
-    if (!jobs.afterId.empty()) submission["merge"] = jobs.afterId;
-    nlohmann::ordered_json written = plan;
-    written["submissions"].push_back(submission);
-    writeAtomically(planPath, written.dump(2) + "\n", false);
-  };
-  if (o.submit) {
-    try {
-      jobs.submit();
-    } catch (const Error&) {
-      if (!jobs.headId.empty() || !jobs.arrayId.empty()) record();
-      throw;
-    }
-    record();
-  }
+  if (previous.is_object() && previous.contains("submissions"))
+    plan["submissions"] = previous["submissions"];
+  const auto submission = submitAndRecord(jobs, plan, planPath, "merge", o.submit);
 
   if (f.json) {
     nlohmann::ordered_json out = submission;

@@ -15,8 +15,10 @@
 //   assemble.sh   tinsmith tin --blocks DIR -o SITE.tin, then info, then what
 //                 each task cost (logs/assemble.log);
 // and with --submit runs `sbatch --array` of the tasks and `sbatch` of the
-// assembly with afterok on each task. --resume resubmits only the tasks that
-// left no triangles, and the assembly after them. The .tin has the bytes
+// assembly with afterok on each task (plan.json records the ids queued, also
+// of a submission that failed half way). --resume resubmits only the tasks
+// that left no triangles, and the assembly after them, and refuses while
+// the last submission's jobs are queued or running. The .tin has the bytes
 // `tinsmith tin --block-points N` writes on one machine; tile it on the
 // cluster with `tinsmith slurm SITE.tin …`.
 #include <filesystem>
@@ -164,6 +166,7 @@ void runSlurmTin(const SlurmTinOptions& o) {
 
   std::vector<int> todo;
   if (o.resume) {
+    refuseWhileQueued(previous);
     for (const std::size_t k : ingest::untriangulatedBlocks(dir))
       todo.push_back(static_cast<int>(k));
   } else {
@@ -176,18 +179,9 @@ void runSlurmTin(const SlurmTinOptions& o) {
   jobs.arrayLog = dir / "logs" / "block-%a.log";
   jobs.afterLog = dir / "logs" / "assemble.log";
   jobs.sbatchArgs = o.sbatchArgs;
-  nlohmann::ordered_json submission;
-  submission["tasks"] = todo;
-  if (o.submit) {
-    jobs.submit();
-    submission["array"] = jobs.arrayId;
-    submission["assemble"] = jobs.afterId;
-  }
-  plan["submissions"] = previous.is_object() && previous.contains("submissions")
-                            ? previous["submissions"]
-                            : nlohmann::ordered_json::array();
-  if (o.submit) plan["submissions"].push_back(submission);
-  writeAtomically(planPath, plan.dump(2) + "\n", false);
+  if (previous.is_object() && previous.contains("submissions"))
+    plan["submissions"] = previous["submissions"];
+  const auto submission = submitAndRecord(jobs, plan, planPath, "assemble", o.submit);
 
   if (o.json) {
     nlohmann::ordered_json out = submission;
@@ -207,12 +201,12 @@ void runSlurmTin(const SlurmTinOptions& o) {
     return;
   }
   if (todo.empty())
-    std::cerr << "every block task is done: submitted the assembly alone, job "
-              << submission["assemble"].get<std::string>() << "\n";
+    std::cerr << "every block task is done: submitted the assembly alone, job " << jobs.afterId
+              << "\n";
   else
-    std::cerr << "submitted the block tasks as array job " << submission["array"].get<std::string>()
-              << " (tasks " << arrayList(todo) << ") and the assembly as job "
-              << submission["assemble"].get<std::string>() << " after every one of them\n"
+    std::cerr << "submitted the block tasks as array job " << jobs.arrayId << " (tasks "
+              << arrayList(todo) << ") and the assembly as job " << jobs.afterId
+              << " after every one of them\n"
               << "follow with: squeue; the TIN is " << output.string()
               << "; a failed task: tinsmith slurm-tin … --resume --submit\n";
 }

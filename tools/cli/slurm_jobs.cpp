@@ -134,6 +134,52 @@ std::vector<std::string> queuedJobs(const std::vector<std::string>& ids) {
   return out;
 }
 
+void refuseWhileQueued(const nlohmann::ordered_json& plan) {
+  if (!plan.is_object() || !plan.contains("submissions") || !plan["submissions"].is_array() ||
+      plan["submissions"].empty())
+    return;
+  std::vector<std::string> submitted;
+  for (const auto& [key, value] : plan["submissions"].back().items())
+    if (value.is_string()) submitted.push_back(value.get<std::string>());
+  const auto queued = queuedJobs(submitted);
+  if (queued.empty()) return;
+  std::string jobs;
+  for (const auto& id : queued) jobs += (jobs.empty() ? "" : " ") + id;
+  throw usageError("jobs of this job folder's last submission are still queued or running: " + jobs,
+                   "wait for them (squeue), or cancel them (scancel " + jobs +
+                       "), then submit again with --resume");
+}
+
+nlohmann::ordered_json submitAndRecord(ArrayThenJob& jobs, nlohmann::ordered_json plan,
+                                       const std::filesystem::path& planPath,
+                                       const std::string& afterKey, bool submit) {
+  if (!plan.contains("submissions") || !plan["submissions"].is_array())
+    plan["submissions"] = nlohmann::ordered_json::array();
+  nlohmann::ordered_json submission;
+  std::vector<int> tasks = jobs.headTasks;
+  tasks.insert(tasks.end(), jobs.tasks.begin(), jobs.tasks.end());
+  submission["tasks"] = tasks;
+  writeAtomically(planPath, plan.dump(2) + "\n", false);
+  if (!submit) return submission;
+  const auto record = [&] {
+    for (const auto& [key, id] : {std::pair<std::string, const std::string*>{"top", &jobs.headId},
+                                  {"array", &jobs.arrayId},
+                                  {afterKey, &jobs.afterId}})
+      if (!id->empty()) submission[key] = *id;
+    nlohmann::ordered_json written = plan;
+    written["submissions"].push_back(submission);
+    writeAtomically(planPath, written.dump(2) + "\n", false);
+  };
+  try {
+    jobs.submit();
+  } catch (const Error&) {
+    if (!jobs.headId.empty() || !jobs.arrayId.empty()) record();
+    throw;
+  }
+  record();
+  return submission;
+}
+
 std::string arrayList(const std::vector<int>& tasks) {
   bool contiguous = true;
   for (std::size_t i = 1; i < tasks.size(); ++i) contiguous &= tasks[i] == tasks[i - 1] + 1;

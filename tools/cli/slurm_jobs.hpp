@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,24 @@ struct ArrayThenJob {
   /// already queued.
   void submit();
 };
+
+/// A job folder's plan.json: what the job is, and its "submissions", each
+/// {"tasks": [the array's tasks], and the ids queued: "top" (head tasks),
+/// "array" and the job after them under its own key}.
+///
+/// Throws usageError while a job of the last submission in `plan` is still
+/// queued or running (squeue): a task resubmitted would run twice, the
+/// second taking the first's stage from under it.
+void refuseWhileQueued(const nlohmann::ordered_json& plan);
+/// Writes `plan` to `planPath` (its earlier submissions kept); with `submit`,
+/// before anything is submitted, then submits `jobs` and writes it again
+/// with this submission appended — also when sbatch fails half way (the
+/// error rethrown), so the folder stays this job's and --resume takes it.
+/// The job after the array is recorded under `afterKey`. Returns the
+/// submission (its tasks, and the ids when submitted).
+nlohmann::ordered_json submitAndRecord(ArrayThenJob& jobs, nlohmann::ordered_json plan,
+                                       const std::filesystem::path& planPath,
+                                       const std::string& afterKey, bool submit);
 
 /// This process's CPU time (user + system) and peak memory so far.
 struct ProcessCost {
