@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -575,8 +576,18 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   if (shard.empty()) {
     finish(stage, stagePath, out, records, build, storeUntilZoom, terrainKeys);
   } else {
-    // A shard: no tileset.json of its own; `tinsmith merge` writes it.
-    stage->put(kShardFinishedKey, nlohmann::json{{"tiles", records.size()}}.dump() + "\n");
+    // A shard: no tileset.json of its own; `tinsmith merge` writes it. It
+    // finishes with its tiles' count and each one's CRC-32, which the merge
+    // checks the bytes it reads against (a shared filesystem's damage).
+    nlohmann::ordered_json crcs = nlohmann::ordered_json::object();
+    for (const auto& r : records) {
+      const std::string key = tiles::tileContentKey(r.id);
+      const auto bytes = stage->get(key);
+      if (!bytes) throw internalError("the shard's tile " + key + " is not in its stage");
+      crcs[key] = crc32(*bytes);
+    }
+    stage->put(kShardFinishedKey,
+               nlohmann::ordered_json{{"tiles", records.size()}, {"crc32", crcs}}.dump() + "\n");
     publish(stage, stagePath, out, canonicalKeys(*stage, records, {}, true));
   }
   TileJobSummary summary = summarize(records, build);
@@ -613,14 +624,32 @@ std::optional<std::string> unfinishedShard(const store::TileStore& in) {
     return "the shard did not finish (no " + std::string(kShardFinishedKey) +
            "): it is the stage of a run that was killed, failed or is still running";
   const auto j = nlohmann::json::parse(*finished, nullptr, false);
-  if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned())
+  if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned() ||
+      !j.contains("crc32") || !j["crc32"].is_object() ||
+      j["crc32"].size() != j["tiles"].get<std::size_t>())
     return "its " + std::string(kShardFinishedKey) + " is not one tinsmith writes";
   std::size_t tiles = 0;
-  for (const auto& key : in.keys()) tiles += key.rfind("tiles/", 0) == 0 ? 1 : 0;
+  for (const auto& key : in.keys()) {
+    if (key.rfind("tiles/", 0) != 0) continue;
+    ++tiles;
+    if (!j["crc32"].contains(key))
+      return "it holds the tile " + key + ", which its shard did not finish with";
+  }
   if (tiles != j["tiles"].get<std::size_t>())
     return "it holds " + std::to_string(tiles) + " of the " +
            std::to_string(j["tiles"].get<std::size_t>()) + " tiles its shard finished with";
   return std::nullopt;
+}
+
+/// The CRC-32 of each tile a finished shard's store finished with (by key);
+/// none for a finished store, whose tiles are not checked.
+std::map<std::string, std::uint32_t> finishedTileCrcs(const store::TileStore& in) {
+  std::map<std::string, std::uint32_t> out;
+  const auto finished = in.get(kShardFinishedKey);
+  if (!finished) return out;
+  const auto j = nlohmann::json::parse(*finished);
+  for (const auto& [key, crc] : j["crc32"].items()) out.emplace(key, crc.get<std::uint32_t>());
+  return out;
 }
 
 ShardCoverage coverageOf(const store::TileStore& in) {
@@ -717,10 +746,18 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     for (std::size_t i = 0; i < shards.size(); ++i) {
       const auto& in = shards[i];
       if (!store::holdsTin(*stage)) store::copyTin(*in, *stage);  // a piece at a time
+      const auto crcs = finishedTileCrcs(*in);
       for (const auto& key : in->keys()) {
         if (key.rfind("tiles/", 0) != 0) continue;
         const auto bytes = in->get(key);
         if (!bytes) continue;
+        if (const auto crc = crcs.find(key); crc != crcs.end() && crc32(*bytes) != crc->second)
+          throw inputError("its tile " + key +
+                               " is damaged: its bytes are not those its shard finished with "
+                               "(CRC-32)",
+                           fileLocation(in->path().string()),
+                           "remove that store and build the shard again (tinsmith slurm … "
+                           "--resume --submit reruns a shard whose store is gone), then merge");
         if (const auto there = from.find(key); there != from.end()) {
           if (shards[there->second]->get(key) != bytes)
             throw usageError("tile " + key + " differs between the shards");

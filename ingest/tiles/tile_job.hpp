@@ -22,7 +22,8 @@
 // name or the stage is replaced only when it is a tinsmith store
 // (store::requireReplaceable), and every option is checked before either is
 // touched. A shard's store also holds tinsmith/shard.json, the part of the
-// pyramid it answers for, and once finished tinsmith/shard-finished.json.
+// pyramid it answers for, and once finished tinsmith/shard-finished.json
+// (its tiles' count and each one's CRC-32, which merge checks).
 #pragma once
 
 #include <cstddef>
@@ -184,7 +185,8 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
 
 /// Whether `path` is a shard's store that finished, as merge takes it: not a
 /// stage left by a shard that was killed, failed or is still running, nor
-/// one that lost tiles, nor a damaged or missing store.
+/// one that lost tiles, nor a damaged or missing store. Tiles' bytes are not
+/// read here (merge checks them against their CRC-32).
 bool isFinishedShard(const std::filesystem::path& path);
 
 /// Joins stores built from the same TIN and options (shards: subtrees and the
@@ -192,7 +194,8 @@ bool isFinishedShard(const std::filesystem::path& path);
 /// usageError, before the output is touched, when the output is one of the
 /// inputs, they disagree (other input or options) or none is the top of the
 /// pyramid, inputError when one is a shard that did not finish
-/// (isFinishedShard), and without leaving a
+/// (isFinishedShard) or holds a tile whose bytes are not those it finished
+/// with (its CRC-32), and without leaving a
 /// stage when a tile differs between them or a child of a refined tile is in
 /// none of them (a shard that answers for the child and lacks it found it
 /// empty).

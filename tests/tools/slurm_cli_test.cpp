@@ -7,6 +7,7 @@
 // job's plan.
 // The same job on a real one-node Slurm cluster: tests/slurm.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <cmath>
 #include <filesystem>
@@ -521,6 +522,39 @@ TEST(SlurmCli, MergeRefusesAnUnfinishedShardAndAJobWithoutItsTop) {
   r = merge({shards[0], shards[1], lost, shards[3], shards[4]});
   EXPECT_EQ(r.exitCode, 3) << r.err;
   EXPECT_NE(r.err.find("tiles its shard finished with"), std::string::npos) << r.err;
+  // A finished shard whose tile lost a bit on the way (a shared
+  // filesystem's damage): its tile is named, and nothing is written.
+  const fs::path flipped = dir / "flipped.3dtiles";
+  fs::copy_file(shards[3], flipped);
+  std::string damagedKey;
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open_v2(flipped.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+    sqlite3_stmt* read = nullptr;
+    sqlite3_prepare_v2(db,
+                       "SELECT key, content FROM media WHERE key LIKE 'tiles/%' ORDER BY key "
+                       "LIMIT 1",
+                       -1, &read, nullptr);
+    ASSERT_EQ(sqlite3_step(read), SQLITE_ROW);
+    damagedKey = reinterpret_cast<const char*>(sqlite3_column_text(read, 0));
+    std::string bytes(static_cast<const char*>(sqlite3_column_blob(read, 1)),
+                      static_cast<std::size_t>(sqlite3_column_bytes(read, 1)));
+    sqlite3_finalize(read);
+    bytes[bytes.size() / 2] ^= 0x10;
+    sqlite3_stmt* write = nullptr;
+    sqlite3_prepare_v2(db, "UPDATE media SET content = ? WHERE key = ?", -1, &write, nullptr);
+    sqlite3_bind_blob(write, 1, bytes.data(), static_cast<int>(bytes.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_text(write, 2, damagedKey.c_str(), -1, SQLITE_TRANSIENT);
+    ASSERT_EQ(sqlite3_step(write), SQLITE_DONE);
+    sqlite3_finalize(write);
+    sqlite3_close_v2(db);
+  }
+  r = merge({shards[0], shards[1], shards[2], flipped, shards[4]});
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_NE(r.err.find("flipped.3dtiles: its tile " + damagedKey + " is damaged"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "merged.3dtiles"));
   // The subtrees without the top, or one alone: no pyramid's root.
   for (const auto& inputs : {std::vector<fs::path>(shards.begin() + 1, shards.end()),
                              std::vector<fs::path>{shards[1]}}) {
