@@ -46,32 +46,44 @@ inline std::size_t edgeOf(const std::vector<std::uint64_t>& edges, std::uint64_t
                                   edges.begin());
 }
 
+/// The chord sag of each edge of a tile's triangles (uniqueEdges, ascending):
+/// the distance, at the edge's middle, between the chord's middle (in
+/// `frame`, the exact positions of `project`'s points) and the ground there
+/// (the point of the project CRS halfway between the ends, through the
+/// georeference). What encoding moves does not change it.
+struct EdgeSags {
+  std::vector<std::uint64_t> edges;
+  std::vector<double> sag;
+};
+template <class ToFrame>
+EdgeSags edgeSags(const TileSurface& tile, std::span<const Point3> project,
+                  std::span<const Point3> frame, const GeoReference& geo, const ToFrame& toFrame) {
+  EdgeSags out{uniqueEdges(tile.triangles), {}};
+  std::vector<Point3> middles(out.edges.size());
+  for (std::size_t k = 0; k < out.edges.size(); ++k)
+    middles[k] = middle(project[out.edges[k] >> 32], project[out.edges[k] & 0xffffffffU]);
+  std::vector<encode::Geodetic> ground(middles.size());
+  geo.toGeodetic(middles, ground);
+  out.sag.resize(out.edges.size());
+  for (std::size_t k = 0; k < out.edges.size(); ++k) {
+    out.sag[k] = distance(middle(frame[out.edges[k] >> 32], frame[out.edges[k] & 0xffffffffU]),
+                          toFrame(ground[k]));
+  }
+  return out;
+}
+
 /// The error a tile declares (tile_content.hpp, encodeTile): per surface
 /// triangle, its measured vertical error, plus the farthest encoding moved
 /// one of its corners (`shipped` against `frame`, the exact positions), plus
-/// its chord's sag: the distance, at the middle of each edge, between the
-/// chord's middle and the ground there (the point of the project CRS halfway
-/// between the ends, through the georeference), taken over the triangle as
-/// the quadratic it is to second order (quadraticGapMax). The largest over
-/// the triangles, and over those a refinement can reach (TileRecord).
+/// its chord's sag (`sags`, taken over the triangle as the quadratic it is to
+/// second order: quadraticGapMax). The largest over the triangles, and over
+/// those a refinement can reach (TileRecord). With `shipped` = `frame`, the
+/// error before encoding.
 struct ShippedError {
   double all = 0.0, reachable = 0.0;
 };
-template <class ToFrame>
-ShippedError shippedError(const TileSurface& tile, std::span<const Point3> project,
-                          std::span<const Point3> frame, std::span<const Point3> shipped,
-                          const GeoReference& geo, const ToFrame& toFrame) {
-  const auto edges = uniqueEdges(tile.triangles);
-  std::vector<Point3> middles(edges.size());
-  for (std::size_t k = 0; k < edges.size(); ++k)
-    middles[k] = middle(project[edges[k] >> 32], project[edges[k] & 0xffffffffU]);
-  std::vector<encode::Geodetic> ground(middles.size());
-  geo.toGeodetic(middles, ground);
-  std::vector<double> sag(edges.size());
-  for (std::size_t k = 0; k < edges.size(); ++k) {
-    sag[k] =
-        distance(middle(frame[edges[k] >> 32], frame[edges[k] & 0xffffffffU]), toFrame(ground[k]));
-  }
+inline ShippedError shippedError(const TileSurface& tile, const EdgeSags& sags,
+                                 std::span<const Point3> frame, std::span<const Point3> shipped) {
   const bool perTriangle = tile.triangleErrors.size() == tile.triangles.size();
   const bool reach = tile.outOfReach.size() == tile.triangles.size();
   ShippedError worst;
@@ -81,7 +93,7 @@ ShippedError shippedError(const TileSurface& tile, std::span<const Point3> proje
     std::array<double, 3> middles{};
     for (int i = 0; i < 3; ++i) {
       moved = std::max(moved, distance(shipped[tri[i]], frame[tri[i]]));
-      middles[i] = sag[edgeOf(edges, tri[i], tri[(i + 1) % 3])];
+      middles[i] = sags.sag[edgeOf(sags.edges, tri[i], tri[(i + 1) % 3])];
     }
     const double vertical = perTriangle ? tile.triangleErrors[t] : tile.error;
     const double e = vertical + moved + quadraticGapMax(middles[0], middles[1], middles[2]);

@@ -84,8 +84,8 @@ TileContent encodeTerrainTile(const TileSurface& surface, const TileId& id,
   std::vector<Point3> ecef(mesh.vertices.size());
   for (std::size_t i = 0; i < ecef.size(); ++i) ecef[i] = encode::geodeticToEcef(mesh.vertices[i]);
   const auto toEcef = [](const encode::Geodetic& g) { return encode::geodeticToEcef(g); };
-  const ShippedError error =
-      shippedError(measured, measured.vertices, ecef, q.decoded, frame, toEcef);
+  const ShippedError error = shippedError(
+      measured, edgeSags(measured, measured.vertices, ecef, frame, toEcef), ecef, q.decoded);
 
   TileRecord record;
   record.id = id;
