@@ -51,6 +51,22 @@ void runAsSlurmWould(const fs::path& workdir, int tasks) {
   EXPECT_EQ(merge.exitCode, 0) << readFile(workdir / "logs" / "merge.log");
 }
 
+/// `tinsmith slurm`'s job for `tin` with `options` at `shardZoom`, in
+/// dir/work<shardZoom>, run as Slurm would: its merged store has the bytes
+/// of dir/one.3dtiles (one `tinsmith tile` with the same options).
+void expectShardsGiveOneRunsBytes(const fs::path& dir, const fs::path& tin,
+                                  const std::string& options, int shardZoom) {
+  SCOPED_TRACE("shard zoom " + std::to_string(shardZoom));
+  const fs::path work = dir / ("work" + std::to_string(shardZoom));
+  const fs::path merged = dir / ("merged" + std::to_string(shardZoom) + ".3dtiles");
+  const auto planned =
+      runTinsmith("slurm " + tin.string() + options + " --shard-zoom " + std::to_string(shardZoom) +
+                  " --workdir " + work.string() + " -o " + merged.string());
+  ASSERT_EQ(planned.exitCode, 0) << planned.err;
+  runAsSlurmWould(work, 1 + (1 << (2 * shardZoom)));
+  EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+}
+
 TEST(SlurmCli, TheScriptsShardAndMergeIntoTheBytesOfOneRun) {
   const fs::path dir = scratchDir("slurm-cli");
   // 1.2 km × 0.4 km: the square's north half holds no terrain, so 8 of the
@@ -171,17 +187,7 @@ TEST(SlurmCli, AnyShardZoomGivesTheBytesOfOneRunOnCliffsAndBreakLines) {
   const auto one =
       runTinsmith("tile " + tin.string() + options + " -o " + (dir / "one.3dtiles").string());
   ASSERT_EQ(one.exitCode, 0) << one.err;
-  for (const int zoom : {1, 3}) {
-    SCOPED_TRACE(zoom);
-    const fs::path work = dir / ("work" + std::to_string(zoom));
-    const fs::path merged = dir / ("merged" + std::to_string(zoom) + ".3dtiles");
-    const auto planned =
-        runTinsmith("slurm " + tin.string() + options + " --shard-zoom " + std::to_string(zoom) +
-                    " --workdir " + work.string() + " -o " + merged.string());
-    ASSERT_EQ(planned.exitCode, 0) << planned.err;
-    runAsSlurmWould(work, 1 + (1 << (2 * zoom)));
-    EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
-  }
+  for (const int zoom : {1, 3}) expectShardsGiveOneRunsBytes(dir, tin, options, zoom);
 }
 
 TEST(SlurmCli, ShardsAcrossTheAntimeridianGiveTheBytesOfOneRun) {
@@ -203,14 +209,7 @@ TEST(SlurmCli, ShardsAcrossTheAntimeridianGiveTheBytesOfOneRun) {
   ASSERT_TRUE(root);
   const auto region = nlohmann::json::parse(*root)["root"]["boundingVolume"]["region"];
   EXPECT_GT(region[0].get<double>(), region[2].get<double>()) << region;  // west > east
-  const fs::path work = dir / "work";
-  const fs::path merged = dir / "merged.3dtiles";
-  const auto planned =
-      runTinsmith("slurm " + tin.string() + options + " --shard-zoom 2 --workdir " + work.string() +
-                  " -o " + merged.string());
-  ASSERT_EQ(planned.exitCode, 0) << planned.err;
-  runAsSlurmWould(work, 17);
-  EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+  expectShardsGiveOneRunsBytes(dir, tin, options, 2);
 }
 
 TEST(SlurmCli, ShardsOfAWideAlbersMosaicGiveTheBytesOfOneRun) {
@@ -228,14 +227,7 @@ TEST(SlurmCli, ShardsOfAWideAlbersMosaicGiveTheBytesOfOneRun) {
   const auto one =
       runTinsmith("tile " + tin.string() + options + " -o " + (dir / "one.3dtiles").string());
   ASSERT_EQ(one.exitCode, 0) << one.err;
-  const fs::path work = dir / "work";
-  const fs::path merged = dir / "merged.3dtiles";
-  const auto planned =
-      runTinsmith("slurm " + tin.string() + options + " --shard-zoom 1 --workdir " + work.string() +
-                  " -o " + merged.string());
-  ASSERT_EQ(planned.exitCode, 0) << planned.err;
-  runAsSlurmWould(work, 5);
-  EXPECT_EQ(readFile(merged), readFile(dir / "one.3dtiles"));
+  expectShardsGiveOneRunsBytes(dir, tin, options, 1);
 }
 
 TEST(SlurmCli, ABlockByBlockTinFromItsScriptsHasOneMachinesBytes) {
