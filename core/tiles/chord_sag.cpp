@@ -54,11 +54,11 @@ double chordSagRadius(const GeoReference& geo, const Rect& square) {
       worst = std::max(worst, gap * 8 * kEarthRadiusOfCurvature / (length * length));
   }
   if (worst > 1.01) return kEarthRadiusOfCurvature / (1.05 * worst);
-  // A projection that stretches the ground (Mercator far from the equator,
-  // by sec² of the latitude) draws its segments over shorter chords, which
-  // sag less: planned with what they sag once that is under half the
-  // sphere's, with a quarter to spare (the sag grows towards the square's
-  // side nearer the equator, which the places stop short of).
+  // A projection that stretches the ground (Mercator far from the equator)
+  // draws its segments over shorter chords, which lie nearer the ground:
+  // planned with what they do once that is under half the sphere's, with a
+  // quarter to spare (the gap grows towards the square's side nearer the
+  // equator, which the places stop short of).
   if (worst > 0 && worst < 0.5) return kEarthRadiusOfCurvature / (1.25 * worst);
   return kEarthRadiusOfCurvature;
 }

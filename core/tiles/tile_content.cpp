@@ -258,9 +258,11 @@ TileContent encodeTile(const TileSurface& tile, double skirtDepth, const Content
   const double width = tile.bounds.width();
   const double share =
       tile.tolerance > 0 ? 0.5 * kEncodingShare * std::max(tile.tolerance, missed) : HUGE_VAL;
-  const double finest = std::max(0.0005, std::min(minQuantization(width), share));
-  glb.maxPositionError = std::clamp(std::min(0.1 * std::max(tile.error, missed), share), finest,
-                                    maxQuantization(width, tile.tolerance));
+  const double coarsest = maxQuantization(width, tile.tolerance);
+  const double finest =
+      std::min(coarsest, std::max(0.0005, std::min(minQuantization(width), share)));
+  glb.maxPositionError =
+      std::clamp(std::min(0.1 * std::max(tile.error, missed), share), finest, coarsest);
   // The record states the requested bound, which the encoder's actual one
   // never exceeds (the checkers compare decoded tiles against it).
   record.positionErrorBound =

@@ -156,14 +156,18 @@ void checkHeightsConvert(const OGRSpatialReference& srs, const std::string& crs)
 
 }  // namespace
 
+void requireTinCrs(const std::string& crs, const std::string& tinName) {
+  if (crs.empty())
+    throw inputError("the TIN has no CRS, so its tiles cannot be placed on the globe",
+                     tinName.empty() ? SourceLocation{} : fileLocation(tinName),
+                     "build it again with one: tinsmith tin … --crs EPSG:… (e.g. EPSG:32612 for "
+                     "UTM 12N), or a config's project.crs; --frame local needs one too");
+}
+
 ProjGeoReference::ProjGeoReference(std::string crs, std::string geoid)
     : crs_(std::move(crs)), geoid_(std::move(geoid)), serial_(nextSerial++) {
   ensureGdalReady();
-  if (crs_.empty()) {
-    throw inputError(
-        "the TIN has no CRS, so its tiles cannot be placed on the globe", {},
-        "rebuild it with a CRS (tinsmith tin --crs EPSG:…); --frame local needs one too");
-  }
+  requireTinCrs(crs_);
   const OGRSpatialReference given = source(crs_, crs_);
   if (geoid_.empty()) {
     sourceDefinition_ = crs_;

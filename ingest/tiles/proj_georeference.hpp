@@ -20,6 +20,10 @@
 
 namespace tinsmith::ingest {
 
+/// Throws inputError (naming `tinName` when given) when a TIN's CRS is
+/// empty (built without --crs): tiles are placed on the globe through it.
+void requireTinCrs(const std::string& crs, const std::string& tinName = {});
+
 class ProjGeoReference : public tiles::GeoReference {
  public:
   /// `crs`: the TIN's CRS ("EPSG:n", "EPSG:h+v" or WKT); `geoid`: "" or

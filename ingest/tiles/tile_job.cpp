@@ -26,12 +26,6 @@ using tiles::TileRecord;
 namespace {
 
 constexpr const char* kBuildKey = "tinsmith/build.json";
-/// The build records' format: raised whenever the tiles of one TIN and one
-/// set of options change, so that a store of an older tinsmith is not resumed,
-/// merged or rebuilt on demand with tiles that do not fit it (2: positions
-/// quantized to the zoom's encoding share, not to 1 cm, and the side margins
-/// with them; chord sag planned as the CRS bends it, chordSagRadius).
-constexpr const char* kBuildFormat = "tinsmith-tiles/2";
 /// A shard's part of the pyramid: {"subtree": "Z/X/Y"} or {"untilZoom": Z}.
 /// Only shard stores hold it; merge reads it to know which tiles a shard
 /// answers for (a refined tile's child missing from its shard is empty).
@@ -48,7 +42,7 @@ std::string buildRecord(const TinIdentity& identity, const std::string& crs,
                         const std::string& tinName, const TileJobOptions& o,
                         const tiles::Tiler* tiler, const tiles::ContentOptions& content) {
   nlohmann::ordered_json j;
-  j["format"] = kBuildFormat;
+  j["format"] = kTileBuildFormat;
   j["tin"] = {{"name", fs::path(tinName).filename().string()},
               {"crc32", identity.crc32},
               {"vertices", identity.vertices},
@@ -416,14 +410,6 @@ void checkTileJobOptions(const TileJobOptions& o) {
                      "shard the 3D Tiles with --scheme 3d-tiles");
 }
 
-void requireTinCrs(const std::string& crs, const std::string& tinName) {
-  if (crs.empty())
-    throw inputError("the TIN has no CRS, so its tiles cannot be placed on the globe",
-                     fileLocation(tinName),
-                     "build it again with one: tinsmith tin … --crs EPSG:… (e.g. EPSG:32612 for "
-                     "UTM 12N), or a config's project.crs");
-}
-
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const fs::path& output,
                           const TileJobOptions& options, const Progress* progress) {
   checkTileJobOptions(options);
@@ -624,9 +610,13 @@ std::optional<std::string> unfinishedShard(const store::TileStore& in) {
     return "the shard did not finish (no " + std::string(kShardFinishedKey) +
            "): it is the stage of a run that was killed, failed or is still running";
   const auto j = nlohmann::json::parse(*finished, nullptr, false);
+  const auto isCrc = [](const nlohmann::json& v) {
+    return v.is_number_unsigned() && v.get<std::uint64_t>() <= 0xffffffffU;
+  };
   if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned() ||
       !j.contains("crc32") || !j["crc32"].is_object() ||
-      j["crc32"].size() != j["tiles"].get<std::size_t>())
+      j["crc32"].size() != j["tiles"].get<std::size_t>() ||
+      !std::all_of(j["crc32"].begin(), j["crc32"].end(), isCrc))
     return "its " + std::string(kShardFinishedKey) + " is not one tinsmith writes";
   std::size_t tiles = 0;
   for (const auto& key : in.keys()) {

@@ -169,9 +169,15 @@ struct TileJobSummary {
   std::size_t peakMemoryBytes = 0;
 };
 
-/// Throws inputError naming `tinName` when its CRS is empty (a TIN built
-/// without --crs): tiles are placed on the globe through it.
-void requireTinCrs(const std::string& crs, const std::string& tinName);
+/// The build records' format: raised whenever the tiles of one TIN and one
+/// set of options change, so that a store of an older tinsmith is not
+/// resumed, merged or rebuilt on demand with tiles that do not fit it (2:
+/// positions quantized to the zoom's encoding share, not to 1 cm, and the
+/// side margins with them; chord sag planned as the CRS bends it,
+/// chordSagRadius; 3: the sag radius grown where the CRS stretches the
+/// ground, a tile over its tolerance quantized to its own error, a shard's
+/// tiles' CRC-32 in shard-finished.json).
+inline constexpr const char* kTileBuildFormat = "tinsmith-tiles/3";
 
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into
 /// `output`. With `resume`, tiles are taken from the stage and from a

@@ -52,8 +52,9 @@ struct BuildRecord {
 TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const std::string& store)
     : state_(std::make_unique<State>()) {
   BuildRecord r{nlohmann::json::parse(build, nullptr, false), store};
-  if (!r.j.is_object() || r.j.value("format", "") != "tinsmith-tiles/2")
-    throw inputError(store + ": tinsmith/build.json is not a tinsmith-tiles/2 build record (" +
+  if (!r.j.is_object() || r.j.value("format", "") != kTileBuildFormat)
+    throw inputError(store + ": tinsmith/build.json is not a " + std::string(kTileBuildFormat) +
+                         " build record (" +
                          (r.j.is_object() ? r.j.value("format", "no format") : "not JSON") +
                          "): its tiles were made by another version of tinsmith, and tiles "
                          "built now would not fit them",

@@ -100,6 +100,14 @@ TEST(TileQuantization, AWideTileIsQuantizedToItsToleranceNotToACentimetre) {
   EXPECT_LE(plain.record.positionErrorBound, 1e-6 * plain.width);
   EXPECT_GT(plain.record.positionErrorBound, 0.5e-6 * plain.width);
   EXPECT_LE(plain.record.positionBits, 20);
+  // Within its tolerance, where the share is tighter than the width's step,
+  // the share rules: 200 km at 10 m.
+  const TinData narrower = albersGrid(41, 5000, [](double, double) { return 200.0; });
+  const Encoded tight = encodeRoot(narrower, 10);
+  ASSERT_LE(tight.record.error, tight.tolerance);
+  ASSERT_LT(0.5 * tiles::kEncodingShare * tight.tolerance, 1e-6 * tight.width);
+  EXPECT_LE(tight.record.positionErrorBound, 0.5 * tiles::kEncodingShare * tight.tolerance);
+  EXPECT_GT(tight.record.positionErrorBound, 0.02);
   // At 5 m, 512 triangles cannot follow the Earth's curve: the root misses
   // its tolerance by hundreds of metres of chord sag. Its steps follow that
   // error (a hundredth of it at most, and half the side margin), not the

@@ -164,7 +164,7 @@ TEST(OnDemand, WithoutTheOptionAMissingTileIs404) {
 
 TEST(OnDemand, AStoreOfAnOlderTinsmithBuildsNoTileThatWouldNotFitIt) {
   // Its build record's format says its tiles follow other rules (before
-  // tinsmith-tiles/2, quantized to 1 cm with other side margins): a tile
+  // tinsmith-tiles/3, other quantization and chord sag): a tile
   // built now would not share its sides with the stored ones bit for bit.
   const auto all = storedTiles();
   std::string deep, top;
@@ -173,7 +173,7 @@ TEST(OnDemand, AStoreOfAnOlderTinsmithBuildsNoTileThatWouldNotFitIt) {
   {
     auto st = store::openStoreForWriting(path, true);
     std::string build = st->get("tinsmith/build.json").value();
-    const auto at = build.find("tinsmith-tiles/2");
+    const auto at = build.find("tinsmith-tiles/3");
     ASSERT_NE(at, std::string::npos) << build;
     build.replace(at, 16, "tinsmith-tiles/1");
     st->put("tinsmith/build.json", build);

@@ -259,7 +259,7 @@ TEST(StoreSafety, ARefusedOptionTouchesNothing) {
   {
     auto st = store::openStoreForWriting(archive, true);
     std::string build = *st->get("tinsmith/build.json");
-    const auto at = build.find("tinsmith-tiles/2");
+    const auto at = build.find("tinsmith-tiles/3");
     ASSERT_NE(at, std::string::npos) << build;
     build.replace(at, 16, "tinsmith-tiles/1");
     st->put("tinsmith/build.json", build);
@@ -268,7 +268,7 @@ TEST(StoreSafety, ARefusedOptionTouchesNothing) {
   auto r = runTinsmith(tileArgs(tin, 0.5) + " --resume -o " + archive.string());
   EXPECT_EQ(r.exitCode, 2) << r.err;
   EXPECT_NE(r.err.find("by another version of tinsmith (its tiles are tinsmith-tiles/1, this "
-                       "tinsmith makes tinsmith-tiles/2)"),
+                       "tinsmith makes tinsmith-tiles/3)"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(readFile(archive), older);

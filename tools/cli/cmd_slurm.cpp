@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tools/cli/commands.hpp"
