@@ -22,7 +22,7 @@
 // and with --submit runs `sbatch --array=0` (the top), `sbatch --array` of
 // the subtrees after it and `sbatch` of the merge after every task (afterok).
 // Nothing heavy runs where tinsmith slurm runs (a login node): it reads the
-// TIN's header only. --resume resubmits only the tasks that left no finished
+// TIN's header and CRS only. --resume resubmits only the tasks that left no finished
 // store (a failed, cancelled, lost or damaged shard; the top too when tiler.plan is gone
 // and a subtree still needs it),
 // and a new merge after them, and refuses while the last submission's jobs
