@@ -592,6 +592,9 @@ namespace {
 struct ShardCoverage {
   std::optional<TileId> subtree;
   std::optional<int> untilZoom;
+  /// A shard's: the CRC-32 of each tile it finished with, by key (a
+  /// finished store's tiles are not checked).
+  std::map<std::string, std::uint32_t> tileCrcs;
 
   [[nodiscard]] bool covers(const TileId& id) const {
     if (untilZoom) return id.z < *untilZoom;
@@ -601,14 +604,19 @@ struct ShardCoverage {
   }
 };
 
-/// Why `in`, a shard's store (it holds kShardKey), is not a finished one —
-/// a stage its run left (killed, failed or still running), or a store that
-/// lost tiles — or nothing.
-std::optional<std::string> unfinishedShard(const store::TileStore& in) {
+/// What a shard's store (it holds kShardKey) finished with: the CRC-32 of
+/// each tile, by key — or why it is not a finished one: a stage its run left
+/// (killed, failed or still running), or a store that lost tiles.
+struct ShardFinish {
+  std::optional<std::string> unfinished;
+  std::map<std::string, std::uint32_t> tileCrcs;
+};
+ShardFinish shardFinish(const store::TileStore& in) {
   const auto finished = in.get(kShardFinishedKey);
+  const auto unfinished = [](std::string why) { return ShardFinish{std::move(why), {}}; };
   if (!finished)
-    return "the shard did not finish (no " + std::string(kShardFinishedKey) +
-           "): it is the stage of a run that was killed, failed or is still running";
+    return unfinished("the shard did not finish (no " + std::string(kShardFinishedKey) +
+                      "): it is the stage of a run that was killed, failed or is still running");
   const auto j = nlohmann::json::parse(*finished, nullptr, false);
   const auto isCrc = [](const nlohmann::json& v) {
     return v.is_number_unsigned() && v.get<std::uint64_t>() <= 0xffffffffU;
@@ -617,28 +625,20 @@ std::optional<std::string> unfinishedShard(const store::TileStore& in) {
       !j.contains("crc32") || !j["crc32"].is_object() ||
       j["crc32"].size() != j["tiles"].get<std::size_t>() ||
       !std::all_of(j["crc32"].begin(), j["crc32"].end(), isCrc))
-    return "its " + std::string(kShardFinishedKey) + " is not one tinsmith writes";
+    return unfinished("its " + std::string(kShardFinishedKey) + " is not one tinsmith writes");
+  ShardFinish out;
+  for (const auto& [key, crc] : j["crc32"].items())
+    out.tileCrcs.emplace(key, crc.get<std::uint32_t>());
   std::size_t tiles = 0;
   for (const auto& key : in.keys()) {
     if (key.rfind("tiles/", 0) != 0) continue;
     ++tiles;
-    if (!j["crc32"].contains(key))
-      return "it holds the tile " + key + ", which its shard did not finish with";
+    if (!out.tileCrcs.contains(key))
+      return unfinished("it holds the tile " + key + ", which its shard did not finish with");
   }
-  if (tiles != j["tiles"].get<std::size_t>())
-    return "it holds " + std::to_string(tiles) + " of the " +
-           std::to_string(j["tiles"].get<std::size_t>()) + " tiles its shard finished with";
-  return std::nullopt;
-}
-
-/// The CRC-32 of each tile a finished shard's store finished with (by key);
-/// none for a finished store, whose tiles are not checked.
-std::map<std::string, std::uint32_t> finishedTileCrcs(const store::TileStore& in) {
-  std::map<std::string, std::uint32_t> out;
-  const auto finished = in.get(kShardFinishedKey);
-  if (!finished) return out;
-  const auto j = nlohmann::json::parse(*finished);
-  for (const auto& [key, crc] : j["crc32"].items()) out.emplace(key, crc.get<std::uint32_t>());
+  if (tiles != out.tileCrcs.size())
+    return unfinished("it holds " + std::to_string(tiles) + " of the " +
+                      std::to_string(out.tileCrcs.size()) + " tiles its shard finished with");
   return out;
 }
 
@@ -651,12 +651,14 @@ ShardCoverage coverageOf(const store::TileStore& in) {
                      fileLocation(in.path().string()),
                      "build the shard again with tinsmith tile --subtree or --until-zoom");
   }
-  if (const auto why = unfinishedShard(in))
-    throw inputError(*why, fileLocation(in.path().string()),
+  ShardFinish finish = shardFinish(in);
+  if (finish.unfinished)
+    throw inputError(*finish.unfinished, fileLocation(in.path().string()),
                      "run that shard again (tinsmith slurm … --resume --submit, or its tinsmith "
                      "tile command with --resume) and merge its finished store");
   const auto j = nlohmann::json::parse(*record, nullptr, false);
   ShardCoverage c;
+  c.tileCrcs = std::move(finish.tileCrcs);
   if (j.is_object() && j.contains("subtree") && j["subtree"].is_string()) {
     c.subtree = tiles::parseTileId(j["subtree"].get<std::string>(), kShardKey);
   } else if (j.is_object() && j.contains("untilZoom") && j["untilZoom"].is_number_integer()) {
@@ -675,7 +677,7 @@ bool isFinishedShard(const fs::path& path) {
   if (!fs::exists(path, ec)) return false;
   try {
     const auto in = store::openStoreForReading(path);
-    return in->contains(kShardKey) && !unfinishedShard(*in);
+    return in->contains(kShardKey) && !shardFinish(*in).unfinished;
   } catch (const Error&) {
     return false;
   }
@@ -736,7 +738,7 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     for (std::size_t i = 0; i < shards.size(); ++i) {
       const auto& in = shards[i];
       if (!store::holdsTin(*stage)) store::copyTin(*in, *stage);  // a piece at a time
-      const auto crcs = finishedTileCrcs(*in);
+      const auto& crcs = coverage[i].tileCrcs;
       for (const auto& key : in->keys()) {
         if (key.rfind("tiles/", 0) != 0) continue;
         const auto bytes = in->get(key);

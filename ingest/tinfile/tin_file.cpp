@@ -1410,8 +1410,8 @@ TinFileHeader readTinFileHeader(const std::filesystem::path& path) {
   return {payload.version, payload.fileCrc, r.getString("CRS text")};
 }
 
-void requireCurrentTinFormat(const std::filesystem::path& path) {
-  const TinFileHeader header = readTinFileHeader(path);
+TinFileHeader requireCurrentTinFormat(const std::filesystem::path& path) {
+  TinFileHeader header = readTinFileHeader(path);
   if (header.version < kTinFormatVersion)
     throw inputError(".tin format version " + std::to_string(header.version) +
                          " is older than the format " + std::to_string(kTinFormatVersion) +
@@ -1419,6 +1419,7 @@ void requireCurrentTinFormat(const std::filesystem::path& path) {
                      fileLocation(path.string()),
                      "rewrite it in this format with `tinsmith export " + path.string() +
                          " --format tin -o NEW.tin`, then tile NEW.tin in shards");
+  return header;
 }
 
 TinPart readTinFilePart(const std::filesystem::path& path, const tiles::Rect& region,

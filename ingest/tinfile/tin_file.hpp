@@ -125,7 +125,8 @@ TinFileHeader readTinFileHeader(const std::filesystem::path& path);
 /// the shards of a tiling job need: they name their TIN by the CRC of its
 /// bytes in this format (encodeTin), and read their parts through its
 /// index's summary. The error says how to rewrite it (`tinsmith export`).
-void requireCurrentTinFormat(const std::filesystem::path& path);
+/// Gives the header it read.
+TinFileHeader requireCurrentTinFormat(const std::filesystem::path& path);
 
 /// Part of a `.tin` file, for the tiles of one square (a shard's subtree,
 /// tiles::TilerOptions::region): the triangles whose boxes meet `region` (in

@@ -212,8 +212,7 @@ void runSlurm(const SlurmCliOptions& o) {
   }
   // The shards and the plan name the TIN by the CRC of its bytes in this
   // format, which a subtree shard takes from the file's header.
-  ingest::requireCurrentTinFormat(tin);
-  ingest::requireTinCrs(ingest::readTinFileHeader(tin).crs, tin.string());
+  ingest::requireTinCrs(ingest::requireCurrentTinFormat(tin).crs, tin.string());
   makeFolder(dir / "shards");
   makeFolder(dir / "logs");
   const int cpus = std::max(1, f.threads);
