@@ -323,6 +323,7 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   if (plan && options_.fixed) throw internalError("Tiler: a plan is for a pyramid of the TIN's own");
   if (options_.region && !plan) throw internalError("Tiler: a region needs the plan of the whole TIN");
   const Rect extent = boundsOf(tin.vertices);
+  extent_ = plan ? plan->extent : extent;
   geometry_ = plan             ? plan->geometry
               : options_.fixed ? options_.fixed->geometry
                                : PyramidGeometry({extent.x0, extent.y0},
@@ -374,7 +375,11 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
 }
 
 double Tiler::sagRadius(const Rect& square) const {
-  return options_.geo ? chordSagRadius(*options_.geo, square) : kEarthRadiusOfCurvature;
+  if (!options_.geo) return kEarthRadiusOfCurvature;
+  const Rect part{std::max(square.x0, extent_.x0), std::max(square.y0, extent_.y0),
+                  std::min(square.x1, extent_.x1), std::min(square.y1, extent_.y1)};
+  const bool meets = part.x0 <= part.x1 && part.y0 <= part.y1;
+  return chordSagRadius(*options_.geo, meets ? part : square);
 }
 
 Rect tilerReadRegion(const Rect& region) {
@@ -396,6 +401,7 @@ TilerPlan Tiler::plan(int cornerZoom) const {
                         ", more than " + std::to_string(kMaxCornerZoom));
   TilerPlan p;
   p.geometry = geometry_;
+  p.extent = extent_;
   p.finestZoom = finestZoom_;
   p.fitSpacing = fitSpacing_;
   p.tileFitAllData = tileFitAllData_;
@@ -403,7 +409,7 @@ TilerPlan Tiler::plan(int cornerZoom) const {
   // A corner more than a tile width from the TIN's box is left out: the
   // four tiles at it hold no terrain, whatever z it has.
   p.cornerZoom = std::max(cornerZoom, -1);
-  const Rect extent = boundsOf(tin_.vertices);
+  const Rect& extent = extent_;
   for (int z = 0; z <= p.cornerZoom; ++z) {
     const double width = std::ldexp(geometry_.size(), -z);
     const Rect near{extent.x0 - width, extent.y0 - width, extent.x1 + width, extent.y1 + width};

@@ -70,6 +70,9 @@ namespace tinsmith::tiles {
 /// those the whole TIN gives.
 struct TilerPlan {
   PyramidGeometry geometry{{0, 0}, 1};
+  /// The box of the TIN's vertices, which every tile's triangles lie in
+  /// (Tiler::sagRadius measures the CRS over a square's part of it).
+  Rect extent;
   int finestZoom = 0;
   /// The spacing at which the fit data sample the TIN's sparse triangles (0:
   /// none), from the median edge and the sample budget over the whole TIN.
@@ -230,6 +233,12 @@ class Tiler {
   [[nodiscard]] const TilerOptions& options() const { return options_; }
   [[nodiscard]] int finestZoom() const { return finestZoom_; }
   [[nodiscard]] int maxZoom() const { return maxZoom_; }
+  /// The radius chord sag is planned with over a tile's square: the
+  /// sphere's without a georeference, else chordSagRadius over the part of
+  /// the square the TIN's box covers, where the tile's triangles lie (over
+  /// the whole square when it covers none of it) — the root of a strip of
+  /// terrain does not take the bending of a CRS far off the strip.
+  [[nodiscard]] double sagRadius(const Rect& square) const;
   [[nodiscard]] int levelsPerTile() const { return levelsPerTile_; }
   [[nodiscard]] double zoomTolerance(int z) const;
   [[nodiscard]] const TinData& tin() const { return tin_; }
@@ -264,9 +273,6 @@ class Tiler {
   /// The lines simplified to zoom z's tolerance (not snapped to its sides).
   [[nodiscard]] std::vector<TerrainLine> simplifiedLines(int z) const;
   [[nodiscard]] int planFinestZoom() const;
-  /// The radius chord sag is planned with over a tile's square
-  /// (chordSagRadius; the sphere's without a georeference).
-  [[nodiscard]] double sagRadius(const Rect& square) const;
   /// The tile's own fit: Algorithm 8.1 over the tile's square, levelsPerTile
   /// levels, to the zoom's tolerance, of the fit data inside the square
   /// (nullopt when fewer than 3): a function of the tile alone.
@@ -291,6 +297,7 @@ class Tiler {
   const TinData& tin_;
   TilerOptions options_;
   PyramidGeometry geometry_{{0, 0}, 1};
+  Rect extent_;  // the whole TIN's vertices' box (the plan's, with a region)
   // TIN vertices and points sampled from its triangles: the TIN's own
   // vertices, not a copy, when they are all of it (a whole TIN, no samples),
   // else dataOwned_.

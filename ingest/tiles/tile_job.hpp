@@ -176,8 +176,9 @@ struct TileJobSummary {
 /// side margins with them; chord sag planned as the CRS bends it,
 /// chordSagRadius; 3: the sag radius grown where the CRS stretches the
 /// ground, a tile over its tolerance quantized to its own error, a shard's
-/// tiles' CRC-32 in shard-finished.json).
-inline constexpr const char* kTileBuildFormat = "tinsmith-tiles/3";
+/// tiles' CRC-32 in shard-finished.json; 4: the sag radius measured over
+/// the part of a tile's square the TIN's box covers).
+inline constexpr const char* kTileBuildFormat = "tinsmith-tiles/4";
 
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into
 /// `output`. With `resume`, tiles are taken from the stage and from a

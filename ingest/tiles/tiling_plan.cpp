@@ -95,6 +95,7 @@ std::string encodeTilingPlan(const TilingPlan& plan) {
   w.put(t.geometry.origin().x);
   w.put(t.geometry.origin().y);
   w.put(t.geometry.size());
+  for (const double v : {t.extent.x0, t.extent.y0, t.extent.x1, t.extent.y1}) w.put(v);
   w.put(static_cast<std::int32_t>(t.finestZoom));
   w.put(t.fitSpacing);
   w.put(static_cast<std::uint8_t>(t.tileFitAllData));
@@ -148,6 +149,8 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   tiles::TilerPlan& t = plan.tiler;
   const double x = r.get<double>(), y = r.get<double>(), size = r.get<double>();
   t.geometry = tiles::PyramidGeometry({x, y}, size);
+  for (double* v : {&t.extent.x0, &t.extent.y0, &t.extent.x1, &t.extent.y1}) *v = r.get<double>();
+  if (!(t.extent.x0 <= t.extent.x1 && t.extent.y0 <= t.extent.y1)) r.bad("the TIN's box is empty");
   t.finestZoom = r.get<std::int32_t>();
   t.fitSpacing = r.get<double>();
   t.tileFitAllData = r.get<std::uint8_t>() != 0;

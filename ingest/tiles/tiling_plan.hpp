@@ -28,7 +28,7 @@
 
 namespace tinsmith::ingest {
 
-inline constexpr std::uint32_t kTilingPlanVersion = 2;
+inline constexpr std::uint32_t kTilingPlanVersion = 3;
 
 /// Which TIN a plan (or a tile store's build record) is of.
 struct TinIdentity {

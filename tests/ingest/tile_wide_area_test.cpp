@@ -26,15 +26,15 @@
 namespace tinsmith::ingest {
 namespace {
 
-/// An n × n grid `spacing` metres apart from (x0, y0) in `crs`, heights from
-/// `z`.
+/// An n × n grid (n × rows, with rows) `spacing` metres apart from (x0, y0)
+/// in `crs`, heights from `z`.
 template <typename Height>
-TinData projectedGrid(const std::string& crs, double x0, double y0, int n, double spacing,
-                      Height z) {
+TinData projectedGrid(const std::string& crs, double x0, double y0, int n, double spacing, Height z,
+                      int rows = 0) {
   Cdt cdt;
   const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
   std::vector<Point3> points;
-  for (int j = 0; j < n; ++j) {
+  for (int j = 0; j < (rows > 0 ? rows : n); ++j) {
     for (int i = 0; i < n; ++i) {
       const double x = i * spacing, y = j * spacing;
       points.push_back({x0 + x, y0 + y, z(x, y)});
@@ -190,6 +190,55 @@ TEST(WideArea, AStretchingProjectionPlansTheSagItsChordsHave) {
     }
   }
   EXPECT_LT(2 * triangles[0], triangles[1]) << triangles[0] << " against " << triangles[1];
+}
+
+TEST(WideArea, AStripsTilesTakeTheBendingOfTheGroundTheyCover) {
+  // 3 000 km of CONUS Albers east to west, 90 km north to south: the
+  // pyramid's square reaches 2 900 km north of the strip, where the
+  // projection bends its lines more. A tile's triangles lie on the strip, so
+  // its sag radius is measured over the part of its square the strip's box
+  // covers; before, the root took the radius of ground 2 900 km away.
+  const auto hill = [](double x, double y) {
+    return 300 + 200 * std::sin(x / 3e5) * std::cos(y / 4e4);
+  };
+  const TinData strip = projectedGrid("EPSG:5070", -2000000, 300000, 101, 30000, hill, 4);
+  const ProjGeoReference geo(strip.crs, "");
+  tiles::TilerOptions options;
+  options.tolerance = 20;
+  options.maxTriangles = 4096;
+  options.threads = 1;
+  options.geo = &geo;
+  const tiles::Tiler tiler(strip, options);
+  const tiles::Rect square = tiler.geometry().bounds({});
+  const tiles::Rect box = tiles::boundsOf(strip.vertices);
+  ASSERT_GT(square.height(), 30 * box.height());
+  const double overStrip = tiles::chordSagRadius(geo, box);
+  const double overSquare = tiles::chordSagRadius(geo, square);
+  EXPECT_GT(overStrip, 1.05 * overSquare) << overStrip << " against " << overSquare;
+  EXPECT_EQ(tiler.sagRadius(square), overStrip);
+  // A square beside the TIN's box (no terrain) keeps its own.
+  const tiles::Rect north{square.x0, box.y1 + 1000, square.x1, square.y1};
+  EXPECT_EQ(tiler.sagRadius(north), tiles::chordSagRadius(geo, north));
+  // A Tiler of a shard's subtree, which holds only its part of the TIN (the
+  // east half, which the projection bends less), takes the whole TIN's box
+  // from the plan: the same radius.
+  auto plan = std::make_shared<const tiles::TilerPlan>(tiler.plan());
+  EXPECT_EQ(plan->extent.x0, box.x0);
+  EXPECT_EQ(plan->extent.y1, box.y1);
+  const TinData east = projectedGrid("EPSG:5070", -500000, 300000, 51, 30000, hill, 4);
+  ASSERT_GT(tiles::chordSagRadius(geo, tiles::boundsOf(east.vertices)), 1.01 * overStrip);
+  tiles::TilerOptions part = options;
+  part.plan = plan;
+  part.region = tiler.geometry().bounds({1, 1, 0});
+  const tiles::Tiler shard(east, part);
+  EXPECT_EQ(shard.sagRadius(square), overStrip);
+  // The root, measured as shipped, is within its tolerance.
+  tiles::ContentOptions content;
+  content.geo = &geo;
+  const tiles::TileSurface root = tiler.buildTile({});
+  ASSERT_FALSE(root.empty());
+  const auto c = tiles::encodeTile(root, tiles::skirtDepth(tiler, root.id, root.error), content);
+  EXPECT_LE(c.record.error, root.tolerance);
 }
 
 TEST(WideArea, TilesOfABendingProjectionMeetTheirTolerance) {

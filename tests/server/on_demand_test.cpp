@@ -12,6 +12,7 @@
 
 #include "core/tiles/tileset_json.hpp"
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/tile_job.hpp"
 #include "tests/server/server_test_support.hpp"
 
 namespace tinsmith::test {
@@ -164,7 +165,7 @@ TEST(OnDemand, WithoutTheOptionAMissingTileIs404) {
 
 TEST(OnDemand, AStoreOfAnOlderTinsmithBuildsNoTileThatWouldNotFitIt) {
   // Its build record's format says its tiles follow other rules (before
-  // tinsmith-tiles/3, other quantization and chord sag): a tile
+  // the current format, other quantization and chord sag): a tile
   // built now would not share its sides with the stored ones bit for bit.
   const auto all = storedTiles();
   std::string deep, top;
@@ -173,9 +174,10 @@ TEST(OnDemand, AStoreOfAnOlderTinsmithBuildsNoTileThatWouldNotFitIt) {
   {
     auto st = store::openStoreForWriting(path, true);
     std::string build = st->get("tinsmith/build.json").value();
-    const auto at = build.find("tinsmith-tiles/3");
+    const std::string now = ingest::kTileBuildFormat;
+    const auto at = build.find(now);
     ASSERT_NE(at, std::string::npos) << build;
-    build.replace(at, 16, "tinsmith-tiles/1");
+    build.replace(at, now.size(), "tinsmith-tiles/1");
     st->put("tinsmith/build.json", build);
   }
   RunningServer server(onDemandOptions(path));

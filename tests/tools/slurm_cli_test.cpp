@@ -213,13 +213,15 @@ TEST(SlurmCli, ShardsAcrossTheAntimeridianGiveTheBytesOfOneRun) {
 }
 
 TEST(SlurmCli, ShardsOfAWideAlbersMosaicGiveTheBytesOfOneRun) {
-  // 3 000 km in CONUS Albers, which bends its straight lines away from the
-  // ground: task 0 and every subtree plan chord sag with the same radius,
-  // measured over the plan's square (not over the part a shard reads).
+  // 3 000 km by 900 km in CONUS Albers, which bends its straight lines away
+  // from the ground: task 0 and every subtree plan chord sag with the same
+  // radius, measured over the part of a tile's square the whole TIN's box
+  // covers (the plan's box; WideArea.AStripsTilesTakeTheBendingOfTheGroundTheyCover
+  // shows a shard's own part would give another).
   const fs::path dir = scratchDir("slurm-cli-albers");
   const fs::path tin = dir / "site.tin";
   const auto built = runTinsmith(
-      "tin --points 'synthetic:grid?nx=101&ny=101&spacing=30000&x0=-2000000&y0=300000"
+      "tin --points 'synthetic:grid?nx=101&ny=31&spacing=30000&x0=-2000000&y0=300000"
       "&surface=hill&z0=300&scale=2000&noise=5' --crs EPSG:5070 -q -o " +
       tin.string());
   ASSERT_EQ(built.exitCode, 0) << built.err;

@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/tile_job.hpp"
 #include "tests/support/run_command.hpp"
 
 namespace tinsmith::test {
@@ -259,16 +260,18 @@ TEST(StoreSafety, ARefusedOptionTouchesNothing) {
   {
     auto st = store::openStoreForWriting(archive, true);
     std::string build = *st->get("tinsmith/build.json");
-    const auto at = build.find("tinsmith-tiles/3");
+    const std::string now = ingest::kTileBuildFormat;
+    const auto at = build.find(now);
     ASSERT_NE(at, std::string::npos) << build;
-    build.replace(at, 16, "tinsmith-tiles/1");
+    build.replace(at, now.size(), "tinsmith-tiles/1");
     st->put("tinsmith/build.json", build);
   }
   const std::string older = readFile(archive);
   auto r = runTinsmith(tileArgs(tin, 0.5) + " --resume -o " + archive.string());
   EXPECT_EQ(r.exitCode, 2) << r.err;
   EXPECT_NE(r.err.find("by another version of tinsmith (its tiles are tinsmith-tiles/1, this "
-                       "tinsmith makes tinsmith-tiles/3)"),
+                       "tinsmith makes " +
+                       std::string(ingest::kTileBuildFormat) + ")"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(readFile(archive), older);
