@@ -366,7 +366,10 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   finestZoom_ = plan             ? plan->finestZoom
                 : options_.fixed ? options_.fixed->finestZoom
                                  : options_.plannedFinestZoom.value_or(-1);
-  if (finestZoom_ < 0) finestZoom_ = planFinestZoom();
+  if (finestZoom_ < 0) {
+    planning_ = planFinestZoom();
+    finestZoom_ = planning_.finestZoom;
+  }
   maxZoom_ =
       std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
   if (plan && plan->zoomLines.size() != static_cast<std::size_t>(finestZoom_) + 1)
@@ -425,22 +428,71 @@ TilerPlan Tiler::plan(int cornerZoom) const {
   return p;
 }
 
-int Tiler::planFinestZoom() const {
+Tiler::Planning Tiler::planFinestZoom() const {
   // The first zoom whose tiles hold the finest fit's triangles within a
   // quarter of the budget each, on average over the square. Zooms below it
   // keep the finest tolerance: they exist only where a tile of the planned
   // finest zoom cannot meet it within levelsPerTile levels.
   const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
                            fit::BinaryTriangulation::kMaxGridLevels - 1);
-  const auto planning = fit::fitMultilevel(
-      tileFitData(), binaryFitOptions(options_, geometry_.origin(), geometry_.size(),
-                                      options_.tolerance, cap, options_.threads));
-  const double finestTriangles = static_cast<double>(planning.levels().back().triangles);
+  const std::span<const Point3> data = tileFitData();
+  const std::size_t cellPoints = std::max<std::size_t>(options_.planningCellPoints, 1);
+  int cellZoom = 0;
+  while (cellZoom < 10 && data.size() > (cellPoints << (2 * cellZoom))) ++cellZoom;
+  std::size_t finestTriangles = 0;
+  if (cellZoom == 0) {
+    const auto planning =
+        fit::fitMultilevel(data, binaryFitOptions(options_, geometry_.origin(), geometry_.size(),
+                                                  options_.tolerance, cap, options_.threads));
+    finestTriangles = planning.levels().back().triangles;
+  } else {
+    // Each square's points, in the data's order (a counting sort by
+    // square); a square of fewer than 3 has nothing to fit. A square at
+    // cell level k is the whole square's binary triangulation from level
+    // k + cellZoom on, so it refines to cap − cellZoom.
+    const std::uint64_t n = std::uint64_t{1} << cellZoom;
+    const auto cellOf = [&](const Point3& p) {
+      const auto line = [&](double v, double origin, auto&& lineAt) {
+        const double u = (v - origin) / geometry_.size() * static_cast<double>(n);
+        auto k =
+            static_cast<std::uint64_t>(std::clamp(std::floor(u), 0.0, static_cast<double>(n - 1)));
+        while (k > 0 && v < lineAt(k)) --k;
+        while (k + 1 < n && v >= lineAt(k + 1)) ++k;
+        return k;
+      };
+      const auto column = line(p.x, geometry_.origin().x,
+                               [&](std::uint64_t k) { return geometry_.lineX(cellZoom, k); });
+      const auto row = line(p.y, geometry_.origin().y,
+                            [&](std::uint64_t k) { return geometry_.lineY(cellZoom, k); });
+      return static_cast<std::size_t>(row * n + column);
+    };
+    std::vector<std::uint32_t> start(n * n + 1, 0);
+    for (const Point3& p : data) ++start[cellOf(p) + 1];
+    for (std::size_t c = 0; c < n * n; ++c) start[c + 1] += start[c];
+    std::vector<std::uint32_t> order(data.size());
+    {
+      std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+      for (std::uint32_t i = 0; i < data.size(); ++i) order[next[cellOf(data[i])]++] = i;
+    }
+    std::vector<Point3> points;
+    for (std::size_t c = 0; c < n * n; ++c) {
+      if (start[c + 1] - start[c] < 3) continue;
+      points.clear();
+      for (std::uint32_t k = start[c]; k < start[c + 1]; ++k) points.push_back(data[order[k]]);
+      const Rect square = geometry_.bounds(
+          {cellZoom, static_cast<std::uint32_t>(c % n), static_cast<std::uint32_t>(c / n)});
+      const auto planning = fit::fitMultilevel(
+          points, binaryFitOptions(options_, {square.x0, square.y0}, square.width(),
+                                   options_.tolerance, cap - cellZoom, options_.threads));
+      finestTriangles += planning.levels().back().triangles;
+    }
+  }
   const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;
   int zmax = 0;
-  while (zmax < options_.maxZoom.value_or(20) && finestTriangles > perTile * std::pow(4.0, zmax))
+  while (zmax < options_.maxZoom.value_or(20) &&
+         static_cast<double>(finestTriangles) > perTile * std::pow(4.0, zmax))
     ++zmax;
-  return zmax;
+  return {zmax, cellZoom, finestTriangles};
 }
 
 Tiler::~Tiler() = default;

@@ -314,6 +314,71 @@ TEST(SurfaceDifference, SectionsThroughLongSlantedSliversMissNoTriangle) {
   }
 }
 
+TEST(Tiles, ThePlanningFitOverSquaresChoosesTheFinestZoomOfTheWholeFit) {
+  // Over more fit points than planningCellPoints the planning fit runs over
+  // the squares of a zoom, one at a time (its memory a square's): their
+  // finest levels hold nearly the whole fit's triangles (a few fewer: no
+  // square refines beside its neighbour to keep the whole triangulation
+  // conforming), and choose the same finest zoom unless the whole fit's
+  // count lies that close to the count a zoom allows. 14 400 points of rough
+  // ground over 4 squares of 3 600, and 4 800 of a strip over 4 squares, of
+  // which 2 hold nothing.
+  const auto rough = [](double x, double y) {
+    return 100 + 20 * std::sin(x / 90) * std::cos(y / 70) + 5 * std::sin(x / 13 + y / 17);
+  };
+  const auto grid = [&](int rows) {
+    Cdt cdt;
+    const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> jitter(-2, 2);
+    std::vector<Point3> points;
+    for (int j = 0; j < rows; ++j) {
+      for (int i = 0; i < 120; ++i) {
+        const double x = i * 10.0 + jitter(rng), y = j * 10.0 + jitter(rng);
+        points.push_back({500000 + x, 4500000 + y, rough(x, y)});
+      }
+    }
+    cdt.insertPoints(points, spots);
+    cdt.finalize();
+    return cdt.toTinData();
+  };
+  const TinData square = grid(120), strip = grid(40);
+  for (const TinData* t : {&square, &strip}) {
+    for (const double tolerance : {0.5, 2.0, 5.0}) {
+      SCOPED_TRACE(std::string(t == &square ? "the square" : "the strip") + " at tolerance " +
+                   std::to_string(tolerance));
+      TilerOptions options;
+      options.tolerance = tolerance;
+      options.maxTriangles = 1024;
+      options.threads = 1;
+      const Tiler whole(*t, options);
+      options.planningCellPoints = 3600;
+      const Tiler squares(*t, options);
+      EXPECT_EQ(whole.planningCellZoom(), 0);
+      EXPECT_EQ(squares.planningCellZoom(), 1);
+      const double a = static_cast<double>(whole.planningTriangles());
+      const double b = static_cast<double>(squares.planningTriangles());
+      EXPECT_GT(a, 1000);
+      EXPECT_LE(b, a);
+      // Where the fit goes to the data's own spacing (more triangles than
+      // points: the square at 0.5 m, 23 583 triangles) the squares' may
+      // hold a fifth fewer (19 192 here); coarser, within a few %.
+      const bool toTheData = a > static_cast<double>(t->vertices.size());
+      EXPECT_GT(b, (toTheData ? 0.75 : 0.95) * a) << b << " against " << a;
+      bool nearABound = false;
+      for (int z = 0; z <= 10; ++z)
+        nearABound |= std::abs(a / (256.0 * std::pow(4.0, z)) - 1) < 0.05;
+      if (!nearABound) {
+        EXPECT_EQ(squares.finestZoom(), whole.finestZoom()) << b << " against " << a;
+      }
+    }
+  }
+  // A plan's finest zoom runs no planning fit.
+  TilerOptions given;
+  given.plannedFinestZoom = 2;
+  EXPECT_EQ(Tiler(square, given).planningCellZoom(), -1);
+}
+
 TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
   const TinData tin = syntheticTin();
   const Surface surface(tin);
