@@ -177,7 +177,9 @@ struct TileJobSummary {
 /// chordSagRadius; 3: the sag radius grown where the CRS stretches the
 /// ground, a tile over its tolerance quantized to its own error, a shard's
 /// tiles' CRC-32 in shard-finished.json; 4: the sag radius measured over
-/// the part of a tile's square the TIN's box covers).
+/// the part of a tile's square the TIN's box covers, and over 2^18 fit
+/// points the planning fit over squares, which may choose another finest
+/// zoom).
 inline constexpr const char* kTileBuildFormat = "tinsmith-tiles/4";
 
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into
