@@ -436,55 +436,80 @@ Tiler::Planning Tiler::planFinestZoom() const {
   const int cap = std::min(options_.maxZoom.value_or(20) + levelsPerTile_,
                            fit::BinaryTriangulation::kMaxGridLevels - 1);
   const std::span<const Point3> data = tileFitData();
+  // One square's fit (fewer than 3 points, or points on one line — a
+  // raster's last row alone past a square's side — have nothing to fit): a
+  // square of zoom k is the whole square's binary triangulation from level
+  // k on, so it refines to cap − k.
+  std::size_t finestTriangles = 0;
+  const auto fitSquare = [&](std::span<const Point3> points, const TileId& id) {
+    const double size = std::ldexp(geometry_.size(), -id.z);
+    if (points.size() < 3 || onOneLine(points, 1e-4 * size)) return;
+    const Rect square = geometry_.bounds(id);
+    const auto planning = fit::fitMultilevel(
+        points, binaryFitOptions(options_, {square.x0, square.y0}, size, options_.tolerance,
+                                 cap - id.z, options_.threads));
+    finestTriangles += planning.levels().back().triangles;
+  };
   const std::size_t cellPoints = std::max<std::size_t>(options_.planningCellPoints, 1);
   int cellZoom = 0;
-  while (cellZoom < 10 && data.size() > (cellPoints << (2 * cellZoom))) ++cellZoom;
-  std::size_t finestTriangles = 0;
-  if (cellZoom == 0) {
-    const auto planning =
-        fit::fitMultilevel(data, binaryFitOptions(options_, geometry_.origin(), geometry_.size(),
-                                                  options_.tolerance, cap, options_.threads));
-    finestTriangles = planning.levels().back().triangles;
+  if (data.size() <= cellPoints) {
+    fitSquare(data, {});
   } else {
-    // Each square's points, in the data's order (a counting sort by
-    // square); a square of fewer than 3 has nothing to fit. A square at
-    // cell level k is the whole square's binary triangulation from level
-    // k + cellZoom on, so it refines to cap − cellZoom.
-    const std::uint64_t n = std::uint64_t{1} << cellZoom;
-    const auto cellOf = [&](const Point3& p) {
-      const auto line = [&](double v, double origin, auto&& lineAt) {
-        const double u = (v - origin) / geometry_.size() * static_cast<double>(n);
-        auto k =
-            static_cast<std::uint64_t>(std::clamp(std::floor(u), 0.0, static_cast<double>(n - 1)));
-        while (k > 0 && v < lineAt(k)) --k;
-        while (k + 1 < n && v >= lineAt(k + 1)) ++k;
-        return k;
-      };
-      const auto column = line(p.x, geometry_.origin().x,
-                               [&](std::uint64_t k) { return geometry_.lineX(cellZoom, k); });
-      const auto row = line(p.y, geometry_.origin().y,
-                            [&](std::uint64_t k) { return geometry_.lineY(cellZoom, k); });
-      return static_cast<std::size_t>(row * n + column);
+    if (data.size() > std::numeric_limits<std::uint32_t>::max())
+      throw inputError("the TIN holds more than 2^32 fit points", {},
+                       "tile it in parts (tinsmith slurm) or thin it");
+    // Each point's square at kMaxCellZoom, whose squares make up those of
+    // every zoom above (their sides are the same doubles,
+    // PyramidGeometry::lineX); a point on a side goes to the square above
+    // or right of it.
+    constexpr int kMaxCellZoom = 10;
+    const std::uint64_t finest = std::uint64_t{1} << kMaxCellZoom;
+    const auto indexOf = [&](double v, double origin, auto&& lineAt) {
+      const double u = (v - origin) / geometry_.size() * static_cast<double>(finest);
+      auto k = static_cast<std::uint64_t>(
+          std::clamp(std::floor(u), 0.0, static_cast<double>(finest - 1)));
+      while (k > 0 && v < lineAt(k)) --k;
+      while (k + 1 < finest && v >= lineAt(k + 1)) ++k;
+      return static_cast<std::uint32_t>(k);
     };
-    std::vector<std::uint32_t> start(n * n + 1, 0);
-    for (const Point3& p : data) ++start[cellOf(p) + 1];
-    for (std::size_t c = 0; c < n * n; ++c) start[c + 1] += start[c];
+    std::vector<std::uint32_t> column(data.size()), row(data.size());
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      column[i] = indexOf(data[i].x, geometry_.origin().x,
+                          [&](std::uint64_t k) { return geometry_.lineX(kMaxCellZoom, k); });
+      row[i] = indexOf(data[i].y, geometry_.origin().y,
+                       [&](std::uint64_t k) { return geometry_.lineY(kMaxCellZoom, k); });
+    }
+    // The first zoom whose fullest square holds at most cellPoints (a
+    // strip fills one row of squares: the average would understate it).
+    std::vector<std::uint32_t> start;
+    const auto squareOf = [&](std::size_t i) {
+      const int shift = kMaxCellZoom - cellZoom;
+      return (static_cast<std::size_t>(row[i] >> shift) << cellZoom) + (column[i] >> shift);
+    };
+    for (cellZoom = 1;; ++cellZoom) {
+      start.assign((std::size_t{1} << (2 * cellZoom)) + 1, 0);
+      for (std::size_t i = 0; i < data.size(); ++i) ++start[squareOf(i) + 1];
+      if (cellZoom == kMaxCellZoom || *std::max_element(start.begin(), start.end()) <= cellPoints)
+        break;
+    }
+    // Each square's points in the data's order (a counting sort by square).
+    const std::size_t squares = start.size() - 1;
+    for (std::size_t c = 0; c < squares; ++c) start[c + 1] += start[c];
     std::vector<std::uint32_t> order(data.size());
     {
       std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
-      for (std::uint32_t i = 0; i < data.size(); ++i) order[next[cellOf(data[i])]++] = i;
+      for (std::size_t i = 0; i < data.size(); ++i)
+        order[next[squareOf(i)]++] = static_cast<std::uint32_t>(i);
     }
+    std::vector<std::uint32_t>().swap(column);
+    std::vector<std::uint32_t>().swap(row);
     std::vector<Point3> points;
-    for (std::size_t c = 0; c < n * n; ++c) {
-      if (start[c + 1] - start[c] < 3) continue;
+    const std::uint32_t n = 1U << cellZoom;
+    for (std::size_t c = 0; c < squares; ++c) {
       points.clear();
       for (std::uint32_t k = start[c]; k < start[c + 1]; ++k) points.push_back(data[order[k]]);
-      const Rect square = geometry_.bounds(
-          {cellZoom, static_cast<std::uint32_t>(c % n), static_cast<std::uint32_t>(c / n)});
-      const auto planning = fit::fitMultilevel(
-          points, binaryFitOptions(options_, {square.x0, square.y0}, square.width(),
-                                   options_.tolerance, cap - cellZoom, options_.threads));
-      finestTriangles += planning.levels().back().triangles;
+      fitSquare(points,
+                {cellZoom, static_cast<std::uint32_t>(c) % n, static_cast<std::uint32_t>(c) / n});
     }
   }
   const double perTile = static_cast<double>(options_.maxTriangles) / 4.0;

@@ -26,8 +26,8 @@
 // zoom whose tiles would hold the finest fit's triangles within a quarter of
 // `maxTriangles` each on average (the planning fit: one over the whole
 // square, or for more than `planningCellPoints` fit points one over each
-// square of the first zoom whose squares hold that many on average, their
-// triangles summed; a plan may give Z instead); a tile fit refines at most
+// square of the first zoom whose fullest square holds at most that many,
+// their triangles summed; a plan may give Z instead); a tile fit refines at most
 // `levelsPerTile` levels below the zoom. A tile gets children when its
 // measured error is above `tolerance` (and z < maxZoom).
 //
@@ -130,9 +130,10 @@ struct TilerOptions {
   double lambdaFactor = 0.01;
   int threads = 0;  ///< for the planning fit (0 = all cores)
   /// The planning fit runs over the whole square up to this many fit
-  /// points, else over the squares of the first zoom whose squares hold at
-  /// most this many on average, one at a time (its memory is a square's,
-  /// not the whole TIN's); the finest zoom counts their triangles together.
+  /// points, else over the squares of the first zoom (to 10) whose fullest
+  /// square holds at most this many, one at a time (its memory is a
+  /// square's, not the whole TIN's; a square whose points lie on one line is
+  /// left out); the finest zoom counts their triangles together.
   /// They hold a few fewer than the whole fit (no square refines beside its
   /// neighbour to keep the whole triangulation conforming): on SRTM
   /// N44W072 at 10 m and 40 m, 0.2–1.8 % fewer over 4, 16 and 64 squares,
@@ -167,10 +168,11 @@ struct TilerOptions {
   /// those of the square, not of the whole TIN.
   std::optional<Rect> region;
   /// The project CRS's place on the Earth: chord sag is then planned with the
-  /// radius chordSagRadius gives over each tile's square, a side with the
-  /// smaller of its two tiles' (a projection that bends straight lines more
-  /// than the sphere allows for), else with
-  /// kEarthRadiusOfCurvature. Must outlive the Tiler.
+  /// radius chordSagRadius gives over the part of each tile's square the
+  /// TIN's box covers (Tiler::sagRadius), a side with the smaller of its two
+  /// tiles' (a projection that bends straight lines more or less than the
+  /// sphere allows for), else with kEarthRadiusOfCurvature. Must outlive the
+  /// Tiler.
   const GeoReference* geo = nullptr;
 };
 

@@ -758,6 +758,7 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
         from.emplace(key, i);
         found.push_back(recordOfTile(key, *bytes, in->path()));
       }
+      decltype(coverage[i].tileCrcs)().swap(coverage[i].tileCrcs);  // checked: let go
     }
     sortRecords(found);
     const auto b = nlohmann::json::parse(build);

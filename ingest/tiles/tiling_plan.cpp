@@ -2,6 +2,7 @@
 
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -150,7 +151,9 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   const double x = r.get<double>(), y = r.get<double>(), size = r.get<double>();
   t.geometry = tiles::PyramidGeometry({x, y}, size);
   for (double* v : {&t.extent.x0, &t.extent.y0, &t.extent.x1, &t.extent.y1}) *v = r.get<double>();
-  if (!(t.extent.x0 <= t.extent.x1 && t.extent.y0 <= t.extent.y1)) r.bad("the TIN's box is empty");
+  if (!(t.extent.x0 <= t.extent.x1 && t.extent.y0 <= t.extent.y1) || !std::isfinite(t.extent.x0) ||
+      !std::isfinite(t.extent.x1) || !std::isfinite(t.extent.y0) || !std::isfinite(t.extent.y1))
+    r.bad("the TIN's box is empty or not finite");
   t.finestZoom = r.get<std::int32_t>();
   t.fitSpacing = r.get<double>();
   t.tileFitAllData = r.get<std::uint8_t>() != 0;

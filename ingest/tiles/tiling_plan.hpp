@@ -8,7 +8,8 @@
 //   magic "\x89TSPLAN\n" (8 bytes), u32 version (kTilingPlanVersion)
 //   TIN: u32 file CRC-32, u64 vertices, u64 triangles
 //   options: f64 tolerance, u64 maxTriangles, i32 maxZoom (−1: none), f64 λ factor
-//   pyramid: f64 origin x, f64 origin y, f64 size, i32 finestZoom
+//   pyramid: f64 origin x, f64 origin y, f64 size, the TIN's box f64 x0, y0,
+//     x1, y1 (version 3 on), i32 finestZoom
 //   fit: f64 spacing, u8 tile fits take all data
 //   u32 zooms, per zoom u64 lines, per line u8 kind, u8 ring, u8 closed,
 //     u64 n, n × (f64 x, y, z)

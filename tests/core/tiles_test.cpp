@@ -373,6 +373,28 @@ TEST(Tiles, ThePlanningFitOverSquaresChoosesTheFinestZoomOfTheWholeFit) {
       }
     }
   }
+  // A raster's last row on a square's side lies alone in the squares above
+  // it, on one line, where a fit is singular: those squares are left out.
+  {
+    Cdt cdt;
+    const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+    std::vector<Point3> points;
+    for (int j = 0; j <= 20; ++j) {
+      for (int i = 0; i <= 40; ++i)
+        points.push_back({i * 10.0, j * 10.0, rough(i * 10.0, j * 10.0)});
+    }
+    cdt.insertPoints(points, spots);
+    cdt.finalize();
+    const TinData raster = cdt.toTinData();  // 400 m × 200 m: its top row at y = 200
+    TilerOptions options;
+    options.tolerance = 0.5;
+    options.maxTriangles = 256;
+    options.threads = 1;
+    options.planningCellPoints = 200;
+    const Tiler squares(raster, options);
+    EXPECT_EQ(squares.planningCellZoom(), 2);  // 100 m squares: the top row alone in row 2
+    EXPECT_GT(squares.planningTriangles(), 0u);
+  }
   // A plan's finest zoom runs no planning fit.
   TilerOptions given;
   given.plannedFinestZoom = 2;
