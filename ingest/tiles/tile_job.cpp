@@ -677,7 +677,16 @@ bool isFinishedShard(const fs::path& path) {
   if (!fs::exists(path, ec)) return false;
   try {
     const auto in = store::openStoreForReading(path);
-    return in->contains(kShardKey) && !shardFinish(*in).unfinished;
+    if (!in->contains(kShardKey)) return false;
+    const ShardFinish finish = shardFinish(*in);
+    if (finish.unfinished) return false;
+    // A tile whose bytes are not those the shard finished with (a shared
+    // filesystem's damage) would fail the merge: the shard is built again.
+    for (const auto& [key, crc] : finish.tileCrcs) {
+      const auto bytes = in->get(key);
+      if (!bytes || crc32(*bytes) != crc) return false;
+    }
+    return true;
   } catch (const Error&) {
     return false;
   }
@@ -748,8 +757,8 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
                                " is damaged: its bytes are not those its shard finished with "
                                "(CRC-32)",
                            fileLocation(in->path().string()),
-                           "remove that store and build the shard again (tinsmith slurm … "
-                           "--resume --submit reruns a shard whose store is gone), then merge");
+                           "build the shard again (tinsmith slurm … --resume --submit "
+                           "reruns it, or its tinsmith tile command), then merge");
         if (const auto there = from.find(key); there != from.end()) {
           if (shards[there->second]->get(key) != bytes)
             throw usageError("tile " + key + " differs between the shards");

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/tile_job.hpp"
 #include "ingest/tiles/tiling_plan.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tests/support/run_command.hpp"
@@ -548,7 +549,12 @@ TEST(SlurmCli, MergeRefusesAnUnfinishedShardAndAJobWithoutItsTop) {
   EXPECT_NE(r.err.find("flipped.3dtiles: its tile " + damagedKey + " is damaged"),
             std::string::npos)
       << r.err;
+  EXPECT_NE(r.err.find("--resume --submit reruns it"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "merged.3dtiles"));
+  // What tinsmith slurm --resume reruns: every one of these but the intact shard.
+  EXPECT_TRUE(ingest::isFinishedShard(shards[3]));
+  for (const auto& rerun : {flipped, lost, stage, dir / "gone.3dtiles"})
+    EXPECT_FALSE(ingest::isFinishedShard(rerun)) << rerun;
   // The subtrees without the top, or one alone: no pyramid's root.
   for (const auto& inputs : {std::vector<fs::path>(shards.begin() + 1, shards.end()),
                              std::vector<fs::path>{shards[1]}}) {

@@ -149,7 +149,8 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
 }
 
 /// The tasks that have left no finished store (ingest::isFinishedShard: a
-/// store that is missing, damaged or lost tiles is built again), and the
+/// store that is missing, damaged, lost tiles or holds one whose bytes are
+/// not those its shard finished with is built again), and the
 /// top when a subtree among them needs the plan the top writes and it is
 /// gone (the merge does not read it: with every store there, nothing is
 /// rerun for it).
