@@ -607,14 +607,19 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   // shared with the neighbour) by the side margin.
   // Each triangle's chord sag counts (the content is straight triangles on
   // the curved Earth), and encoding keeps its share of the tolerance.
+  const double mosaicError = options_.mosaicError ? options_.mosaicError(id) : 0.0;
   RefineOptions refine;
-  refine.tolerance = std::max((1 - kEncodingShare) * zd.tolerance - encodingAllowance,
+  refine.tolerance = std::max((1 - kEncodingShare) * zd.tolerance - encodingAllowance - mosaicError,
                               0.5 * (1 - kEncodingShare) * zd.tolerance);
   refine.maxTriangles = options_.maxTriangles;
   refine.sideMargin = sideMargin(rect, zd.tolerance);
   refine.earthRadius = radius;
   tile.heldPoints = refineTile(tile, *index_, refine);
   tile.tolerance = zd.tolerance;
+  if (mosaicError > 0) {
+    tile.error += mosaicError;
+    for (double& e : tile.triangleErrors) e += mosaicError;
+  }
   return tile;
 }
 

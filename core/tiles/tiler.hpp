@@ -49,6 +49,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -167,6 +168,13 @@ struct TilerOptions {
   /// (ingest::readTinFilePart): the fit data, the index and the lines are
   /// those of the square, not of the whole TIN.
   std::optional<Rect> region;
+  /// Set when the TIN is the mosaic of a finer zoom's tiles (tile_mosaic.hpp)
+  /// rather than the terrain: how far the mosaic lies from the terrain under
+  /// a tile's square, vertically (the largest error of its tiles there).
+  /// Each tile is refined to its zoom's tolerance less this, and its
+  /// errors, measured against the mosaic, have this added: a bound against
+  /// the terrain itself, by the triangle inequality.
+  std::function<double(const TileId&)> mosaicError;
   /// The project CRS's place on the Earth: chord sag is then planned with the
   /// radius chordSagRadius gives over the part of each tile's square the
   /// TIN's box covers (Tiler::sagRadius), a side with the smaller of its two

@@ -19,6 +19,7 @@
 #include "core/tiles/pyramid.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/terrain_lines.hpp"
+#include "core/tiles/tile_mosaic.hpp"
 #include "core/tiles/tile_refiner.hpp"
 #include "core/tiles/tiler.hpp"
 #include "core/tin/hull_trim.hpp"
@@ -434,6 +435,106 @@ TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
     }
     EXPECT_GE(built, 1u);
     EXPECT_GE(exact * 10, sides * 9) << exact << " of " << sides << " side vertices exact";
+  }
+}
+
+/// A 1 km square of 81 × 81 points on a rippled hill with a river across
+/// it, at UTM-sized coordinates: detail enough for tiles down to zoom 2 and
+/// more within a tile's budget.
+TinData rippledRiverTin() {
+  Cdt cdt;
+  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
+  const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
+  const double x0 = 500000, y0 = 4500000;
+  const auto z = [](double x, double y) {
+    return hill(x, y) + 0.8 * std::sin(x / 37) * std::cos(y / 53);
+  };
+  std::vector<Point3> points;
+  for (int j = 0; j <= 80; ++j)
+    for (int i = 0; i <= 80; ++i)
+      points.push_back({x0 + i * 12.5, y0 + j * 12.5, z(i * 12.5, j * 12.5)});
+  cdt.insertPoints(points, spots);
+  std::vector<Point3> line;
+  for (int k = 0; k <= 30; ++k) {
+    const double x = 20 + k * 31.0, y = 900 - k * 27.0 + 15 * std::sin(0.7 * k);
+    line.push_back({x0 + x, y0 + y, z(x, y) - 1.0 - 0.01 * k});
+  }
+  cdt.insertConstraint(line, river);
+  cdt.finalize();
+  return cdt.toTinData();
+}
+
+// The top of a pyramid fitted to the mosaic of a zoom's tiles instead of
+// the TIN (issue 24): the tiles join without a crack, keep the river, and a
+// tile above fitted to them, refined to its tolerance less E (the mosaic's
+// own error) and declaring its error against the mosaic plus E, is within
+// that declaration against the TIN itself.
+TEST(TileMosaic, TheTopFittedToAZoomsTilesKeepsItsDeclarationAgainstTheTin) {
+  const TinData tin = rippledRiverTin();
+  TilerOptions options;
+  options.tolerance = 0.05;
+  options.maxTriangles = 4096;
+  const Tiler tiler(tin, options);
+  constexpr int k = 2;
+  ASSERT_GE(tiler.finestZoom(), k);  // each zoom above twice zoom k's tolerance
+  std::vector<TileSurface> zoomK;
+  std::size_t tileVertices = 0;
+  for (std::uint32_t y = 0; y < (1U << k); ++y)
+    for (std::uint32_t x = 0; x < (1U << k); ++x) {
+      zoomK.push_back(tiler.buildTile({k, x, y}));
+      tileVertices += zoomK.back().vertices.size();
+    }
+  const TileMosaic mosaic = mosaicOf(zoomK, tin.crs);
+  EXPECT_EQ(mosaic.mismatchedVertices, 0u);
+  EXPECT_LT(mosaic.tin.vertices.size(), tileVertices);  // the sides are shared
+  double e = 0;
+  std::size_t triangles = 0;
+  for (const TileSurface& t : zoomK) {
+    e = std::max(e, t.error);
+    triangles += t.triangles.size();
+  }
+  EXPECT_EQ(mosaic.maxError, e);
+  EXPECT_EQ(mosaic.tin.triangles.size(), triangles);
+  // No crack: the mosaic's boundary is the square's outline, which is the TIN's.
+  const Rect square = tiler.geometry().bounds({});
+  const auto onOutline = [&](const Point3& a, const Point3& b) {
+    return (a.x == square.x0 && b.x == square.x0) || (a.x == square.x1 && b.x == square.x1) ||
+           (a.y == square.y0 && b.y == square.y0) || (a.y == square.y1 && b.y == square.y1);
+  };
+  const auto boundary = boundaryHalfEdges(mosaic.tin);
+  EXPECT_FALSE(boundary.empty());
+  for (const auto& [a, b] : boundary)
+    EXPECT_TRUE(onOutline(mosaic.tin.vertices[a], mosaic.tin.vertices[b]))
+        << mosaic.tin.vertices[a].x << " " << mosaic.tin.vertices[a].y << " → "
+        << mosaic.tin.vertices[b].x << " " << mosaic.tin.vertices[b].y;
+  // The river, as the tiles keep it: rivers only (and the ring).
+  const auto lines = extractTerrainLines(mosaic.tin);
+  EXPECT_EQ(std::count_if(lines.begin(), lines.end(), [](const auto& l) { return l.ring; }), 1);
+  EXPECT_GE(std::count_if(lines.begin(), lines.end(),
+                          [](const auto& l) { return l.kind == FeatureKind::River; }),
+            1);
+  EXPECT_FALSE(mosaic.tin.constrainedEdges.empty());
+  for (const auto& c : mosaic.tin.constrainedEdges) EXPECT_EQ(c.feature, 1u);
+
+  TilerOptions top = options;
+  top.fixed = TilerOptions::FixedPyramid{tiler.geometry(), tiler.finestZoom(), k};
+  top.maxZoom = tiler.maxZoom();
+  top.mosaicError = [&](const TileId&) { return e; };
+  const Tiler topTiler(mosaic.tin, top);
+  top.mosaicError = {};
+  const Tiler againstTheMosaic(mosaic.tin, top);
+  const TinIndex index(tin);
+  for (const TileId id : {TileId{0, 0, 0}, TileId{1, 0, 0}, TileId{1, 1, 1}}) {
+    SCOPED_TRACE(id.name());
+    const TileSurface s = topTiler.buildTile(id);
+    ASSERT_FALSE(s.empty());
+    EXPECT_LE(s.error, tiler.zoomTolerance(id.z));
+    EXPECT_LE(maxVerticalDifference(s.vertices, s.triangles, index).maxAbs, s.error + 1e-9);
+    // Refined further than the same tile against the mosaic alone, and
+    // declaring the mosaic's error besides its own.
+    const TileSurface plain = againstTheMosaic.buildTile(id);
+    EXPECT_GT(s.triangles.size(), plain.triangles.size());
+    EXPECT_GE(s.error, e);
   }
 }
 

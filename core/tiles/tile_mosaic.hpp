@@ -1,0 +1,36 @@
+// The mosaic of one zoom's tile surfaces as a TIN: what the tiles above that
+// zoom can be fitted to instead of the TIN itself (docs/benchmarks.md, issue
+// 24's "the top from the subtrees' reports"). The tiles of a zoom share
+// their sides' vertices bit for bit (tiler.hpp), so their surfaces join
+// into one crack-free triangulation; its break lines are the tiles' line
+// edges (rivers kept apart), its domain the tiles' own, whose boundary
+// edges are the rings a Tiler finds in it.
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <string>
+
+#include "core/tiles/tiler.hpp"
+#include "core/tin/tin_data.hpp"
+
+namespace tinsmith::tiles {
+
+struct TileMosaic {
+  TinData tin;
+  /// Side vertices two tiles hold at the same x, y with different z (none
+  /// when the tiles are of one Tiler's zoom: a sign of tiles that are not).
+  std::size_t mismatchedVertices = 0;
+  /// The largest TileSurface::error of the tiles (m): how far the mosaic is
+  /// from the TIN they were built of, vertically.
+  double maxError = 0.0;
+};
+
+/// The tiles' surfaces joined: vertices merged where x, y and z are the same
+/// doubles (in the order first met), triangles in the tiles' order, and a
+/// constrained edge for each held edge that is no tile side and no edge of
+/// the mosaic's boundary (feature 0 a break line, 1 a river). `crs` is the
+/// TIN's. Empty tiles are skipped.
+TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs);
+
+}  // namespace tinsmith::tiles
