@@ -7,7 +7,11 @@ namespace tinsmith {
 /// the system when freed. glibc otherwise raises its mapping threshold after
 /// the first large free (up to 32 MiB), so the multi-megabyte temporaries of
 /// a build end up in the heap and stay resident after they are freed, which
-/// raises peak memory by tens of megabytes. Call once at program start,
+/// raises peak memory by tens of megabytes. The heap's top keeps up to
+/// 8 MiB free and grows 8 MiB at a time (not 128 KiB, glibc's trim
+/// threshold once the mapping threshold is set): a few MiB more at the peak
+/// for about a sixth less CPU in a tiling run, most of it page faults
+/// (docs/benchmarks.md). Call once at program start,
 /// before any thread is created; a no-op on other C libraries.
 void returnLargeBlocksToSystem();
 

@@ -60,7 +60,7 @@ void parallelFor(std::size_t n, int threads, F&& build) {
 struct Built {
   TileId id;
   std::size_t triangles = 0, bytes = 0;
-  double declared = 0, measured = 0, allowance = 0;
+  double declared = 0, reachable = 0, measured = 0, allowance = 0;
   bool empty = true;
 };
 
@@ -134,7 +134,8 @@ int main(int argc, char** argv) try {
     b.id = top[i];
     if (s.empty()) return;
     const auto c = tiles::encodeTile(s, tiles::skirtDepth(tiler, s.id, s.error), content);
-    b = {top[i], s.triangles.size(), c.glb.size(), c.record.error, 0, 0, false};
+    b = {top[i], s.triangles.size(), c.glb.size(), c.record.error, c.record.reachableError, 0, 0,
+         false};
   });
   const double todaySeconds = secondsSince(start);
 
@@ -154,7 +155,8 @@ int main(int argc, char** argv) try {
     b.id = top[i];
     if (s.empty()) return;
     const auto c = tiles::encodeTile(s, tiles::skirtDepth(mosaicTiler, s.id, s.error), content);
-    b = {top[i], s.triangles.size(), c.glb.size(), c.record.error, 0, e, false};
+    b = {top[i], s.triangles.size(), c.glb.size(), c.record.error, c.record.reachableError, 0, e,
+         false};
     mosaicSurfaces[i] = std::move(s);
   });
   const double mosaicSeconds = secondsSince(start);
@@ -167,7 +169,7 @@ int main(int argc, char** argv) try {
   int over = 0;
   std::printf(
       "\n| tile | zoom tolerance | today: triangles / bytes / declared / measured vs TIN "
-      "| from the mosaic: E / triangles / bytes / declared / measured vs TIN |\n"
+      "| from the mosaic: E / triangles / bytes / declared (reachable) / measured vs TIN |\n"
       "|---|---|---|---|\n");
   std::size_t todayTriangles = 0, mosaicTriangles = 0, todayBytes = 0, mosaicBytes = 0;
   for (std::size_t i = 0; i < top.size(); ++i) {
@@ -180,10 +182,11 @@ int main(int argc, char** argv) try {
     mosaicTriangles += b.triangles;
     todayBytes += a.bytes;
     mosaicBytes += b.bytes;
-    std::printf("| %s | %.2f | %zu / %zu / %.2f / %.2f | %.2f / %zu / %zu / %.2f / %.2f%s |\n",
-                top[i].name().c_str(), tiler.zoomTolerance(top[i].z), a.triangles, a.bytes,
-                a.declared, a.measured, b.allowance, b.triangles, b.bytes, b.declared, b.measured,
-                bad ? " OVER" : "");
+    std::printf(
+        "| %s | %.2f | %zu / %zu / %.2f / %.2f | %.2f / %zu / %zu / %.2f (%.2f) / %.2f%s |\n",
+        top[i].name().c_str(), tiler.zoomTolerance(top[i].z), a.triangles, a.bytes, a.declared,
+        a.measured, b.allowance, b.triangles, b.bytes, b.declared, b.reachable, b.measured,
+        bad ? " OVER" : "");
   }
   std::printf(
       "\ntop tiles: today %zu triangles, %zu bytes in %.2f s (the whole-TIN Tiler's "
