@@ -18,19 +18,20 @@ namespace tinsmith::tiles {
 
 struct TileMosaic {
   TinData tin;
-  /// Side vertices two tiles hold at the same x, y with different z (none
-  /// when the tiles are of one Tiler's zoom: a sign of tiles that are not).
-  std::size_t mismatchedVertices = 0;
   /// The largest TileSurface::error of the tiles (m): how far the mosaic is
   /// from the TIN they were built of, vertically.
   double maxError = 0.0;
 };
 
-/// The tiles' surfaces joined: vertices merged where x, y and z are the same
+/// The tiles' surfaces joined: vertices merged where x and y are the same
 /// doubles (in the order first met), triangles in the tiles' order, and a
-/// constrained edge for each held edge that is no tile side and no edge of
-/// the mosaic's boundary (feature 0 a break line, 1 a river). `crs` is the
-/// TIN's. Empty tiles are skipped.
+/// constrained edge for each held edge inside a tile that two of its
+/// triangles share (feature 0 a break line, 1 a river): not the tile sides,
+/// nor the rings, whose edges are the mosaic's boundary. A break line that
+/// runs exactly along a tile side is left out with the side. `crs` is the
+/// TIN's. Empty tiles are skipped. Throws internalError when two tiles give
+/// a shared vertex different z (they are not the tiles of one Tiler's zoom)
+/// or a tile lacks its flags or held edges.
 TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs);
 
 }  // namespace tinsmith::tiles

@@ -608,6 +608,9 @@ TileSurface Tiler::buildTile(const TileId& id, double encodingAllowance) const {
   // Each triangle's chord sag counts (the content is straight triangles on
   // the curved Earth), and encoding keeps its share of the tolerance.
   const double mosaicError = options_.mosaicError ? options_.mosaicError(id) : 0.0;
+  if (!(mosaicError >= 0) || !std::isfinite(mosaicError))
+    throw internalError("Tiler: the mosaic's error under tile " + id.name() + " is " +
+                        std::to_string(mosaicError));
   RefineOptions refine;
   refine.tolerance = std::max((1 - kEncodingShare) * zd.tolerance - encodingAllowance - mosaicError,
                               0.5 * (1 - kEncodingShare) * zd.tolerance);

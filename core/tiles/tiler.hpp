@@ -170,10 +170,13 @@ struct TilerOptions {
   std::optional<Rect> region;
   /// Set when the TIN is the mosaic of a finer zoom's tiles (tile_mosaic.hpp)
   /// rather than the terrain: how far the mosaic lies from the terrain under
-  /// a tile's square, vertically (the largest error of its tiles there).
-  /// Each tile is refined to its zoom's tolerance less this, and its
-  /// errors, measured against the mosaic, have this added: a bound against
-  /// the terrain itself, by the triangle inequality.
+  /// a tile's square, vertically (the largest error of its tiles there; ≥ 0,
+  /// called from several threads). A tile's errors, measured against the
+  /// mosaic, have it added — a bound against the terrain itself, by the
+  /// triangle inequality — and its refinement aims at its zoom's tolerance
+  /// less it (never below half the tolerance: a larger one leaves the tile
+  /// over it). Its sides and lines are simplified as without it, to a
+  /// share of the tolerance against the mosaic.
   std::function<double(const TileId&)> mosaicError;
   /// The project CRS's place on the Earth: chord sag is then planned with the
   /// radius chordSagRadius gives over the part of each tile's square the

@@ -313,6 +313,44 @@ std::unique_ptr<store::TileStore> resumableStore(const fs::path& path, const std
   return st;
 }
 
+/// What a shard's store (it holds kShardKey) finished with: the CRC-32 of
+/// each tile, by key — or why it is not a finished one: a stage its run left
+/// (killed, failed or still running), or a store that lost tiles.
+struct ShardFinish {
+  std::optional<std::string> unfinished;
+  std::map<std::string, std::uint32_t> tileCrcs;
+};
+ShardFinish shardFinish(const store::TileStore& in) {
+  const auto finished = in.get(kShardFinishedKey);
+  const auto unfinished = [](std::string why) { return ShardFinish{std::move(why), {}}; };
+  if (!finished)
+    return unfinished("the shard did not finish (no " + std::string(kShardFinishedKey) +
+                      "): it is the stage of a run that was killed, failed or is still running");
+  const auto j = nlohmann::json::parse(*finished, nullptr, false);
+  const auto isCrc = [](const nlohmann::json& v) {
+    return v.is_number_unsigned() && v.get<std::uint64_t>() <= 0xffffffffU;
+  };
+  if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned() ||
+      !j.contains("crc32") || !j["crc32"].is_object() ||
+      j["crc32"].size() != j["tiles"].get<std::size_t>() ||
+      !std::all_of(j["crc32"].begin(), j["crc32"].end(), isCrc))
+    return unfinished("its " + std::string(kShardFinishedKey) + " is not one tinsmith writes");
+  ShardFinish out;
+  for (const auto& [key, crc] : j["crc32"].items())
+    out.tileCrcs.emplace(key, crc.get<std::uint32_t>());
+  std::size_t tiles = 0;
+  for (const auto& key : in.keys()) {
+    if (key.rfind("tiles/", 0) != 0) continue;
+    ++tiles;
+    if (!out.tileCrcs.contains(key))
+      return unfinished("it holds the tile " + key + ", which its shard did not finish with");
+  }
+  if (tiles != out.tileCrcs.size())
+    return unfinished("it holds " + std::to_string(tiles) + " of the " +
+                      std::to_string(out.tileCrcs.size()) + " tiles its shard finished with");
+  return out;
+}
+
 }  // namespace
 
 std::optional<encode::Compression> parseCompression(std::string_view name) {
@@ -498,9 +536,13 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   store::requireReplaceable(out);
   store::requireReplaceable(stagePath);
   std::unique_ptr<store::TileStore> previous;  // the finished output's tiles, for --resume
+  // A finished shard's tiles' CRC-32: a tile whose bytes are not those is
+  // built again, not carried on under a new CRC.
+  std::map<std::string, std::uint32_t> previousCrcs;
   if (options.resume) {
     (void)resumableStore(stagePath, build, shard);
     previous = resumableStore(out, build, shard);
+    if (previous && previous->contains(kShardKey)) previousCrcs = shardFinish(*previous).tileCrcs;
   }
   store::removeStaleTemps(out);
   store::removeStaleTemps(stagePath);
@@ -536,6 +578,9 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
         if (!previous) return std::nullopt;
         const auto bytes = previous->get(key);
         if (!bytes) return std::nullopt;
+        if (const auto crc = previousCrcs.find(key);
+            crc != previousCrcs.end() && crc32(*bytes) != crc->second)
+          return std::nullopt;
         TileRecord record = recordOfTile(key, *bytes, out);
         stage->put(key, *bytes);  // the stage becomes the whole new store
         return record;
@@ -604,44 +649,6 @@ struct ShardCoverage {
   }
 };
 
-/// What a shard's store (it holds kShardKey) finished with: the CRC-32 of
-/// each tile, by key — or why it is not a finished one: a stage its run left
-/// (killed, failed or still running), or a store that lost tiles.
-struct ShardFinish {
-  std::optional<std::string> unfinished;
-  std::map<std::string, std::uint32_t> tileCrcs;
-};
-ShardFinish shardFinish(const store::TileStore& in) {
-  const auto finished = in.get(kShardFinishedKey);
-  const auto unfinished = [](std::string why) { return ShardFinish{std::move(why), {}}; };
-  if (!finished)
-    return unfinished("the shard did not finish (no " + std::string(kShardFinishedKey) +
-                      "): it is the stage of a run that was killed, failed or is still running");
-  const auto j = nlohmann::json::parse(*finished, nullptr, false);
-  const auto isCrc = [](const nlohmann::json& v) {
-    return v.is_number_unsigned() && v.get<std::uint64_t>() <= 0xffffffffU;
-  };
-  if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned() ||
-      !j.contains("crc32") || !j["crc32"].is_object() ||
-      j["crc32"].size() != j["tiles"].get<std::size_t>() ||
-      !std::all_of(j["crc32"].begin(), j["crc32"].end(), isCrc))
-    return unfinished("its " + std::string(kShardFinishedKey) + " is not one tinsmith writes");
-  ShardFinish out;
-  for (const auto& [key, crc] : j["crc32"].items())
-    out.tileCrcs.emplace(key, crc.get<std::uint32_t>());
-  std::size_t tiles = 0;
-  for (const auto& key : in.keys()) {
-    if (key.rfind("tiles/", 0) != 0) continue;
-    ++tiles;
-    if (!out.tileCrcs.contains(key))
-      return unfinished("it holds the tile " + key + ", which its shard did not finish with");
-  }
-  if (tiles != out.tileCrcs.size())
-    return unfinished("it holds " + std::to_string(tiles) + " of the " +
-                      std::to_string(out.tileCrcs.size()) + " tiles its shard finished with");
-  return out;
-}
-
 ShardCoverage coverageOf(const store::TileStore& in) {
   const auto record = in.get(kShardKey);
   if (!record) {
@@ -672,7 +679,7 @@ ShardCoverage coverageOf(const store::TileStore& in) {
 
 }  // namespace
 
-bool isFinishedShard(const fs::path& path) {
+bool isFinishedShard(const fs::path& path, bool checkTileBytes) {
   std::error_code ec;
   if (!fs::exists(path, ec)) return false;
   try {
@@ -680,8 +687,9 @@ bool isFinishedShard(const fs::path& path) {
     if (!in->contains(kShardKey)) return false;
     const ShardFinish finish = shardFinish(*in);
     if (finish.unfinished) return false;
+    if (!checkTileBytes) return true;
     // A tile whose bytes are not those the shard finished with (a shared
-    // filesystem's damage) would fail the merge: the shard is built again.
+    // filesystem's damage) would fail the merge.
     for (const auto& [key, crc] : finish.tileCrcs) {
       const auto bytes = in->get(key);
       if (!bytes || crc32(*bytes) != crc) return false;
@@ -758,7 +766,8 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
                                "(CRC-32)",
                            fileLocation(in->path().string()),
                            "build the shard again (tinsmith slurm … --resume --submit "
-                           "reruns it, or its tinsmith tile command), then merge");
+                           "reruns it, or its tinsmith tile command without --resume), "
+                           "then merge");
         if (const auto there = from.find(key); there != from.end()) {
           if (shards[there->second]->get(key) != bytes)
             throw usageError("tile " + key + " differs between the shards");

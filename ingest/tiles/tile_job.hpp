@@ -194,9 +194,10 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
 
 /// Whether `path` is a shard's store that finished, as merge takes it: not a
 /// stage left by a shard that was killed, failed or is still running, nor
-/// one that lost tiles or holds one whose bytes are not those it finished
-/// with (their CRC-32: every tile is read), nor a damaged or missing store.
-bool isFinishedShard(const std::filesystem::path& path);
+/// one that lost tiles, nor a damaged or missing store; with
+/// `checkTileBytes`, nor one holding a tile whose bytes are not those it
+/// finished with (their CRC-32: every tile is read, the store's size).
+bool isFinishedShard(const std::filesystem::path& path, bool checkTileBytes = false);
 
 /// Joins stores built from the same TIN and options (shards: subtrees and the
 /// tiles above them) into one, as one run would have written it. Throws

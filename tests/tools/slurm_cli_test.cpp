@@ -551,10 +551,20 @@ TEST(SlurmCli, MergeRefusesAnUnfinishedShardAndAJobWithoutItsTop) {
       << r.err;
   EXPECT_NE(r.err.find("--resume --submit reruns it"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "merged.3dtiles"));
-  // What tinsmith slurm --resume reruns: every one of these but the intact shard.
-  EXPECT_TRUE(ingest::isFinishedShard(shards[3]));
+  // What tinsmith slurm --resume reruns (the tiles' bytes checked): every
+  // one of these but the intact shard; the flipped tile goes unseen by the
+  // check of keys alone.
+  EXPECT_TRUE(ingest::isFinishedShard(shards[3], true));
+  EXPECT_TRUE(ingest::isFinishedShard(flipped, false));
   for (const auto& rerun : {flipped, lost, stage, dir / "gone.3dtiles"})
-    EXPECT_FALSE(ingest::isFinishedShard(rerun)) << rerun;
+    EXPECT_FALSE(ingest::isFinishedShard(rerun, true)) << rerun;
+  // Its tinsmith tile command with --resume builds the flipped tile again
+  // rather than carry it on under a new CRC: the shard's own bytes.
+  ASSERT_EQ(
+      runTinsmith(tile + " --subtree 1/0/1 --unchecked-ancestors --resume -o " + flipped.string())
+          .exitCode,
+      0);
+  EXPECT_EQ(readFile(flipped), readFile(shards[3]));
   // The subtrees without the top, or one alone: no pyramid's root.
   for (const auto& inputs : {std::vector<fs::path>(shards.begin() + 1, shards.end()),
                              std::vector<fs::path>{shards[1]}}) {

@@ -22,8 +22,11 @@
 // and with --submit runs `sbatch --array=0` (the top), `sbatch --array` of
 // the subtrees after it and `sbatch` of the merge after every task (afterok).
 // Nothing heavy runs where tinsmith slurm runs (a login node): it reads the
-// TIN's header and CRS only. --resume resubmits only the tasks that left no finished
-// store (a failed, cancelled, lost or damaged shard; the top too when tiler.plan is gone
+// TIN's header and CRS only, and with --resume the shards' stores (each
+// tile's bytes against its CRC-32: the output's size, read once).
+// --resume resubmits only the tasks that left no finished
+// store (a failed, cancelled, lost or damaged shard, or one holding a tile
+// whose bytes changed; the top too when tiler.plan is gone
 // and a subtree still needs it),
 // and a new merge after them, and refuses while the last submission's jobs
 // are queued or running (plan.json records their ids, also of a submission
@@ -149,15 +152,16 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
 }
 
 /// The tasks that have left no finished store (ingest::isFinishedShard: a
-/// store that is missing, damaged, lost tiles or holds one whose bytes are
-/// not those its shard finished with is built again), and the
+/// store that is missing, damaged or lost tiles is built again, and with
+/// `checkTileBytes` one holding a tile whose bytes are not those its shard
+/// finished with), and the
 /// top when a subtree among them needs the plan the top writes and it is
 /// gone (the merge does not read it: with every store there, nothing is
 /// rerun for it).
-std::vector<int> unfinishedTasks(const fs::path& dir, int tasks) {
+std::vector<int> unfinishedTasks(const fs::path& dir, int tasks, bool checkTileBytes) {
   std::vector<int> out;
   for (int k = 0; k < tasks; ++k)
-    if (!ingest::isFinishedShard(dir / "shards" / (std::to_string(k) + ".3dtiles")))
+    if (!ingest::isFinishedShard(dir / "shards" / (std::to_string(k) + ".3dtiles"), checkTileBytes))
       out.push_back(k);
   if (!out.empty() && out.front() != 0 && !fs::exists(dir / "tiler.plan"))
     out.insert(out.begin(), 0);
@@ -202,7 +206,7 @@ void runSlurm(const SlurmCliOptions& o) {
     if (same != plan)
       throw usageError("'" + dir.string() + "' holds the plan of another job (plan.json)",
                        "choose another --workdir, or give the arguments that job was planned with");
-    if (!f.resume && unfinishedTasks(dir, tasks).size() < static_cast<std::size_t>(tasks))
+    if (!f.resume && unfinishedTasks(dir, tasks, false).size() < static_cast<std::size_t>(tasks))
       throw usageError("'" + dir.string() + "' already holds shards of this job",
                        "add --resume to submit only the shards that are missing (or the merge "
                        "alone, when none is)");
@@ -223,7 +227,7 @@ void runSlurm(const SlurmCliOptions& o) {
   std::vector<int> todo;
   if (f.resume) {
     refuseWhileQueued(previous);
-    todo = unfinishedTasks(dir, tasks);
+    todo = unfinishedTasks(dir, tasks, true);
   } else {
     for (int k = 0; k < tasks; ++k) todo.push_back(k);
   }

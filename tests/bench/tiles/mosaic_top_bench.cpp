@@ -77,6 +77,7 @@ int main(int argc, char** argv) try {
   const int k = std::atoi(argv[3]);
   const int m = argc > 4 ? std::atoi(argv[4]) : k;
   const int threads = argc > 5 ? std::atoi(argv[5]) : 2;
+  if (m < k) throw std::invalid_argument("M must be at least K");
   const ingest::ProjGeoReference geo(tin.crs, "");
   tiles::TilerOptions options;
   options.tolerance = tolerance;
@@ -89,30 +90,29 @@ int main(int argc, char** argv) try {
   const auto& geometry = tiler.geometry();
   std::printf("TIN %zu vertices, %zu triangles; finest zoom %d, K = %d, M = %d\n",
               tin.vertices.size(), tin.triangles.size(), tiler.finestZoom(), k, m);
-  if (m < k) throw std::invalid_argument("M must be at least K");
 
   // The zoom-M tiles, as the subtree shards build them.
   auto start = std::chrono::steady_clock::now();
   const std::uint32_t side = 1U << m;
-  std::vector<tiles::TileSurface> zoomK(std::size_t{side} * side);
-  parallelFor(zoomK.size(), threads, [&](std::size_t i) {
-    zoomK[i] = tiler.buildTile(
+  std::vector<tiles::TileSurface> zoomM(std::size_t{side} * side);
+  parallelFor(zoomM.size(), threads, [&](std::size_t i) {
+    zoomM[i] = tiler.buildTile(
         {m, static_cast<std::uint32_t>(i % side), static_cast<std::uint32_t>(i / side)});
   });
-  const double zoomKSeconds = secondsSince(start);
-  const tiles::TileMosaic mosaic = tiles::mosaicOf(zoomK, tin.crs);
+  const double zoomMSeconds = secondsSince(start);
+  const tiles::TileMosaic mosaic = tiles::mosaicOf(zoomM, tin.crs);
   std::printf(
       "zoom %d: %zu tiles in %.2f s; mosaic %zu vertices, %zu triangles, %zu line edges, "
-      "%zu mismatched side vertices, largest tile error %.3f m\n",
-      m, zoomK.size(), zoomKSeconds, mosaic.tin.vertices.size(), mosaic.tin.triangles.size(),
-      mosaic.tin.constrainedEdges.size(), mosaic.mismatchedVertices, mosaic.maxError);
+      "largest tile error %.3f m\n",
+      m, zoomM.size(), zoomMSeconds, mosaic.tin.vertices.size(), mosaic.tin.triangles.size(),
+      mosaic.tin.constrainedEdges.size(), mosaic.maxError);
   // E per tile above K: the largest error of the zoom-M tiles under it.
   const auto allowance = [&](const TileId& id) {
     const int dz = m - id.z;
     double e = 0;
     for (std::uint32_t y = id.y << dz; y < (id.y + 1) << dz; ++y)
       for (std::uint32_t x = id.x << dz; x < (id.x + 1) << dz; ++x)
-        e = std::max(e, zoomK[std::size_t{y} * side + x].error);
+        e = std::max(e, zoomM[std::size_t{y} * side + x].error);
     return e;
   };
 
@@ -127,9 +127,11 @@ int main(int argc, char** argv) try {
 
   // Today's top: from the TIN.
   std::vector<Built> today(top.size());
+  std::vector<tiles::TileSurface> todaySurfaces(top.size());
   start = std::chrono::steady_clock::now();
   parallelFor(top.size(), threads, [&](std::size_t i) {
-    const tiles::TileSurface s = tiler.buildTile(top[i]);
+    tiles::TileSurface& s = todaySurfaces[i];
+    s = tiler.buildTile(top[i]);
     Built& b = today[i];
     b.id = top[i];
     if (s.empty()) return;
@@ -164,7 +166,7 @@ int main(int argc, char** argv) try {
   // Both measured against the TIN itself.
   parallelFor(top.size(), threads, [&](std::size_t i) {
     if (!fromMosaic[i].empty) fromMosaic[i].measured = measure(mosaicSurfaces[i]);
-    if (!today[i].empty) today[i].measured = measure(tiler.buildTile(top[i]));
+    if (!today[i].empty) today[i].measured = measure(todaySurfaces[i]);
   });
   int over = 0;
   std::printf(
