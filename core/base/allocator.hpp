@@ -11,8 +11,9 @@ namespace tinsmith {
 /// 8 MiB free and grows 8 MiB at a time (not 128 KiB, glibc's trim
 /// threshold once the mapping threshold is set): a few MiB more at the peak
 /// (each thread's arena may keep its 8 MiB) for 42 % fewer page faults and
-/// a third less kernel CPU in a tiling run (docs/benchmarks.md). Call once at program start,
-/// before any thread is created; a no-op on other C libraries.
+/// a third less kernel CPU in a tiling run (docs/benchmarks.md). Call once
+/// at program start, before any thread is created; a no-op on other C
+/// libraries.
 void returnLargeBlocksToSystem();
 
 }  // namespace tinsmith

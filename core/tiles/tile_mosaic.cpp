@@ -54,7 +54,7 @@ TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs) 
         m.tin.vertices.push_back(p);
       } else if (m.tin.vertices[it->second].z != p.z) {
         throw internalError("mosaicOf: tile " + t.id.name() +
-                            " and a neighbour disagree on the z " + "of their side vertex at (" +
+                            " and a neighbour disagree on the z of their side vertex at (" +
                             std::to_string(p.x) + ", " + std::to_string(p.y) +
                             "): not the tiles of one Tiler's zoom");
       }
