@@ -479,10 +479,9 @@ TinData rippledRiverTin() {
 
 // The top of a pyramid fitted to the mosaic of a zoom's tiles instead of
 // the TIN (issue 24): the tiles join without a crack, keep the river, the
-// road and the hole, and a
-// tile above fitted to them, refined to its tolerance less E (the mosaic's
-// own error) and declaring its error against the mosaic plus E, is within
-// that declaration against the TIN itself.
+// road and the hole, and a tile above fitted to them, refined to its
+// tolerance less E (the mosaic's own error) and declaring its error against
+// the mosaic plus E, is within that declaration against the TIN itself.
 TEST(TileMosaic, TheTopFittedToAZoomsTilesKeepsItsDeclarationAgainstTheTin) {
   const TinData tin = rippledRiverTin();
   TilerOptions options;

@@ -25,9 +25,9 @@
 #include <exception>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "core/base/parallel.hpp"
 #include "core/tiles/pyramid_build.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/tile_content.hpp"
@@ -45,16 +45,14 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-/// `build(i)` for i < n on `threads` threads.
+/// `build(i)` for i < n on `threads` threads (runWorkers: an exception is
+/// rethrown here).
 template <class F>
 void parallelFor(std::size_t n, int threads, F&& build) {
   std::atomic<std::size_t> next{0};
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t)
-    pool.emplace_back([&] {
-      for (std::size_t i; (i = next++) < n;) build(i);
-    });
-  for (auto& t : pool) t.join();
+  runWorkers(resolveThreads(threads), [&] {
+    for (std::size_t i; (i = next++) < n;) build(i);
+  });
 }
 
 struct Built {
