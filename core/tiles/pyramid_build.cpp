@@ -4,10 +4,12 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "core/base/error.hpp"
 #include "core/base/parallel.hpp"
+#include "core/tiles/tile_mosaic.hpp"
 
 namespace tinsmith::tiles {
 
@@ -21,6 +23,9 @@ std::optional<std::string> whyNotInPyramid(const Tiler& tiler, const ContentOpti
     a = a.parent();
     const TileSurface s = tiler.buildTile(a);
     if (s.empty()) return "its ancestor " + a.name() + " holds no terrain";
+    // Above the mosaic zoom a tile with terrain refines, and so do its own
+    // ancestors.
+    if (a.z < tiler.mosaicZoom()) break;
     const TileRecord r = encodeTile(s, skirtDepth(tiler, a, s.error), content).record;
     if (!tiler.refines(a, r.error, r.reachableError))
       return "its ancestor " + a.name() + " meets the tolerance and has no children";
@@ -45,15 +50,19 @@ PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, c
   return buildPyramid(tiler, encode, root, threads, callbacks, untilZoom);
 }
 
-PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const TileId& root,
-                            int threads, const PyramidCallbacks& callbacks, int untilZoom) {
-  if (!tiler.geometry().inside(root))
-    throw usageError("tile " + root.name() + " is outside the pyramid");
+namespace {
+
+/// The walk down from `level` (tiles of one zoom): each zoom's tiles built
+/// on workers, emitted in order, their refined tiles' children the next
+/// zoom's. `keep` takes each built surface of zoom `keepZoom` once it is
+/// encoded (on a worker thread).
+PyramidSummary walk(const Tiler& tiler, const TileEncoder& encode, std::vector<TileId> level,
+                    int threads, const PyramidCallbacks& callbacks, int untilZoom, int keepZoom,
+                    const std::function<void(TileSurface&&)>& keep) {
   const unsigned workers = resolveThreads(threads);
 
   PyramidSummary summary;
-  std::vector<TileId> level;
-  if (root.z < untilZoom) level.push_back(root);
+  if (!level.empty() && level.front().z >= untilZoom) level.clear();
   while (!level.empty()) {
     const int z = level.front().z;
     std::sort(level.begin(), level.end(), rowMajorLess);
@@ -84,8 +93,9 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
         if (k >= todo.size()) return;
         const std::size_t i = todo[k];
         try {
-          const TileSurface s = tiler.buildTile(level[i]);
+          TileSurface s = tiler.buildTile(level[i]);
           if (!s.empty()) built[i] = encode(s);
+          if (keep && z == keepZoom) keep(std::move(s));
         } catch (...) {
           std::lock_guard lock(failureMutex);
           if (!failure) failure = std::current_exception();
@@ -132,6 +142,78 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
     level = z + 1 < untilZoom ? std::move(nextLevel) : std::vector<TileId>{};
   }
   return summary;
+}
+
+}  // namespace
+
+PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const TileId& root,
+                            int threads, const PyramidCallbacks& callbacks, int untilZoom) {
+  if (!tiler.geometry().inside(root))
+    throw usageError("tile " + root.name() + " is outside the pyramid");
+  const int k = tiler.mosaicZoom();
+  if (root.z >= k) return walk(tiler, encode, {root}, threads, callbacks, untilZoom, -1, {});
+  if (root.z > 0)
+    throw usageError(
+        "tile " + root.name() + " lies above zoom " + std::to_string(k) +
+            ", whose tiles' mosaic the top of the pyramid is fitted to: it is "
+            "built only with the whole top",
+        "build the whole pyramid, or subtrees of zoom " + std::to_string(k) + " or below");
+
+  // Zoom K and below from the TIN, zoom K's surfaces kept for the mosaic.
+  const std::uint32_t side = 1U << k;
+  std::vector<TileId> roots;
+  for (std::uint32_t y = 0; y < side; ++y)
+    for (std::uint32_t x = 0; x < side; ++x) roots.push_back({k, x, y});
+  const auto slot = [side](const TileId& id) { return std::size_t{id.y} * side + id.x; };
+  std::vector<std::optional<TileSurface>> kept(roots.size());
+  PyramidSummary below = walk(tiler, encode, roots, threads, callbacks, untilZoom, k,
+                              [&](TileSurface&& s) { kept[slot(s.id)] = std::move(s); });
+  // Those the walk did not build (the caller had them, or it stops above
+  // zoom K) are built again: the mosaic is of every one.
+  std::vector<std::size_t> missing;
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    if (!kept[i]) missing.push_back(i);
+  std::atomic<std::size_t> next{0};
+  runWorkers(resolveThreads(threads), [&] {
+    for (std::size_t j; (j = next++) < missing.size();)
+      kept[missing[j]] = tiler.buildTile(roots[missing[j]]);
+  });
+  std::vector<TileSurface> surfaces;
+  std::vector<double> errors(kept.size());  // by slot
+  surfaces.reserve(kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    errors[i] = kept[i]->error;
+    surfaces.push_back(std::move(*kept[i]));
+  }
+  decltype(kept)().swap(kept);
+  const TileMosaic mosaic = mosaicOf(surfaces, tiler.tin().crs);
+  decltype(surfaces)().swap(surfaces);
+
+  // The top from the mosaic: each tile's E the largest error of the zoom-K
+  // tiles under it.
+  PyramidSummary top;
+  if (!mosaic.tin.triangles.empty()) {
+    TilerOptions options = tiler.options();
+    options.fixed = TilerOptions::FixedPyramid{tiler.geometry(), tiler.finestZoom(), k};
+    options.maxZoom = tiler.maxZoom();
+    options.plan.reset();
+    options.region.reset();
+    options.plannedFinestZoom.reset();
+    options.mosaicError = [&errors, &slot, k](const TileId& id) {
+      const int dz = k - id.z;
+      double e = 0;
+      for (std::uint32_t y = id.y << dz; y < (id.y + 1) << dz; ++y)
+        for (std::uint32_t x = id.x << dz; x < (id.x + 1) << dz; ++x)
+          e = std::max(e, errors[slot({k, x, y})]);
+      return e;
+    };
+    const Tiler mosaicTiler(mosaic.tin, options);
+    top = walk(mosaicTiler, encode, {root}, threads, callbacks, std::min(untilZoom, k), -1, {});
+  }
+  top.records.insert(top.records.end(), below.records.begin(), below.records.end());
+  top.built += below.built;
+  top.reused += below.reused;
+  return top;
 }
 
 }  // namespace tinsmith::tiles

@@ -1,6 +1,6 @@
 // Walks the pyramid from a root tile zoom by zoom: the tiles of a zoom are
 // built on worker threads (each a pure function of its id), handed to the
-// caller in (z, y, x) order on the calling thread, and their errors decide
+// caller in (y, x) order on the calling thread, and their errors decide
 // the next zoom's tiles (the four children of a refined tile, those that hold
 // part of the TIN). Tiles the caller already has (a resumed run) are not
 // rebuilt: their records stand in.
@@ -18,7 +18,9 @@ namespace tinsmith::tiles {
 struct PyramidCallbacks {
   /// The record of a tile the store already holds, or nullopt.
   std::function<std::optional<TileRecord>(const TileId&)> existing;
-  /// A finished tile, in (z, y, x) order; may throw (the walk stops).
+  /// A finished tile, a zoom's in (y, x) order (zoom by zoom, but the
+  /// tiles above a mosaic zoom after it: buildPyramid); may throw (the walk
+  /// stops).
   std::function<void(const TileContent&)> emit;
   /// Progress within a zoom: done of total tiles.
   std::function<void(int z, std::size_t done, std::size_t total)> progress;
@@ -45,7 +47,13 @@ std::optional<std::string> whyNotInPyramid(const Tiler& tiler, const ContentOpti
 /// Builds the pyramid under `root` (the whole pyramid for 0/0/0), which
 /// must be a tile of the pyramid (requireInPyramid; only its grid is checked
 /// here). Tiles at `untilZoom` and below are left out (the walk stops above
-/// them).
+/// them). Under a tiler whose mosaic zoom K is above the root (which must
+/// then be 0/0/0; usageError for another), zoom K and below come first,
+/// from the TIN, then the tiles above K, fitted to the mosaic of every
+/// zoom-K tile (tile_mosaic.hpp; those the walk did not build, as it stops
+/// above K or the caller has them, are built for it) by a Tiler of the same
+/// pyramid, each declaring its error against the mosaic plus the largest of
+/// its zoom-K tiles'. The records are in (z, y, x) order all the same.
 PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
                             int threads, const PyramidCallbacks& callbacks,
                             int untilZoom = 1 << 20);

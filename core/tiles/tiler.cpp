@@ -372,6 +372,19 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
   }
   maxZoom_ =
       std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
+  if (plan) {
+    mosaicZoom_ = plan->mosaicZoom;
+  } else if (!options_.fixed && options_.mosaicPoints > 0) {
+    const double fill =
+        static_cast<double>(tin.vertices.size()) / static_cast<double>(options_.mosaicPoints);
+    while (mosaicZoom_ < std::min(finestZoom_, maxZoom_) && fill > std::ldexp(1.0, 2 * mosaicZoom_))
+      ++mosaicZoom_;
+  }
+  if (options_.mosaicError) {
+    edgeAllowance_ = options_.mosaicError(TileId{});
+    if (!(edgeAllowance_ >= 0) || !std::isfinite(edgeAllowance_))
+      throw internalError("Tiler: the mosaic's largest error is " + std::to_string(edgeAllowance_));
+  }
   if (plan && plan->zoomLines.size() != static_cast<std::size_t>(finestZoom_) + 1)
     throw internalError("Tiler: the plan's lines are not one set a zoom to the finest");
   index_.emplace(tin);
@@ -408,6 +421,7 @@ TilerPlan Tiler::plan(int cornerZoom) const {
   p.finestZoom = finestZoom_;
   p.fitSpacing = fitSpacing_;
   p.tileFitAllData = tileFitAllData_;
+  p.mosaicZoom = mosaicZoom_;
   for (int z = 0; z <= finestZoom_; ++z) p.zoomLines.push_back(simplifiedLines(z));
   // A corner more than a tile width from the TIN's box is left out: the
   // four tiles at it hold no terrain, whatever z it has.
@@ -526,6 +540,11 @@ double Tiler::zoomTolerance(int z) const {
   return std::ldexp(options_.tolerance, std::max(0, finestZoom_ - z));
 }
 
+double Tiler::edgeTolerance(int z) const {
+  const double tolerance = zoomTolerance(z);
+  return kEdgeShare * (tolerance - std::min(edgeAllowance_, 0.5 * tolerance));
+}
+
 const Tiler::Zoom& Tiler::zoom(int z) const {
   ZoomSlot& slot = zooms_.at(static_cast<std::size_t>(z));
   std::call_once(slot.once, [&] { slot.zoom = makeZoom(z); });
@@ -588,7 +607,7 @@ std::vector<TerrainLine> Tiler::simplifiedLines(int z) const {
   };
   std::vector<TerrainLine> out;
   out.reserve(lines_.size());
-  for (const auto& line : lines_) out.push_back(simplify(line, kEdgeShare * zoomTolerance(z), offTin));
+  for (const auto& line : lines_) out.push_back(simplify(line, edgeTolerance(z), offTin));
   return out;
 }
 
@@ -763,7 +782,7 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd, const fit::M
   }
 
   // Each side is the TIN's section along it, simplified (vertically, to
-  // kEdgeShare of the zoom's tolerance, and with the TIN's step to the lines
+  // edgeTolerance, and with the TIN's step to the lines
   // the side margin away on either hand: simplifyProfile) between the points
   // it must keep; those take the TIN's z (the fit's outside the TIN), a
   // line's crossing the line's. Both tiles sharing a side compute it from the
@@ -849,7 +868,7 @@ Tiler::TileInput Tiler::tileInput(const TileId& id, const Zoom& zd, const fit::M
       kept.clear();
       const SideSample end = sample(ub, must[m].p.z, true);
       simplifyProfile(std::span<const SideSample>(first, last), sample(ua, must[m - 1].p.z, true),
-                      end, kEdgeShare * zd.tolerance, kept);
+                      end, edgeTolerance(id.z), kept);
       kept.push_back(end);
       // Chords too long for the Earth's curvature are cut evenly, each cut
       // on the TIN (the chord's line off it): from the same doubles in both

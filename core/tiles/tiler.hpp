@@ -4,8 +4,9 @@
 // triangulation of
 //   - the tile's sides: the TIN's exact section along each side, simplified in
 //     the vertical (Douglas–Peucker) to kEdgeShare of the zoom's tolerance
-//     between the points a side must keep (corners, the lines' crossings), with the TIN's step
-//     across the side margin kept linear along it too (no new vertex comes closer to a side);
+//     (less the mosaic's error, for a top fitted to a mosaic) between the points a side must keep
+//     (corners, the lines' crossings), with the TIN's step across the side margin kept linear along
+//     it too (no new vertex comes closer to a side);
 //   - the break lines and domain-boundary rings, simplified in 3-D to the same
 //     share with every chord also kept within it of the TIN beneath;
 //   - the tile fit's binary vertices inside the tile;
@@ -102,6 +103,8 @@ struct TilerPlan {
   };
   int cornerZoom = -1;
   std::vector<OffTinCorner> offTinCorners;  ///< by zoom, row, column
+  /// Tiler::mosaicZoom of the whole TIN.
+  int mosaicZoom = 0;
 };
 
 /// The square a Tiler with a region must read the TIN in: `region` grown by
@@ -141,6 +144,16 @@ struct TilerOptions {
   /// the same finest zoom; up to a fifth fewer where the fit goes to the
   /// data's own spacing (more triangles than points).
   std::size_t planningCellPoints = std::size_t{1} << 18;
+  /// The tiles above the mosaic zoom K are fitted to the mosaic of zoom
+  /// K's tiles (tile_mosaic.hpp, buildPyramid), not to the TIN: K is the
+  /// first zoom whose squares the TIN's vertices fill with at most this
+  /// many each on average (vertices ≤ mosaicPoints · 4^K), and at most the
+  /// finest zoom (whose tolerance a tile above can leave room in) and the
+  /// max zoom; 0 — every tile from the TIN — for a TIN of up to this many
+  /// vertices, and for a fixed pyramid. The top is then what a task can
+  /// build from the subtrees' zoom-K tiles alone (issue 24), and every tile
+  /// above K that holds terrain refines.
+  std::size_t mosaicPoints = std::size_t{1} << 18;
   /// A fixed pyramid instead of the TIN's bounding square and the planned
   /// finest zoom: the square, the finest zoom (which meets `tolerance`, each
   /// zoom above twice the one below) and the zooms every tile with terrain
@@ -175,8 +188,9 @@ struct TilerOptions {
   /// mosaic, have it added — a bound against the terrain itself, by the
   /// triangle inequality — and its refinement aims at its zoom's tolerance
   /// less it (never below half the tolerance: a larger one leaves the tile
-  /// over it). Its sides and lines are simplified as without it, to a
-  /// share of the tolerance against the mosaic.
+  /// over it). Its sides and lines are simplified to a share of the
+  /// tolerance less the root's E (the mosaic's largest: a value both tiles
+  /// at a side agree on; at most half the tolerance), against the mosaic.
   std::function<double(const TileId&)> mosaicError;
   /// The project CRS's place on the Earth: chord sag is then planned with the
   /// radius chordSagRadius gives over the part of each tile's square the
@@ -258,6 +272,9 @@ class Tiler {
   [[nodiscard]] const TilerOptions& options() const { return options_; }
   [[nodiscard]] int finestZoom() const { return finestZoom_; }
   [[nodiscard]] int maxZoom() const { return maxZoom_; }
+  /// TilerOptions::mosaicPoints' K: the tiles above it are fitted to the
+  /// mosaic of its tiles (a plan's, for a Tiler with a plan).
+  [[nodiscard]] int mosaicZoom() const { return mosaicZoom_; }
   /// The zoom of the squares the planning fit ran over (0: the whole
   /// square; −1: no planning fit ran, a plan or options gave the finest
   /// zoom), and the triangles of its finest levels, which chose the zoom.
@@ -273,9 +290,10 @@ class Tiler {
   [[nodiscard]] double zoomTolerance(int z) const;
   [[nodiscard]] const TinData& tin() const { return tin_; }
   [[nodiscard]] std::size_t dataPointCount() const { return data_.size(); }
-  /// Whether a tile with these errors gets children (tileRefines).
+  /// Whether a tile with these errors gets children (tileRefines; every
+  /// tile above the mosaic zoom or a fixed pyramid's refineBelow does).
   [[nodiscard]] bool refines(const TileId& id, double error, double reachableError) const {
-    return (options_.fixed && id.z < options_.fixed->refineBelow) ||
+    return (options_.fixed && id.z < options_.fixed->refineBelow) || id.z < mosaicZoom_ ||
            tileRefines(error, reachableError, id.z, options_.tolerance, finestZoom_, maxZoom_);
   }
 
@@ -300,7 +318,9 @@ class Tiler {
   };
   const Zoom& zoom(int z) const;
   std::unique_ptr<Zoom> makeZoom(int z) const;
-  /// The lines simplified to zoom z's tolerance (not snapped to its sides).
+  /// What zoom z's sides and lines are simplified to (m).
+  [[nodiscard]] double edgeTolerance(int z) const;
+  /// The lines simplified to edgeTolerance(z) (not snapped to its sides).
   [[nodiscard]] std::vector<TerrainLine> simplifiedLines(int z) const;
   struct Planning {
     int finestZoom = 0;
@@ -355,6 +375,10 @@ class Tiler {
   int finestZoom_ = 0;
   Planning planning_;  // what the planning fit found (cellZoom −1: none ran)
   int maxZoom_ = 0;
+  int mosaicZoom_ = 0;
+  // Sides and lines are simplified to kEdgeShare of a zoom's tolerance
+  // less this (the mosaic's largest error, TilerOptions::mosaicError).
+  double edgeAllowance_ = 0;
   int levelsPerTile_ = 5;
   mutable std::array<ZoomSlot, 31> zooms_;  // by zoom (PyramidGeometry::inside: z < 31)
   // The lines simplified to the finest zoom's tolerance, which every zoom

@@ -65,7 +65,8 @@ std::string buildRecord(const TinIdentity& identity, const std::string& crs,
     j["pyramid"] = {{"origin", {tiler->geometry().origin().x, tiler->geometry().origin().y}},
                     {"size", tiler->geometry().size()},
                     {"finestZoom", tiler->finestZoom()},
-                    {"levelsPerTile", tiler->levelsPerTile()}};
+                    {"levelsPerTile", tiler->levelsPerTile()},
+                    {"mosaicZoom", tiler->mosaicZoom()}};
   }
   if (tiler && o.frame == tiles::ContentFrame::Local) {
     const auto& g = content.localOrigin;
@@ -508,6 +509,23 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     const Point3 centre{o.x + half, o.y + half, 0.0};
     geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
     // Everything that can refuse the run is checked before the output is touched.
+    const int mosaicZoom = tiler->mosaicZoom();
+    if (root.z > 0 && root.z < mosaicZoom)
+      throw usageError("the subtree " + root.name() + " lies above zoom " +
+                           std::to_string(mosaicZoom) +
+                           ", whose tiles' mosaic the top of this pyramid is fitted to "
+                           "(its TIN's size sets it): it is built only with the whole top",
+                       "give a subtree of zoom " + std::to_string(mosaicZoom) +
+                           " or below (tinsmith slurm: at least " +
+                           std::to_string(1U << (2 * mosaicZoom)) + " shards)");
+    if (options.writePlan && *options.untilZoom < mosaicZoom)
+      throw usageError("--until-zoom " + std::to_string(*options.untilZoom) +
+                           " leaves the subtrees above zoom " + std::to_string(mosaicZoom) +
+                           ", whose tiles' mosaic the top of this pyramid is fitted to (its "
+                           "TIN's size sets it): a subtree cannot fit its part of the top",
+                       "shard at zoom " + std::to_string(mosaicZoom) +
+                           " or below (tinsmith slurm: at least " +
+                           std::to_string(1U << (2 * mosaicZoom)) + " shards)");
     if (options.uncheckedAncestors) {
       if (!tiler->geometry().inside(root))
         throw usageError("tile " + root.name() + " is outside the pyramid");
@@ -567,7 +585,10 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     fs::remove(stagePath / kShardKey, ec);
   }
 
-  const int storeUntilZoom = options.storeUntilZoom.value_or(1 << 20);
+  // The tiles above the mosaic zoom are always stored: they are fitted to
+  // the mosaic of zoom K's tiles, which a rebuild on demand has not got.
+  const int storeUntilZoom =
+      std::max(options.storeUntilZoom.value_or(1 << 20), tiler ? tiler->mosaicZoom() : 0);
   tiles::PyramidSummary walked;
   if (tiles3d) {
     tiles::PyramidCallbacks callbacks;
@@ -783,8 +804,11 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     const double tolerance = b["options"]["tolerance"].get<double>();
     const int maxZoom = b["options"]["maxZoom"].get<int>();
     const int finestZoom = b["pyramid"]["finestZoom"].get<int>();
+    const int mosaicZoom = b["pyramid"]["mosaicZoom"].get<int>();
+    // Above the mosaic zoom every tile with terrain refines (Tiler::refines).
     const auto refines = [&](const TileRecord& r) {
-      return tiles::tileRefines(r.error, r.reachableError, r.id.z, tolerance, finestZoom, maxZoom);
+      return r.id.z < mosaicZoom ||
+             tiles::tileRefines(r.error, r.reachableError, r.id.z, tolerance, finestZoom, maxZoom);
     };
     const auto answered = [&](const TileId& id) {
       return std::any_of(coverage.begin(), coverage.end(),

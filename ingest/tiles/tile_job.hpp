@@ -79,6 +79,8 @@ struct TileJobOptions {
   /// Tiles at this zoom and below are built (their records make
   /// tileset.json) but not stored: the server's --on-demand builds them
   /// again from the store's TIN when asked (ingest/tiles/tile_rebuild.hpp).
+  /// The tiles above the mosaic zoom (tiles::TilerOptions::mosaicPoints)
+  /// are stored whatever it says.
   std::optional<int> storeUntilZoom;
   bool resume = false;
   int threads = 0;
@@ -179,8 +181,9 @@ struct TileJobSummary {
 /// tiles' CRC-32 in shard-finished.json; 4: the sag radius measured over
 /// the part of a tile's square the TIN's box covers, and over 2^18 fit
 /// points the planning fit over squares, which may choose another finest
-/// zoom).
-inline constexpr const char* kTileBuildFormat = "tinsmith-tiles/4";
+/// zoom; 5: over 2^18 vertices the tiles above the mosaic zoom fitted to
+/// the mosaic of its tiles, which the record names).
+inline constexpr const char* kTileBuildFormat = "tinsmith-tiles/5";
 
 /// Tiles `tin` (read from `tinName`, for messages and the build record) into
 /// `output`. With `resume`, tiles are taken from the stage and from a

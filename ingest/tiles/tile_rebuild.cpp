@@ -17,6 +17,8 @@ struct TileRebuilder::State {
   std::unique_ptr<ProjGeoReference> geo;
   tiles::ContentOptions content;
   std::unique_ptr<tiles::Tiler> tiler;
+  /// The record's: the tiles above it were fitted to its tiles' mosaic.
+  int mosaicZoom = 0;
 };
 
 namespace {
@@ -81,6 +83,7 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const
   o.compression = *compression;
   o.frame = *frame;
   checkTileJobOptions(o);
+  state_->mosaicZoom = static_cast<int>(r.number("/pyramid/mosaicZoom"));
 
   // As runTileJob does it: the same georeference, content options and tiler.
   state_->geo = std::make_unique<ProjGeoReference>(state_->tin.crs, o.geoid);
@@ -117,6 +120,12 @@ int TileRebuilder::maxZoom() const {
 
 std::optional<tiles::TileContent> TileRebuilder::build(const tiles::TileId& id) const {
   const tiles::Tiler& tiler = *state_->tiler;
+  if (id.z < state_->mosaicZoom)
+    throw inputError("tile " + id.name() + " is missing from the store, and it lies above zoom " +
+                         std::to_string(state_->mosaicZoom) +
+                         ", whose tiles' mosaic it was fitted to: it cannot be built from the TIN "
+                         "alone",
+                     {}, "rebuild the store with tinsmith tile (it stores every such tile)");
   const tiles::TileSurface s = tiler.buildTile(id);
   if (s.empty()) return std::nullopt;
   return tiles::encodeTile(s, tiles::skirtDepth(tiler, s.id, s.error), state_->content);

@@ -35,7 +35,9 @@ class TileRebuilder {
 
   /// The tile's content, or nullopt when it holds none of the TIN. A zoom's
   /// fit is made by the first tile of the zoom and kept. Thread-safe.
-  /// Throws usageError for an id outside the pyramid.
+  /// Throws usageError for an id outside the pyramid, inputError for one
+  /// above the mosaic zoom (fitted to the mosaic of that zoom's tiles: a
+  /// store holds every such tile).
   [[nodiscard]] std::optional<tiles::TileContent> build(const tiles::TileId& id) const;
 
   [[nodiscard]] int maxZoom() const;

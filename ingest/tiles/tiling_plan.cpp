@@ -100,6 +100,7 @@ std::string encodeTilingPlan(const TilingPlan& plan) {
   w.put(static_cast<std::int32_t>(t.finestZoom));
   w.put(t.fitSpacing);
   w.put(static_cast<std::uint8_t>(t.tileFitAllData));
+  w.put(static_cast<std::int32_t>(t.mosaicZoom));
   w.put(static_cast<std::uint32_t>(t.zoomLines.size()));
   for (const auto& lines : t.zoomLines) {
     w.put(static_cast<std::uint64_t>(lines.size()));
@@ -157,10 +158,13 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   t.finestZoom = r.get<std::int32_t>();
   t.fitSpacing = r.get<double>();
   t.tileFitAllData = r.get<std::uint8_t>() != 0;
+  t.mosaicZoom = r.get<std::int32_t>();
   const auto zooms = r.get<std::uint32_t>();
   if (t.finestZoom < 0 || t.finestZoom > 30 ||
       zooms != static_cast<std::uint32_t>(t.finestZoom) + 1)
     r.bad("the finest zoom and the zooms of lines do not agree");
+  if (t.mosaicZoom < 0 || t.mosaicZoom > t.finestZoom)
+    r.bad("the mosaic zoom " + std::to_string(t.mosaicZoom) + " is not one of the planned zooms");
   t.zoomLines.resize(zooms);
   for (auto& lines : t.zoomLines) {
     lines.resize(r.count(11));

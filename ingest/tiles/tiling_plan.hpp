@@ -11,6 +11,7 @@
 //   pyramid: f64 origin x, f64 origin y, f64 size, the TIN's box f64 x0, y0,
 //     x1, y1 (version 3 on), i32 finestZoom
 //   fit: f64 spacing, u8 tile fits take all data
+//   i32 mosaicZoom (version 4 on)
 //   u32 zooms, per zoom u64 lines, per line u8 kind, u8 ring, u8 closed,
 //     u64 n, n × (f64 x, y, z)
 //   corners off the TIN: i32 cornerZoom (−1: none), u64 n,
@@ -29,7 +30,7 @@
 
 namespace tinsmith::ingest {
 
-inline constexpr std::uint32_t kTilingPlanVersion = 3;
+inline constexpr std::uint32_t kTilingPlanVersion = 4;
 
 /// Which TIN a plan (or a tile store's build record) is of.
 struct TinIdentity {

@@ -23,13 +23,13 @@
 #include "core/tiles/tile_refiner.hpp"
 #include "core/tiles/tiler.hpp"
 #include "core/tin/hull_trim.hpp"
+#include "tests/support/test_terrain.hpp"
 
 namespace tinsmith::tiles {
 namespace {
 
-double hill(double x, double y) {
-  return 100 + 30 * std::exp(-((x - 400) * (x - 400) + (y - 600) * (y - 600)) / 6e4);
-}
+using test::hill;
+using test::rippledRiverTin;
 
 /// A 1 km square of jittered points on a hill with a road across it, at
 /// UTM-sized coordinates.
@@ -436,45 +436,6 @@ TEST(Tiles, TheFinestZoomMeetsTheToleranceAndSidesLieOnTheTin) {
     EXPECT_GE(built, 1u);
     EXPECT_GE(exact * 10, sides * 9) << exact << " of " << sides << " side vertices exact";
   }
-}
-
-/// A 1 km square of 81 × 81 points on a rippled hill with a river across
-/// it, a road beside it and a square hole, at UTM-sized coordinates:
-/// detail enough for tiles down to zoom 2 and more within a tile's budget.
-TinData rippledRiverTin() {
-  Cdt cdt;
-  const FeatureId spots = cdt.addFeature(FeatureKind::SpotHeight, "spots");
-  const FeatureId river = cdt.addFeature(FeatureKind::River, "river");
-  const FeatureId road = cdt.addFeature(FeatureKind::Road, "road");
-  const FeatureId hole = cdt.addFeature(FeatureKind::Hole, "hole");
-  const double x0 = 500000, y0 = 4500000;
-  const auto z = [](double x, double y) {
-    return hill(x, y) + 0.8 * std::sin(x / 37) * std::cos(y / 53);
-  };
-  std::vector<Point3> points;
-  for (int j = 0; j <= 80; ++j)
-    for (int i = 0; i <= 80; ++i)
-      points.push_back({x0 + i * 12.5, y0 + j * 12.5, z(i * 12.5, j * 12.5)});
-  cdt.insertPoints(points, spots);
-  std::vector<Point3> line;
-  for (int k = 0; k <= 30; ++k) {
-    const double x = 20 + k * 31.0, y = 900 - k * 27.0 + 15 * std::sin(0.7 * k);
-    line.push_back({x0 + x, y0 + y, z(x, y) - 1.0 - 0.01 * k});
-  }
-  cdt.insertConstraint(line, river);
-  line.clear();
-  for (int k = 0; k <= 6; ++k) {
-    const double x = 50 + k * 50.0, y = 505 + 20 * std::sin(0.4 * k);
-    line.push_back({x0 + x, y0 + y, z(x, y) + 0.3});
-  }
-  cdt.insertConstraint(line, road);
-  std::vector<Point3> ring;
-  for (const auto& [x, y] :
-       {std::pair{120.0, 120.0}, {200.0, 120.0}, {200.0, 200.0}, {120.0, 200.0}})
-    ring.push_back({x0 + x, y0 + y, z(x, y)});
-  cdt.addHole(ring, hole);
-  cdt.finalize();
-  return cdt.toTinData();
 }
 
 // The top of a pyramid fitted to the mosaic of a zoom's tiles instead of

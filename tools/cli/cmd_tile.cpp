@@ -73,7 +73,8 @@ void addTileCommand(CLI::App& app) {
                   "Build only the tiles above this zoom: the shards' top");
   cmd->add_option("--store-until-zoom", opt->storeUntilZoom,
                   "Plan every tile (tileset.json lists them all) but store only those above "
-                  "this zoom; tinsmith serve --on-demand builds the rest from the store's TIN");
+                  "this zoom (and always those above the mosaic zoom of a TIN of over 2^18 "
+                  "vertices); tinsmith serve --on-demand builds the rest from the store's TIN");
   cmd->add_option("--finest-zoom", opt->finestZoom,
                   "The finest zoom the job's plan chose (tinsmith slurm gives it to every shard): "
                   "skips the planning fit; another value than the planning's builds another "

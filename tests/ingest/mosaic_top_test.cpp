@@ -1,0 +1,185 @@
+// The top of the pyramid fitted to the mosaic of the mosaic zoom K's tiles
+// (tiles::TilerOptions::mosaicPoints, tiles::buildPyramid) through the
+// tiling job: one run, its shards at any zoom from K down merged into its
+// bytes, a resumed run, shards above K refused, the tiles above K stored
+// always and never built on demand. (Over 2^18 vertices a TIN gets K > 0;
+// here the points per square are made small instead of the TIN large.)
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/base/error.hpp"
+#include "core/tiles/tile_content.hpp"
+#include "core/tiles/tileset_json.hpp"
+#include "ingest/store/stored_tin.hpp"
+#include "ingest/store/tile_store.hpp"
+#include "ingest/tiles/tile_job.hpp"
+#include "ingest/tiles/tile_rebuild.hpp"
+#include "ingest/tiles/tiling_plan.hpp"
+#include "ingest/tinfile/tin_file.hpp"
+#include "tests/support/run_command.hpp"
+#include "tests/support/test_terrain.hpp"
+
+namespace tinsmith::ingest {
+namespace {
+
+namespace fs = std::filesystem;
+using tiles::TileId;
+
+TinData rippledTin() {
+  TinData tin = test::rippledRiverTin();
+  tin.crs = "EPSG:26912";
+  return tin;
+}
+
+TileJobOptions mosaicOptions() {
+  TileJobOptions o;
+  o.tiler.tolerance = 0.05;
+  o.tiler.maxTriangles = 1024;
+  o.tiler.mosaicPoints = 1024;  // 6 600 vertices: K = 2
+  o.threads = 2;
+  return o;
+}
+
+/// Every tile of a store by key.
+std::map<std::string, std::string> tilesOf(const fs::path& path) {
+  const auto store = store::openStoreForReading(path);
+  std::map<std::string, std::string> tiles;
+  for (const auto& key : store->keys())
+    if (key.rfind("tiles/", 0) == 0) tiles[key] = *store->get(key);
+  return tiles;
+}
+
+nlohmann::json buildOf(const fs::path& path) {
+  return nlohmann::json::parse(*store::openStoreForReading(path)->get("tinsmith/build.json"));
+}
+
+/// The top of a sharded job (`--until-zoom shardZoom --write-plan`) and its
+/// subtrees at shardZoom taking the plan, merged into `merged`.
+void shardAndMerge(const TinData& tin, const fs::path& dir, int shardZoom, const fs::path& merged) {
+  const TileJobOptions options = mosaicOptions();
+  std::vector<fs::path> shards{dir / "top.3dtiles"};
+  TileJobOptions top = options;
+  top.untilZoom = shardZoom;
+  top.writePlan = dir / "tiler.plan";
+  runTileJob(tin, "ripple.tin", shards[0], top);
+  const auto plan = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
+  const std::uint32_t side = 1U << shardZoom;
+  for (std::uint32_t y = 0; y < side; ++y)
+    for (std::uint32_t x = 0; x < side; ++x) {
+      TileJobOptions subtree = options;
+      subtree.subtree = TileId{shardZoom, x, y};
+      subtree.uncheckedAncestors = true;
+      subtree.plan = plan;
+      shards.push_back(dir /
+                       ("subtree-" + std::to_string(x) + "-" + std::to_string(y) + ".3dtiles"));
+      runTileJob(tin, "ripple.tin", shards.back(), subtree);
+    }
+  mergeTileStores(shards, merged);
+}
+
+TEST(MosaicTop, OneRunsTopIsFittedToZoomKsMosaicAndItsShardsMergeIntoItsBytes) {
+  const fs::path dir = test::scratchDir("mosaic-top");
+  const TinData tin = rippledTin();
+  runTileJob(tin, "ripple.tin", dir / "one.3dtiles", mosaicOptions());
+  const nlohmann::json build = buildOf(dir / "one.3dtiles");
+  ASSERT_EQ(build["pyramid"]["mosaicZoom"], 2);
+  ASSERT_GE(build["pyramid"]["finestZoom"].get<int>(), 3);
+  const auto one = tilesOf(dir / "one.3dtiles");
+  // Every tile above K with terrain refines: all of zoom 1 and 2 are there.
+  for (std::uint32_t y = 0; y < 4; ++y)
+    for (std::uint32_t x = 0; x < 4; ++x) {
+      EXPECT_TRUE(one.contains(tiles::tileContentKey({2, x, y}))) << x << " " << y;
+      EXPECT_TRUE(one.contains(tiles::tileContentKey({1, x / 2, y / 2})));
+    }
+  const auto below = std::count_if(
+      one.begin(), one.end(), [](const auto& kv) { return kv.first.rfind("tiles/3/", 0) == 0; });
+  EXPECT_GT(below, 0);
+
+  // A tile above K declares its error against the mosaic plus the largest
+  // of its zoom-K tiles': at least that.
+  double largestK = 0;
+  for (const auto& [key, bytes] : one)
+    if (key.rfind("tiles/2/", 0) == 0)
+      largestK = std::max(largestK, tiles::recordFromGlb(bytes)->error);
+  ASSERT_GT(largestK, 0);
+  EXPECT_GE(tiles::recordFromGlb(one.at(tiles::tileContentKey({})))->error, largestK);
+
+  // The shards at the mosaic zoom and below it, merged: the one run's bytes.
+  for (const int shardZoom : {2, 3}) {
+    SCOPED_TRACE("shard zoom " + std::to_string(shardZoom));
+    const fs::path shards = dir / ("shards-" + std::to_string(shardZoom));
+    fs::create_directories(shards);
+    shardAndMerge(tin, shards, shardZoom, shards / "merged.3dtiles");
+    EXPECT_EQ(test::readFile(shards / "merged.3dtiles"), test::readFile(dir / "one.3dtiles"));
+  }
+
+  // Resumed over itself, every tile reused: zoom K's surfaces are built
+  // again for the mosaic, and nothing changes.
+  fs::copy_file(dir / "one.3dtiles", dir / "resumed.3dtiles");
+  TileJobOptions resume = mosaicOptions();
+  resume.resume = true;
+  const TileJobSummary again = runTileJob(tin, "ripple.tin", dir / "resumed.3dtiles", resume);
+  EXPECT_EQ(again.built, 0u);
+  EXPECT_EQ(test::readFile(dir / "resumed.3dtiles"), test::readFile(dir / "one.3dtiles"));
+}
+
+TEST(MosaicTop, ShardsAboveTheMosaicZoomAreRefusedBeforeAnythingIsWritten) {
+  const fs::path dir = test::scratchDir("mosaic-top-refused");
+  const TinData tin = rippledTin();
+  TileJobOptions top = mosaicOptions();
+  top.untilZoom = 1;
+  top.writePlan = dir / "tiler.plan";
+  try {
+    runTileJob(tin, "ripple.tin", dir / "top.3dtiles", top);
+    ADD_FAILURE() << "a top above zoom 2 was tiled";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("above zoom 2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("16 shards"), std::string::npos) << e.what();
+  }
+  TileJobOptions subtree = mosaicOptions();
+  subtree.subtree = TileId{1, 1, 0};
+  EXPECT_THROW(runTileJob(tin, "ripple.tin", dir / "sub.3dtiles", subtree), Error);
+  EXPECT_FALSE(fs::exists(dir / "top.3dtiles"));
+  EXPECT_FALSE(fs::exists(dir / "tiler.plan"));
+  EXPECT_FALSE(fs::exists(dir / "sub.3dtiles"));
+  // A subtree at the mosaic zoom is in the pyramid without building the
+  // top: its ancestors above K refine as they hold terrain.
+  subtree.subtree = TileId{2, 3, 1};
+  runTileJob(tin, "ripple.tin", dir / "sub.3dtiles", subtree);
+  EXPECT_TRUE(tilesOf(dir / "sub.3dtiles").contains(tiles::tileContentKey({2, 3, 1})));
+}
+
+TEST(MosaicTop, TheTilesAboveTheMosaicZoomAreAlwaysStoredAndNeverBuiltOnDemand) {
+  const fs::path dir = test::scratchDir("mosaic-top-stored");
+  const TinData tin = rippledTin();
+  TileJobOptions options = mosaicOptions();
+  options.storeUntilZoom = 1;
+  runTileJob(tin, "ripple.tin", dir / "lean.3dtiles", options);
+  const auto lean = tilesOf(dir / "lean.3dtiles");
+  EXPECT_TRUE(lean.contains(tiles::tileContentKey({1, 0, 0})));
+  EXPECT_TRUE(lean.contains(tiles::tileContentKey({1, 1, 1})));
+  EXPECT_FALSE(lean.contains(tiles::tileContentKey({2, 0, 0})));
+
+  const auto store = store::openStoreForReading(dir / "lean.3dtiles");
+  const TileRebuilder rebuilder(*store->get("tinsmith/build.json"), *store::getTin(*store),
+                                "lean.3dtiles");
+  EXPECT_THROW((void)rebuilder.build({1, 0, 0}), Error);
+  // Below it a tile is the TIN's alone: built on demand, it is the one a
+  // whole run stores.
+  runTileJob(tin, "ripple.tin", dir / "one.3dtiles", mosaicOptions());
+  const auto one = tilesOf(dir / "one.3dtiles");
+  for (const TileId id : {TileId{2, 0, 0}, TileId{2, 3, 2}}) {
+    const auto built = rebuilder.build(id);
+    ASSERT_TRUE(built) << id.name();
+    EXPECT_EQ(built->glb, one.at(tiles::tileContentKey(id))) << id.name();
+  }
+}
+
+}  // namespace
+}  // namespace tinsmith::ingest
