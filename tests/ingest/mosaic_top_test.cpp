@@ -14,8 +14,10 @@
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/cdt/cdt.hpp"
 #include "core/tiles/tile_content.hpp"
 #include "core/tiles/tileset_json.hpp"
+#include "core/tin/hull_trim.hpp"
 #include "ingest/store/stored_tin.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/tile_job.hpp"
@@ -33,6 +35,28 @@ using tiles::TileId;
 
 TinData rippledTin() {
   TinData tin = test::rippledRiverTin();
+  tin.crs = "EPSG:26912";
+  return tin;
+}
+
+/// The rippled hill's grid with its north-east quadrant nodata, its hull
+/// trimmed: zoom 2's three tiles away from the notch's corner hold no
+/// terrain, and the mosaic has a hole a quarter of the square.
+TinData lShapedTin() {
+  Cdt cdt;
+  const FeatureId cells = cdt.addFeature(FeatureKind::SpotHeight, "dem");
+  std::vector<Point3> points;
+  for (int j = 0; j <= 80; ++j)
+    for (int i = 0; i <= 80; ++i) {
+      if (i > 40 && j > 40) continue;
+      const double x = i * 12.5, y = j * 12.5;
+      points.push_back(
+          {500000 + x, 4500000 + y, test::hill(x, y) + 0.8 * std::sin(x / 37) * std::cos(y / 53)});
+    }
+  cdt.insertPoints(points, cells);
+  cdt.finalize();
+  TinData tin = cdt.toTinData();
+  EXPECT_GT(trimHull(tin, 3 * 12.5), 0u);
   tin.crs = "EPSG:26912";
   return tin;
 }
@@ -61,13 +85,14 @@ nlohmann::json buildOf(const fs::path& path) {
 
 /// The top of a sharded job (`--until-zoom shardZoom --write-plan`) and its
 /// subtrees at shardZoom taking the plan, merged into `merged`.
-void shardAndMerge(const TinData& tin, const fs::path& dir, int shardZoom, const fs::path& merged) {
+void shardAndMerge(const TinData& tin, const std::string& name, const fs::path& dir, int shardZoom,
+                   const fs::path& merged) {
   const TileJobOptions options = mosaicOptions();
   std::vector<fs::path> shards{dir / "top.3dtiles"};
   TileJobOptions top = options;
   top.untilZoom = shardZoom;
   top.writePlan = dir / "tiler.plan";
-  runTileJob(tin, "ripple.tin", shards[0], top);
+  runTileJob(tin, name, shards[0], top);
   const auto plan = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
   const std::uint32_t side = 1U << shardZoom;
   for (std::uint32_t y = 0; y < side; ++y)
@@ -78,7 +103,7 @@ void shardAndMerge(const TinData& tin, const fs::path& dir, int shardZoom, const
       subtree.plan = plan;
       shards.push_back(dir /
                        ("subtree-" + std::to_string(x) + "-" + std::to_string(y) + ".3dtiles"));
-      runTileJob(tin, "ripple.tin", shards.back(), subtree);
+      runTileJob(tin, name, shards.back(), subtree);
     }
   mergeTileStores(shards, merged);
 }
@@ -115,7 +140,7 @@ TEST(MosaicTop, OneRunsTopIsFittedToZoomKsMosaicAndItsShardsMergeIntoItsBytes) {
     SCOPED_TRACE("shard zoom " + std::to_string(shardZoom));
     const fs::path shards = dir / ("shards-" + std::to_string(shardZoom));
     fs::create_directories(shards);
-    shardAndMerge(tin, shards, shardZoom, shards / "merged.3dtiles");
+    shardAndMerge(tin, "ripple.tin", shards, shardZoom, shards / "merged.3dtiles");
     EXPECT_EQ(test::readFile(shards / "merged.3dtiles"), test::readFile(dir / "one.3dtiles"));
   }
 
@@ -127,6 +152,21 @@ TEST(MosaicTop, OneRunsTopIsFittedToZoomKsMosaicAndItsShardsMergeIntoItsBytes) {
   const TileJobSummary again = runTileJob(tin, "ripple.tin", dir / "resumed.3dtiles", resume);
   EXPECT_EQ(again.built, 0u);
   EXPECT_EQ(test::readFile(dir / "resumed.3dtiles"), test::readFile(dir / "one.3dtiles"));
+}
+
+TEST(MosaicTop, ATinWithAnEmptyQuadrantHasATopWithAHoleAndItsShardsMergeIntoOneRunsBytes) {
+  const fs::path dir = test::scratchDir("mosaic-top-l");
+  const TinData tin = lShapedTin();
+  runTileJob(tin, "l.tin", dir / "one.3dtiles", mosaicOptions());
+  ASSERT_EQ(buildOf(dir / "one.3dtiles")["pyramid"]["mosaicZoom"], 2);
+  const auto one = tilesOf(dir / "one.3dtiles");
+  EXPECT_TRUE(one.contains(tiles::tileContentKey({})));
+  EXPECT_TRUE(one.contains(tiles::tileContentKey({1, 0, 1})));
+  EXPECT_TRUE(one.contains(tiles::tileContentKey({2, 1, 1})));
+  for (const TileId id : {TileId{2, 3, 2}, TileId{2, 2, 3}, TileId{2, 3, 3}})
+    EXPECT_FALSE(one.contains(tiles::tileContentKey(id))) << id.name();
+  shardAndMerge(tin, "l.tin", dir, 2, dir / "merged.3dtiles");
+  EXPECT_EQ(test::readFile(dir / "merged.3dtiles"), test::readFile(dir / "one.3dtiles"));
 }
 
 TEST(MosaicTop, ShardsAboveTheMosaicZoomAreRefusedBeforeAnythingIsWritten) {

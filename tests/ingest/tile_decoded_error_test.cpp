@@ -26,8 +26,10 @@
 #include "core/encode/glb.hpp"
 #include "core/tiles/surface_difference.hpp"
 #include "core/tiles/tile_content.hpp"
+#include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 #include "tests/support/run_command.hpp"
+#include "tests/support/test_terrain.hpp"
 #include "tests/support/tin_distance.hpp"
 
 namespace tinsmith::ingest {
@@ -252,6 +254,31 @@ TEST(TileDecodedError, AFlat20KmTinIsDrawnInsideItsRegionsAndWithinTolerance) {
     }
   }
   EXPECT_GT(checked, 0u);
+}
+
+TEST(TileDecodedError, TheTopFittedToZoomKsMosaicIsDrawnWithinItsDeclaredError) {
+  // The rippled hill with its river, road and hole, tiled with the top above
+  // zoom 2 fitted to zoom 2's mosaic (a TIN of 6 600 vertices over 1 024
+  // points a square): what a tile above declares — against the mosaic, plus
+  // the largest error of its zoom-2 tiles — bounds what it draws against
+  // the TIN itself.
+  const fs::path dir = test::scratchDir("tile-decoded-mosaic");
+  TinData tin = test::rippledRiverTin();
+  tin.crs = "EPSG:26912";
+  TileJobOptions options;
+  options.tiler.tolerance = 0.05;
+  options.tiler.maxTriangles = 1024;
+  options.tiler.mosaicPoints = 1024;
+  options.threads = 2;
+  runTileJob(tin, "ripple.tin", dir / "store", options);
+  std::size_t above = 0;
+  for (const auto& m : measureStore(dir / "store", tin)) {
+    above += m.record.id.z < 2;
+    EXPECT_LE(m.worst, m.record.error * 1.001 + 1e-6)
+        << "tile " << m.record.id.name() << ": drawn " << m.worst << " m from the TIN, declared "
+        << m.record.error;
+  }
+  EXPECT_EQ(above, 5u);
 }
 
 TEST(TileDecodedError, MeasureAStore) {
