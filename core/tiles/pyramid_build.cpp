@@ -21,11 +21,11 @@ std::optional<std::string> whyNotInPyramid(const Tiler& tiler, const ContentOpti
                                            const TileId& root) {
   for (TileId a = root; a.z > 0;) {
     a = a.parent();
+    // Above the mosaic zoom every tile with terrain refines: an ancestor
+    // there holds the terrain its zoom-K descendant (checked) holds.
+    if (a.z < tiler.mosaicZoom()) break;
     const TileSurface s = tiler.buildTile(a);
     if (s.empty()) return "its ancestor " + a.name() + " holds no terrain";
-    // Above the mosaic zoom a tile with terrain refines, and so do its own
-    // ancestors.
-    if (a.z < tiler.mosaicZoom()) break;
     const TileRecord r = encodeTile(s, skirtDepth(tiler, a, s.error), content).record;
     if (!tiler.refines(a, r.error, r.reachableError))
       return "its ancestor " + a.name() + " meets the tolerance and has no children";
@@ -54,15 +54,16 @@ namespace {
 
 /// The walk down from `level` (tiles of one zoom): each zoom's tiles built
 /// on workers, emitted in order, their refined tiles' children the next
-/// zoom's. `keep` takes each built surface of zoom `keepZoom` once it is
+/// zoom's. `keep` takes each surface it builds of the first zoom, once it is
 /// encoded (on a worker thread).
 PyramidSummary walk(const Tiler& tiler, const TileEncoder& encode, std::vector<TileId> level,
-                    int threads, const PyramidCallbacks& callbacks, int untilZoom, int keepZoom,
+                    int threads, const PyramidCallbacks& callbacks, int untilZoom,
                     const std::function<void(TileSurface&&)>& keep) {
   const unsigned workers = resolveThreads(threads);
 
   PyramidSummary summary;
   if (!level.empty() && level.front().z >= untilZoom) level.clear();
+  const int keepZoom = level.empty() ? -1 : level.front().z;
   while (!level.empty()) {
     const int z = level.front().z;
     std::sort(level.begin(), level.end(), rowMajorLess);
@@ -151,13 +152,10 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
   if (!tiler.geometry().inside(root))
     throw usageError("tile " + root.name() + " is outside the pyramid");
   const int k = tiler.mosaicZoom();
-  if (root.z >= k) return walk(tiler, encode, {root}, threads, callbacks, untilZoom, -1, {});
+  if (root.z >= k) return walk(tiler, encode, {root}, threads, callbacks, untilZoom, {});
   if (root.z > 0)
-    throw usageError(
-        "tile " + root.name() + " lies above zoom " + std::to_string(k) +
-            ", whose tiles' mosaic the top of the pyramid is fitted to: it is "
-            "built only with the whole top",
-        "build the whole pyramid, or subtrees of zoom " + std::to_string(k) + " or below");
+    throw usageError("tile " + root.name() + " lies above the mosaic zoom " + std::to_string(k) +
+                     ": it is built only with the whole top");
 
   // Zoom K and below from the TIN, zoom K's surfaces kept for the mosaic.
   const std::uint32_t side = 1U << k;
@@ -166,7 +164,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
     for (std::uint32_t x = 0; x < side; ++x) roots.push_back({k, x, y});
   const auto slot = [side](const TileId& id) { return std::size_t{id.y} * side + id.x; };
   std::vector<std::optional<TileSurface>> kept(roots.size());
-  PyramidSummary below = walk(tiler, encode, roots, threads, callbacks, untilZoom, k,
+  PyramidSummary below = walk(tiler, encode, roots, threads, callbacks, untilZoom,
                               [&](TileSurface&& s) { kept[slot(s.id)] = std::move(s); });
   // Those the walk did not build (the caller had them, or it stops above
   // zoom K) are built again: the mosaic is of every one.
@@ -208,7 +206,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
       return e;
     };
     const Tiler mosaicTiler(mosaic.tin, options);
-    top = walk(mosaicTiler, encode, {root}, threads, callbacks, std::min(untilZoom, k), -1, {});
+    top = walk(mosaicTiler, encode, {root}, threads, callbacks, std::min(untilZoom, k), {});
   }
   top.records.insert(top.records.end(), below.records.begin(), below.records.end());
   top.built += below.built;

@@ -374,11 +374,9 @@ Tiler::Tiler(const TinData& tin, TilerOptions options) : tin_(tin), options_(opt
       std::min(options_.maxZoom.value_or(options_.fixed ? finestZoom_ : finestZoom_ + 6), 30);
   if (plan) {
     mosaicZoom_ = plan->mosaicZoom;
-  } else if (!options_.fixed && options_.mosaicPoints > 0) {
-    const double fill =
-        static_cast<double>(tin.vertices.size()) / static_cast<double>(options_.mosaicPoints);
-    while (mosaicZoom_ < std::min(finestZoom_, maxZoom_) && fill > std::ldexp(1.0, 2 * mosaicZoom_))
-      ++mosaicZoom_;
+  } else if (!options_.fixed) {
+    mosaicZoom_ =
+        mosaicZoomFor(tin.vertices.size(), options_.mosaicPoints, std::min(finestZoom_, maxZoom_));
   }
   if (options_.mosaicError) {
     edgeAllowance_ = options_.mosaicError(TileId{});

@@ -49,6 +49,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -123,6 +124,17 @@ Rect tilerVertexRegion(const TilerPlan& plan, const Rect& region);
 
 class GeoReference;  // tile_content.hpp
 
+/// The first zoom k ≤ cap whose 4^k squares `vertices` fill with at most
+/// `mosaicPoints` each on average (0 when mosaicPoints is 0): the mosaic
+/// zoom of a TIN (TilerOptions::mosaicPoints) with cap its finest zoom.
+[[nodiscard]] inline int mosaicZoomFor(std::size_t vertices, std::size_t mosaicPoints, int cap) {
+  if (mosaicPoints == 0) return 0;
+  const double fill = static_cast<double>(vertices) / static_cast<double>(mosaicPoints);
+  int k = 0;
+  while (k < cap && fill > std::ldexp(1.0, 2 * k)) ++k;
+  return k;
+}
+
 struct TilerOptions {
   double tolerance = 1.0;            ///< metres; what the finest zoom meets
   std::size_t maxTriangles = 32768;  ///< per tile, sets levelsPerTile
@@ -152,7 +164,7 @@ struct TilerOptions {
   /// max zoom; 0 — every tile from the TIN — for a TIN of up to this many
   /// vertices, and for a fixed pyramid. The top is then what a task can
   /// build from the subtrees' zoom-K tiles alone (issue 24), and every tile
-  /// above K that holds terrain refines.
+  /// above K that holds terrain refines. 0: K = 0 for every TIN.
   std::size_t mosaicPoints = std::size_t{1} << 18;
   /// A fixed pyramid instead of the TIN's bounding square and the planned
   /// finest zoom: the square, the finest zoom (which meets `tolerance`, each

@@ -449,6 +449,22 @@ void checkTileJobOptions(const TileJobOptions& o) {
                      "shard the 3D Tiles with --scheme 3d-tiles");
 }
 
+namespace {
+
+/// The error for a subtree (or shard zoom) above the mosaic zoom K, `what`
+/// naming it: the tiles above K are fitted to the mosaic of all of zoom K's.
+[[noreturn]] void refuseAboveMosaicZoom(const std::string& what, int mosaicZoom) {
+  const std::string k = std::to_string(mosaicZoom);
+  throw usageError(what + " lies above zoom " + k +
+                       ", the mosaic zoom of this TIN (over 2^18 vertices): the tiles above it "
+                       "are fitted to the mosaic of all of zoom " +
+                       k + "'s tiles, and are built only as the whole top",
+                   "shard at zoom " + k + " or below (tinsmith slurm --shard-zoom " + k +
+                       " or more; tinsmith tile --subtree of zoom " + k + " or more)");
+}
+
+}  // namespace
+
 TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const fs::path& output,
                           const TileJobOptions& options, const Progress* progress) {
   checkTileJobOptions(options);
@@ -509,23 +525,14 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     const Point3 centre{o.x + half, o.y + half, 0.0};
     geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
     // Everything that can refuse the run is checked before the output is touched.
+    // Above the mosaic zoom only the whole top is built (buildPyramid).
     const int mosaicZoom = tiler->mosaicZoom();
     if (root.z > 0 && root.z < mosaicZoom)
-      throw usageError("the subtree " + root.name() + " lies above zoom " +
-                           std::to_string(mosaicZoom) +
-                           ", whose tiles' mosaic the top of this pyramid is fitted to "
-                           "(its TIN's size sets it): it is built only with the whole top",
-                       "give a subtree of zoom " + std::to_string(mosaicZoom) +
-                           " or below (tinsmith slurm: at least " +
-                           std::to_string(1U << (2 * mosaicZoom)) + " shards)");
-    if (options.writePlan && *options.untilZoom < mosaicZoom)
-      throw usageError("--until-zoom " + std::to_string(*options.untilZoom) +
-                           " leaves the subtrees above zoom " + std::to_string(mosaicZoom) +
-                           ", whose tiles' mosaic the top of this pyramid is fitted to (its "
-                           "TIN's size sets it): a subtree cannot fit its part of the top",
-                       "shard at zoom " + std::to_string(mosaicZoom) +
-                           " or below (tinsmith slurm: at least " +
-                           std::to_string(1U << (2 * mosaicZoom)) + " shards)");
+      refuseAboveMosaicZoom("the subtree " + root.name(), mosaicZoom);
+    if (options.untilZoom && *options.untilZoom < mosaicZoom)
+      refuseAboveMosaicZoom(
+          "--until-zoom " + std::to_string(*options.untilZoom) + " leaves subtrees that",
+          mosaicZoom);
     if (options.uncheckedAncestors) {
       if (!tiler->geometry().inside(root))
         throw usageError("tile " + root.name() + " is outside the pyramid");
@@ -804,7 +811,8 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     const double tolerance = b["options"]["tolerance"].get<double>();
     const int maxZoom = b["options"]["maxZoom"].get<int>();
     const int finestZoom = b["pyramid"]["finestZoom"].get<int>();
-    const int mosaicZoom = b["pyramid"]["mosaicZoom"].get<int>();
+    // (A store of tinsmith-tiles/4 or older has none: its top was the TIN's.)
+    const int mosaicZoom = b.at("pyramid").value("mosaicZoom", 0);
     // Above the mosaic zoom every tile with terrain refines (Tiler::refines).
     const auto refines = [&](const TileRecord& r) {
       return r.id.z < mosaicZoom ||

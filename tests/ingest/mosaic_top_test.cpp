@@ -135,6 +135,25 @@ TEST(MosaicTop, OneRunsTopIsFittedToZoomKsMosaicAndItsShardsMergeIntoItsBytes) {
   ASSERT_GT(largestK, 0);
   EXPECT_GE(tiles::recordFromGlb(one.at(tiles::tileContentKey({})))->error, largestK);
 
+  // Without a mosaic (mosaicPoints 0) zoom K and below are the same bytes,
+  // the top is not; on one thread, the same bytes as on two.
+  TileJobOptions plain = mosaicOptions();
+  plain.tiler.mosaicPoints = 0;
+  runTileJob(tin, "ripple.tin", dir / "plain.3dtiles", plain);
+  EXPECT_EQ(buildOf(dir / "plain.3dtiles")["pyramid"]["mosaicZoom"], 0);
+  for (const auto& [key, bytes] : tilesOf(dir / "plain.3dtiles")) {
+    const int z = key[6] - '0';
+    if (z < 2) {
+      EXPECT_NE(bytes, one.at(key)) << key;
+    } else if (one.contains(key)) {
+      EXPECT_EQ(bytes, one.at(key)) << key;
+    }
+  }
+  TileJobOptions single = mosaicOptions();
+  single.threads = 1;
+  runTileJob(tin, "ripple.tin", dir / "single.3dtiles", single);
+  EXPECT_EQ(test::readFile(dir / "single.3dtiles"), test::readFile(dir / "one.3dtiles"));
+
   // The shards at the mosaic zoom and below it, merged: the one run's bytes.
   for (const int shardZoom : {2, 3}) {
     SCOPED_TRACE("shard zoom " + std::to_string(shardZoom));
@@ -152,6 +171,14 @@ TEST(MosaicTop, OneRunsTopIsFittedToZoomKsMosaicAndItsShardsMergeIntoItsBytes) {
   const TileJobSummary again = runTileJob(tin, "ripple.tin", dir / "resumed.3dtiles", resume);
   EXPECT_EQ(again.built, 0u);
   EXPECT_EQ(test::readFile(dir / "resumed.3dtiles"), test::readFile(dir / "one.3dtiles"));
+  // A run that lost its top and some of zoom K (a folder store, their files
+  // gone): resumed, the same tiles.
+  runTileJob(tin, "ripple.tin", dir / "folder", mosaicOptions());
+  for (const char* lost : {"tiles/0/0/0.glb", "tiles/1/1/0.glb", "tiles/2/0/0.glb"})
+    ASSERT_TRUE(fs::remove(dir / "folder" / lost)) << lost;
+  const TileJobSummary mended = runTileJob(tin, "ripple.tin", dir / "folder", resume);
+  EXPECT_EQ(mended.built, 3u);
+  EXPECT_EQ(tilesOf(dir / "folder"), one);
 }
 
 TEST(MosaicTop, ATinWithAnEmptyQuadrantHasATopWithAHoleAndItsShardsMergeIntoOneRunsBytes) {
@@ -175,21 +202,24 @@ TEST(MosaicTop, ShardsAboveTheMosaicZoomAreRefusedBeforeAnythingIsWritten) {
   TileJobOptions top = mosaicOptions();
   top.untilZoom = 1;
   top.writePlan = dir / "tiler.plan";
-  try {
-    runTileJob(tin, "ripple.tin", dir / "top.3dtiles", top);
-    ADD_FAILURE() << "a top above zoom 2 was tiled";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("above zoom 2"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("16 shards"), std::string::npos) << e.what();
-  }
   TileJobOptions subtree = mosaicOptions();
   subtree.subtree = TileId{1, 1, 0};
-  EXPECT_THROW(runTileJob(tin, "ripple.tin", dir / "sub.3dtiles", subtree), Error);
-  EXPECT_FALSE(fs::exists(dir / "top.3dtiles"));
-  EXPECT_FALSE(fs::exists(dir / "tiler.plan"));
-  EXPECT_FALSE(fs::exists(dir / "sub.3dtiles"));
-  // A subtree at the mosaic zoom is in the pyramid without building the
-  // top: its ancestors above K refine as they hold terrain.
+  for (const auto& [options, name] :
+       {std::pair{top, "--until-zoom 1"}, {subtree, "subtree 1/1/0"}}) {
+    try {
+      runTileJob(tin, "ripple.tin", dir / "above.3dtiles", options);
+      ADD_FAILURE() << name << " was tiled";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(name), std::string::npos) << what;
+      EXPECT_NE(what.find("above zoom 2"), std::string::npos) << what;
+      EXPECT_NE(what.find("--shard-zoom 2 or more"), std::string::npos) << what;
+    }
+  }
+  // Nothing written: no store, no stage, no plan.
+  EXPECT_TRUE(fs::is_empty(dir)) << fs::directory_iterator(dir)->path();
+  // A subtree at the mosaic zoom is in the pyramid with no tile above it
+  // built: its ancestors above K refine as they hold terrain.
   subtree.subtree = TileId{2, 3, 1};
   runTileJob(tin, "ripple.tin", dir / "sub.3dtiles", subtree);
   EXPECT_TRUE(tilesOf(dir / "sub.3dtiles").contains(tiles::tileContentKey({2, 3, 1})));

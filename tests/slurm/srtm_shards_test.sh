@@ -132,6 +132,14 @@ for k in $(seq 1 "$subtrees"); do
 done
 [ -n "$victim" ] || fatal "no zoom-$shard_zoom tile in one.3dtiles"
 
+# A shard zoom above the mosaic zoom (2 for 1.44 M vertices: the top is
+# fitted to zoom 2's tiles) is refused on the login node, nothing written.
+"$tinsmith" slurm "$work/srtm.tin" -o "$work/above.3dtiles" --shard-zoom 1 --workdir "$work/above" \
+  --tolerance "$tolerance" >"$work/above.out" 2>"$work/above.err" && above_rc=0 || above_rc=$?
+expect "--shard-zoom 1 is refused (exit $above_rc) before a file is written, naming --shard-zoom 2" \
+  test "$above_rc" = 2 -a ! -e "$work/above" -a ! -e "$work/above.3dtiles" \
+  -a -n "$(grep -- '--shard-zoom 2 or more' "$work/above.err")"
+
 # ---------------------------------------------------------------- 1. a failed shard
 run="$work/run"
 slurm_run() {

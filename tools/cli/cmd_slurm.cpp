@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "core/base/error.hpp"
+#include "core/tiles/tiler.hpp"
 #include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tiles/tile_job.hpp"
 #include "ingest/tinfile/tin_file.hpp"
@@ -218,6 +219,20 @@ void runSlurm(const SlurmCliOptions& o) {
   // The shards and the plan name the TIN by the CRC of its bytes in this
   // format, which a subtree shard takes from the file's header.
   ingest::requireTinCrs(ingest::requireCurrentTinFormat(tin).crs, tin.string());
+  // A shard zoom above the mosaic zoom would fail task 0: refused here from
+  // the vertex count alone (the header and the index's summary). The mosaic
+  // zoom is at most this bound (also at most the planned finest zoom).
+  const tiles::Rect nowhere{1e300, 1e300, 1e300, 1e300};
+  const std::size_t vertices = ingest::readTinFilePart(tin, nowhere, nowhere).vertices;
+  if (const int k = tiles::mosaicZoomFor(vertices, tiles::TilerOptions{}.mosaicPoints, 30);
+      o.shardZoom < k)
+    throw usageError("--shard-zoom " + std::to_string(o.shardZoom) +
+                         " may lie above the mosaic zoom of a TIN of " + std::to_string(vertices) +
+                         " vertices (" + std::to_string(k) +
+                         ", unless its planned finest zoom is less): the tiles above that zoom "
+                         "are fitted to the mosaic of all of its tiles, built only as the whole "
+                         "top, and task 0 would refuse the shards",
+                     "give --shard-zoom " + std::to_string(k) + " or more");
   makeFolder(dir / "shards");
   makeFolder(dir / "logs");
   const int cpus = std::max(1, f.threads);
