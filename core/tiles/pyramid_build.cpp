@@ -167,15 +167,22 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
   PyramidSummary below = walk(tiler, encode, roots, threads, callbacks, untilZoom,
                               [&](TileSurface&& s) { kept[slot(s.id)] = std::move(s); });
   // Those the walk did not build (the caller had them, or it stops above
-  // zoom K) are built again: the mosaic is of every one.
+  // zoom K) are built again: the mosaic is of every one. Their progress is
+  // zoom K's, reported by the calling thread (one of the workers).
   std::vector<std::size_t> missing;
   for (std::size_t i = 0; i < kept.size(); ++i)
     if (!kept[i]) missing.push_back(i);
-  std::atomic<std::size_t> next{0};
+  const auto caller = std::this_thread::get_id();
+  std::atomic<std::size_t> next{0}, done{0};
   runWorkers(resolveThreads(threads), [&] {
-    for (std::size_t j; (j = next++) < missing.size();)
+    for (std::size_t j; (j = next++) < missing.size();) {
       kept[missing[j]] = tiler.buildTile(roots[missing[j]]);
+      const std::size_t d = ++done;
+      if (callbacks.progress && std::this_thread::get_id() == caller)
+        callbacks.progress(k, d, missing.size());
+    }
   });
+  if (callbacks.progress && !missing.empty()) callbacks.progress(k, missing.size(), missing.size());
   std::vector<TileSurface> surfaces;
   std::vector<double> errors(kept.size());  // by slot
   surfaces.reserve(kept.size());

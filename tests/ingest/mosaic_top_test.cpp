@@ -18,6 +18,7 @@
 #include "core/tiles/tile_content.hpp"
 #include "core/tiles/tileset_json.hpp"
 #include "core/tin/hull_trim.hpp"
+#include "ingest/base/progress.hpp"
 #include "ingest/store/stored_tin.hpp"
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/tile_job.hpp"
@@ -92,7 +93,15 @@ void shardAndMerge(const TinData& tin, const std::string& name, const fs::path& 
   TileJobOptions top = options;
   top.untilZoom = shardZoom;
   top.writePlan = dir / "tiler.plan";
-  runTileJob(tin, name, shards[0], top);
+  // Its progress goes through zoom 2, whose tiles it builds for the mosaic
+  // alone when it stops there.
+  std::uint64_t zoom2 = 0;
+  Progress progress{[&](std::string_view stage, std::string_view detail, std::uint64_t done,
+                        std::uint64_t total) {
+    if (stage == "tiles.zoom" && detail == "zoom 2" && done == total) zoom2 = total;
+  }};
+  runTileJob(tin, name, shards[0], top, &progress);
+  EXPECT_GT(zoom2, 0u);
   const auto plan = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
   const std::uint32_t side = 1U << shardZoom;
   for (std::uint32_t y = 0; y < side; ++y)
