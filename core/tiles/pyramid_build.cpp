@@ -198,21 +198,7 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
   // tiles under it.
   PyramidSummary top;
   if (!mosaic.tin.triangles.empty()) {
-    TilerOptions options = tiler.options();
-    options.fixed = TilerOptions::FixedPyramid{tiler.geometry(), tiler.finestZoom(), k};
-    options.maxZoom = tiler.maxZoom();
-    options.plan.reset();
-    options.region.reset();
-    options.plannedFinestZoom.reset();
-    options.mosaicError = [&errors, &slot, k](const TileId& id) {
-      const int dz = k - id.z;
-      double e = 0;
-      for (std::uint32_t y = id.y << dz; y < (id.y + 1) << dz; ++y)
-        for (std::uint32_t x = id.x << dz; x < (id.x + 1) << dz; ++x)
-          e = std::max(e, errors[slot({k, x, y})]);
-      return e;
-    };
-    const Tiler mosaicTiler(mosaic.tin, options);
+    const Tiler mosaicTiler(mosaic.tin, mosaicTopOptions(tiler, k, k, std::move(errors)));
     top = walk(mosaicTiler, encode, {root}, threads, callbacks, std::min(untilZoom, k), {});
   }
   top.records.insert(top.records.end(), below.records.begin(), below.records.end());

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstdint>
 #include <map>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -83,6 +84,28 @@ TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs) 
         m.tin.constrainedEdges.push_back({edge.first, edge.second, use.second ? 1U : 0U});
   }
   return m;
+}
+
+TilerOptions mosaicTopOptions(const Tiler& tiler, int k, int m, std::vector<double> errors) {
+  if (m < k || errors.size() != (std::size_t{1} << (2 * m)))
+    throw internalError("mosaicTopOptions: " + std::to_string(errors.size()) + " errors for zoom " +
+                        std::to_string(m) + ", the top above zoom " + std::to_string(k));
+  TilerOptions options = tiler.options();
+  options.fixed = TilerOptions::FixedPyramid{tiler.geometry(), tiler.finestZoom(), k};
+  options.maxZoom = tiler.maxZoom();
+  options.plan.reset();
+  options.region.reset();
+  options.plannedFinestZoom.reset();
+  options.mosaicError = [errors = std::move(errors), m](const TileId& id) {
+    const int dz = m - id.z;
+    const std::size_t side = std::size_t{1} << m;
+    double e = 0;
+    for (std::uint32_t y = id.y << dz; y < (id.y + 1) << dz; ++y)
+      for (std::uint32_t x = id.x << dz; x < (id.x + 1) << dz; ++x)
+        e = std::max(e, errors[y * side + x]);
+    return e;
+  };
+  return options;
 }
 
 }  // namespace tinsmith::tiles

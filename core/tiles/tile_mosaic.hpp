@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "core/tiles/tiler.hpp"
 #include "core/tin/tin_data.hpp"
@@ -33,5 +34,11 @@ struct TileMosaic {
 /// a shared vertex different z (they are not the tiles of one Tiler's zoom)
 /// or a tile lacks its flags or held edges.
 TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs);
+
+/// The options of a Tiler over a mosaic that builds `tiler`'s tiles above
+/// zoom k: its pyramid, finest zoom, tolerances and budget, every tile above
+/// k refined, and each tile's mosaicError E the largest of `errors` — the
+/// errors of the mosaic's zoom-m tiles (m ≥ k), row by row — under it.
+TilerOptions mosaicTopOptions(const Tiler& tiler, int k, int m, std::vector<double> errors);
 
 }  // namespace tinsmith::tiles

@@ -85,7 +85,6 @@ int main(int argc, char** argv) try {
   const tiles::Tiler tiler(tin, options);
   tiles::ContentOptions content;
   content.geo = &geo;
-  const auto& geometry = tiler.geometry();
   std::printf("TIN %zu vertices, %zu triangles; finest zoom %d, K = %d, M = %d\n",
               tin.vertices.size(), tin.triangles.size(), tiler.finestZoom(), k, m);
 
@@ -104,16 +103,6 @@ int main(int argc, char** argv) try {
       "largest tile error %.3f m\n",
       m, zoomM.size(), zoomMSeconds, mosaic.tin.vertices.size(), mosaic.tin.triangles.size(),
       mosaic.tin.constrainedEdges.size(), mosaic.maxError);
-  // E per tile above K: the largest error of the zoom-M tiles under it.
-  const auto allowance = [&](const TileId& id) {
-    const int dz = m - id.z;
-    double e = 0;
-    for (std::uint32_t y = id.y << dz; y < (id.y + 1) << dz; ++y)
-      for (std::uint32_t x = id.x << dz; x < (id.x + 1) << dz; ++x)
-        e = std::max(e, zoomM[std::size_t{y} * side + x].error);
-    return e;
-  };
-
   std::vector<TileId> top;
   for (int z = 0; z < k; ++z)
     for (std::uint32_t y = 0; y < (1U << z); ++y)
@@ -141,15 +130,14 @@ int main(int argc, char** argv) try {
 
   // The top from the mosaic.
   start = std::chrono::steady_clock::now();
-  tiles::TilerOptions mosaicOptions = options;
-  mosaicOptions.fixed = tiles::TilerOptions::FixedPyramid{geometry, tiler.finestZoom(), k};
-  mosaicOptions.maxZoom = tiler.maxZoom();
-  mosaicOptions.mosaicError = allowance;
+  std::vector<double> errors;  // of the zoom-M tiles, row by row
+  for (const auto& t : zoomM) errors.push_back(t.error);
+  const tiles::TilerOptions mosaicOptions = tiles::mosaicTopOptions(tiler, k, m, std::move(errors));
   const tiles::Tiler mosaicTiler(mosaic.tin, mosaicOptions);
   std::vector<Built> fromMosaic(top.size());
   std::vector<tiles::TileSurface> mosaicSurfaces(top.size());
   parallelFor(top.size(), threads, [&](std::size_t i) {
-    const double e = allowance(top[i]);
+    const double e = mosaicOptions.mosaicError(top[i]);
     tiles::TileSurface s = mosaicTiler.buildTile(top[i]);
     Built& b = fromMosaic[i];
     b.id = top[i];
