@@ -145,6 +145,32 @@ PyramidSummary walk(const Tiler& tiler, const TileEncoder& encode, std::vector<T
   return summary;
 }
 
+/// The tiles above frame.mosaicZoom from its zoom-K surfaces (row by row,
+/// 4^K), each tile encoded by `encoderFor` the mosaic's Tiler.
+PyramidSummary topOf(const PyramidFrame& frame, std::vector<TileSurface> zoomK,
+                     const std::function<TileEncoder(const Tiler&)>& encoderFor, int threads,
+                     const PyramidCallbacks& callbacks, int untilZoom) {
+  const int k = frame.mosaicZoom;
+  if (k < 1 || zoomK.size() != (std::size_t{1} << (2 * k)))
+    throw internalError("buildMosaicTop: " + std::to_string(zoomK.size()) +
+                        " surfaces for the mosaic of zoom " + std::to_string(k));
+  std::vector<double> errors(zoomK.size());  // by slot
+  for (std::size_t i = 0; i < zoomK.size(); ++i) {
+    const TileId& id = zoomK[i].id;
+    if (!zoomK[i].empty() && (id.z != k || std::size_t{id.y} * (1U << k) + id.x != i))
+      throw internalError("buildMosaicTop: surface " + std::to_string(i) + " is of tile " +
+                          id.name());
+    errors[i] = zoomK[i].error;
+  }
+  const TileMosaic mosaic = mosaicOf(zoomK, frame.crs);
+  decltype(zoomK)().swap(zoomK);
+  if (mosaic.tin.triangles.empty()) return {};
+  // Each tile's E the largest error of the zoom-K tiles under it.
+  const Tiler mosaicTiler(mosaic.tin, mosaicTopOptions(frame, k, k, std::move(errors)));
+  return walk(mosaicTiler, encoderFor(mosaicTiler), {TileId{}}, threads, callbacks,
+              std::min(untilZoom, k), {});
+}
+
 }  // namespace
 
 PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const TileId& root,
@@ -152,18 +178,27 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
   if (!tiler.geometry().inside(root))
     throw usageError("tile " + root.name() + " is outside the pyramid");
   const int k = tiler.mosaicZoom();
-  if (root.z >= k) return walk(tiler, encode, {root}, threads, callbacks, untilZoom, {});
+  const auto& handOver = callbacks.mosaicSurface;
+  if (root.z >= k) {
+    return walk(tiler, encode, {root}, threads, callbacks, untilZoom,
+                root.z == k && handOver ? [&](TileSurface&& s) { handOver(s); }
+                                        : std::function<void(TileSurface &&)>{});
+  }
   if (root.z > 0)
     throw usageError("tile " + root.name() + " lies above the mosaic zoom " + std::to_string(k) +
                      ": it is built only with the whole top");
 
-  // Zoom K and below from the TIN, zoom K's surfaces kept for the mosaic.
+  // Zoom K and below from the TIN, zoom K's surfaces kept for the mosaic
+  // (or handed over, with the top left to the caller).
   const std::uint32_t side = 1U << k;
   std::vector<TileId> roots;
   for (std::uint32_t y = 0; y < side; ++y)
     for (std::uint32_t x = 0; x < side; ++x) roots.push_back({k, x, y});
   const auto slot = [side](const TileId& id) { return std::size_t{id.y} * side + id.x; };
   std::vector<std::optional<TileSurface>> kept(roots.size());
+  if (handOver)
+    return walk(tiler, encode, roots, threads, callbacks, untilZoom,
+                [&](TileSurface&& s) { handOver(s); });
   PyramidSummary below = walk(tiler, encode, roots, threads, callbacks, untilZoom,
                               [&](TileSurface&& s) { kept[slot(s.id)] = std::move(s); });
   // Those the walk did not build (the caller had them, or it stops above
@@ -184,27 +219,30 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
   });
   if (callbacks.progress && !missing.empty()) callbacks.progress(k, missing.size(), missing.size());
   std::vector<TileSurface> surfaces;
-  std::vector<double> errors(kept.size());  // by slot
   surfaces.reserve(kept.size());
-  for (std::size_t i = 0; i < kept.size(); ++i) {
-    errors[i] = kept[i]->error;
-    surfaces.push_back(std::move(*kept[i]));
-  }
+  for (auto& s : kept) surfaces.push_back(std::move(*s));
   decltype(kept)().swap(kept);
-  const TileMosaic mosaic = mosaicOf(surfaces, tiler.tin().crs);
-  decltype(surfaces)().swap(surfaces);
 
-  // The top from the mosaic: each tile's E the largest error of the zoom-K
-  // tiles under it.
-  PyramidSummary top;
-  if (!mosaic.tin.triangles.empty()) {
-    const Tiler mosaicTiler(mosaic.tin, mosaicTopOptions(tiler, k, k, std::move(errors)));
-    top = walk(mosaicTiler, encode, {root}, threads, callbacks, std::min(untilZoom, k), {});
-  }
+  PyramidSummary top = topOf(
+      frameOf(tiler), std::move(surfaces), [&](const Tiler&) { return encode; }, threads, callbacks,
+      untilZoom);
   top.records.insert(top.records.end(), below.records.begin(), below.records.end());
   top.built += below.built;
   top.reused += below.reused;
   return top;
+}
+
+PyramidSummary buildMosaicTop(const PyramidFrame& frame, std::vector<TileSurface> zoomK,
+                              const ContentOptions& content, int threads,
+                              const PyramidCallbacks& callbacks) {
+  return topOf(
+      frame, std::move(zoomK),
+      [&](const Tiler& mosaicTiler) -> TileEncoder {
+        return [&](const TileSurface& s) {
+          return encodeTile(s, skirtDepth(mosaicTiler, s.id, s.error), content);
+        };
+      },
+      threads, callbacks, 1 << 20);
 }
 
 }  // namespace tinsmith::tiles

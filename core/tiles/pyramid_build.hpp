@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/tiles/tile_content.hpp"
+#include "core/tiles/tile_mosaic.hpp"
 #include "core/tiles/tiler.hpp"
 
 namespace tinsmith::tiles {
@@ -24,6 +25,12 @@ struct PyramidCallbacks {
   std::function<void(const TileContent&)> emit;
   /// Progress within a zoom: done of total tiles.
   std::function<void(int z, std::size_t done, std::size_t total)> progress;
+  /// Set: the tiles above the tiler's mosaic zoom K are not built (a shard's
+  /// merge builds them from every zoom-K surface: buildMosaicTop), and each
+  /// zoom-K surface the walk builds, empty ones too, is handed here (on a
+  /// worker thread) — those of a root at zoom K, or of all zoom K under
+  /// 0/0/0. Not called for the tiles the caller already has (`existing`).
+  std::function<void(const TileSurface&)> mosaicSurface;
 };
 
 struct PyramidSummary {
@@ -54,6 +61,7 @@ std::optional<std::string> whyNotInPyramid(const Tiler& tiler, const ContentOpti
 /// above K or the caller has them, are built for it) by a Tiler of the same
 /// pyramid, each declaring its error against the mosaic plus the largest of
 /// its zoom-K tiles'. The records are in (z, y, x) order all the same.
+/// With callbacks.mosaicSurface, 0/0/0 stands for zoom K and below only.
 PyramidSummary buildPyramid(const Tiler& tiler, const ContentOptions& content, const TileId& root,
                             int threads, const PyramidCallbacks& callbacks,
                             int untilZoom = 1 << 20);
@@ -64,5 +72,15 @@ using TileEncoder = std::function<TileContent(const TileSurface&)>;
 PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const TileId& root,
                             int threads, const PyramidCallbacks& callbacks,
                             int untilZoom = 1 << 20);
+
+/// The tiles above frame.mosaicZoom K (≥ 1), as buildPyramid builds them
+/// for a whole run, from `zoomK`: every zoom-K tile's surface, row by row
+/// (4^K of them, empty where a tile holds no terrain) — what a sharded job's
+/// shards handed over. The same bytes as the run's when the frame is its
+/// Tiler's (frameOf) or what its build record names. internalError when a
+/// surface is out of its place.
+PyramidSummary buildMosaicTop(const PyramidFrame& frame, std::vector<TileSurface> zoomK,
+                              const ContentOptions& content, int threads,
+                              const PyramidCallbacks& callbacks);
 
 }  // namespace tinsmith::tiles

@@ -86,13 +86,18 @@ TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs) 
   return m;
 }
 
-TilerOptions mosaicTopOptions(const Tiler& tiler, int k, int m, std::vector<double> errors) {
+PyramidFrame frameOf(const Tiler& tiler) {
+  return {tiler.options(), tiler.geometry(),   tiler.finestZoom(),
+          tiler.maxZoom(), tiler.mosaicZoom(), tiler.tin().crs};
+}
+
+TilerOptions mosaicTopOptions(const PyramidFrame& frame, int k, int m, std::vector<double> errors) {
   if (m < k || errors.size() != (std::size_t{1} << (2 * m)))
     throw internalError("mosaicTopOptions: " + std::to_string(errors.size()) + " errors for zoom " +
                         std::to_string(m) + ", the top above zoom " + std::to_string(k));
-  TilerOptions options = tiler.options();
-  options.fixed = TilerOptions::FixedPyramid{tiler.geometry(), tiler.finestZoom(), k};
-  options.maxZoom = tiler.maxZoom();
+  TilerOptions options = frame.options;
+  options.fixed = TilerOptions::FixedPyramid{frame.geometry, frame.finestZoom, k};
+  options.maxZoom = frame.maxZoom;
   options.plan.reset();
   options.region.reset();
   options.plannedFinestZoom.reset();

@@ -35,10 +35,25 @@ struct TileMosaic {
 /// or a tile lacks its flags or held edges.
 TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs);
 
-/// The options of a Tiler over a mosaic that builds `tiler`'s tiles above
+/// What a Tiler over the mosaic of a pyramid's zoom-K tiles needs of that
+/// pyramid to build the tiles above K: a Tiler's (frameOf), or what a build
+/// record names (a merge's, which has no TIN).
+struct PyramidFrame {
+  /// The tiling options: tolerance, maxTriangles, lambdaFactor and geo are
+  /// read (the rest are a fixed pyramid's, set by mosaicTopOptions).
+  TilerOptions options;
+  PyramidGeometry geometry{{0, 0}, 1};
+  int finestZoom = 0;
+  int maxZoom = 0;
+  int mosaicZoom = 0;  ///< K
+  std::string crs;     ///< the TIN's
+};
+PyramidFrame frameOf(const Tiler& tiler);
+
+/// The options of a Tiler over a mosaic that builds `frame`'s tiles above
 /// zoom k: its pyramid, finest zoom, tolerances and budget, every tile above
 /// k refined, and each tile's mosaicError E the largest of `errors` — the
 /// errors of the mosaic's zoom-m tiles (m ≥ k), row by row — under it.
-TilerOptions mosaicTopOptions(const Tiler& tiler, int k, int m, std::vector<double> errors);
+TilerOptions mosaicTopOptions(const PyramidFrame& frame, int k, int m, std::vector<double> errors);
 
 }  // namespace tinsmith::tiles

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -15,6 +16,7 @@
 #include "ingest/store/tile_store.hpp"
 #include "ingest/tiles/proj_georeference.hpp"
 #include "ingest/tiles/terrain_job.hpp"
+#include "ingest/tiles/tile_surface_bytes.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 namespace tinsmith::ingest {
@@ -30,9 +32,12 @@ constexpr const char* kBuildKey = "tinsmith/build.json";
 /// Only shard stores hold it; merge reads it to know which tiles a shard
 /// answers for (a refined tile's child missing from its shard is empty).
 constexpr const char* kShardKey = "tinsmith/shard.json";
-/// A shard that finished: {"tiles": N}, its number of tiles, put in the
-/// stage just before it takes the output's name. A killed or running
-/// shard's stage holds kShardKey but not this, and merge refuses it.
+/// A shard that finished: {"tiles": N, "crc32": {key: CRC-32 of each tile},
+/// "surfaces": {key: CRC-32 of each zoom-K surface}}, put in the stage just
+/// before it takes the output's name. A killed or running shard's stage
+/// holds kShardKey but not this, and merge refuses it. A shard holds no
+/// tile above the mosaic zoom K: it hands over the surfaces of its zoom-K
+/// tiles (tileSurfaceKey), the merge builds the top from them.
 constexpr const char* kShardFinishedKey = "tinsmith/shard-finished.json";
 static_assert(std::string_view(kBuildKey) == store::kStoreMarkerKey);
 
@@ -134,15 +139,17 @@ std::string shardRecord(const TileJobOptions& o) {
 /// The canonical order of a finished store's keys: the build record, the
 /// TIN (when the stage holds it: a shard below the root does not) and a
 /// shard's record, the tiles in `records` (already in rowMajorLess order),
-/// then the tileset files.
+/// a shard's zoom-K surfaces, then the tileset files.
 std::vector<std::string> canonicalKeys(const store::TileStore& stage,
                                        const std::vector<TileRecord>& records,
                                        std::vector<std::string> tilesetKeys, bool shard = false,
-                                       const std::vector<std::string>& terrainKeys = {}) {
+                                       const std::vector<std::string>& terrainKeys = {},
+                                       const std::vector<std::string>& surfaceKeys = {}) {
   std::vector<std::string> out{kBuildKey};
   for (auto& key : store::storedTinKeys(stage)) out.push_back(std::move(key));
   if (shard) out.insert(out.end(), {kShardKey, kShardFinishedKey});
   for (const auto& r : records) out.push_back(tiles::tileContentKey(r.id));
+  out.insert(out.end(), surfaceKeys.begin(), surfaceKeys.end());
   std::sort(tilesetKeys.begin(), tilesetKeys.end());
   out.insert(out.end(), tilesetKeys.begin(), tilesetKeys.end());
   out.insert(out.end(), terrainKeys.begin(), terrainKeys.end());
@@ -320,35 +327,58 @@ std::unique_ptr<store::TileStore> resumableStore(const fs::path& path, const std
 struct ShardFinish {
   std::optional<std::string> unfinished;
   std::map<std::string, std::uint32_t> tileCrcs;
+  /// The CRC-32 of each zoom-K surface it hands over, by key; nullopt for a
+  /// shard of an older tinsmith, which handed none (and held the top).
+  std::optional<std::map<std::string, std::uint32_t>> surfaceCrcs;
 };
 ShardFinish shardFinish(const store::TileStore& in) {
   const auto finished = in.get(kShardFinishedKey);
-  const auto unfinished = [](std::string why) { return ShardFinish{std::move(why), {}}; };
+  const auto unfinished = [](std::string why) { return ShardFinish{std::move(why), {}, {}}; };
   if (!finished)
     return unfinished("the shard did not finish (no " + std::string(kShardFinishedKey) +
                       "): it is the stage of a run that was killed, failed or is still running");
   const auto j = nlohmann::json::parse(*finished, nullptr, false);
-  const auto isCrc = [](const nlohmann::json& v) {
-    return v.is_number_unsigned() && v.get<std::uint64_t>() <= 0xffffffffU;
+  const auto isCrcs = [](const nlohmann::json& v) {
+    return v.is_object() && std::all_of(v.begin(), v.end(), [](const nlohmann::json& c) {
+             return c.is_number_unsigned() && c.get<std::uint64_t>() <= 0xffffffffU;
+           });
   };
   if (!j.is_object() || !j.contains("tiles") || !j["tiles"].is_number_unsigned() ||
-      !j.contains("crc32") || !j["crc32"].is_object() ||
+      !j.contains("crc32") || !isCrcs(j["crc32"]) ||
       j["crc32"].size() != j["tiles"].get<std::size_t>() ||
-      !std::all_of(j["crc32"].begin(), j["crc32"].end(), isCrc))
+      (j.contains("surfaces") && !isCrcs(j["surfaces"])))
     return unfinished("its " + std::string(kShardFinishedKey) + " is not one tinsmith writes");
   ShardFinish out;
   for (const auto& [key, crc] : j["crc32"].items())
     out.tileCrcs.emplace(key, crc.get<std::uint32_t>());
-  std::size_t tiles = 0;
-  for (const auto& key : in.keys()) {
-    if (key.rfind("tiles/", 0) != 0) continue;
-    ++tiles;
-    if (!out.tileCrcs.contains(key))
-      return unfinished("it holds the tile " + key + ", which its shard did not finish with");
+  if (j.contains("surfaces")) {
+    out.surfaceCrcs.emplace();
+    for (const auto& [key, crc] : j["surfaces"].items())
+      out.surfaceCrcs->emplace(key, crc.get<std::uint32_t>());
   }
-  if (tiles != out.tileCrcs.size())
-    return unfinished("it holds " + std::to_string(tiles) + " of the " +
-                      std::to_string(out.tileCrcs.size()) + " tiles its shard finished with");
+  // Every tile and surface the store holds is one its shard finished with.
+  const auto listed = [](const std::map<std::string, std::uint32_t>* crcs, const char* prefix,
+                         const char* what,
+                         const std::vector<std::string>& keys) -> std::optional<std::string> {
+    std::size_t n = 0;
+    for (const auto& key : keys) {
+      if (key.rfind(prefix, 0) != 0) continue;
+      ++n;
+      if (!crcs || !crcs->contains(key))
+        return "it holds the " + std::string(what) + " " + key +
+               ", which its shard did not finish with";
+    }
+    const std::size_t wanted = crcs ? crcs->size() : 0;
+    if (n != wanted)
+      return "it holds " + std::to_string(n) + " of the " + std::to_string(wanted) + " " + what +
+             "s its shard finished with";
+    return std::nullopt;
+  };
+  const auto keys = in.keys();
+  if (auto why = listed(&out.tileCrcs, "tiles/", "tile", keys)) return unfinished(std::move(*why));
+  if (auto why = listed(out.surfaceCrcs ? &*out.surfaceCrcs : nullptr, "tinsmith/surfaces/",
+                        "tile surface", keys))
+    return unfinished(std::move(*why));
   return out;
 }
 
@@ -451,6 +481,16 @@ void checkTileJobOptions(const TileJobOptions& o) {
 
 namespace {
 
+/// Where the local frame's east-north-up axes stand: the pyramid's centre.
+encode::Geodetic pyramidCentre(const tiles::PyramidGeometry& pyramid, const ProjGeoReference& geo) {
+  const Point2 o = pyramid.origin();
+  const double half = 0.5 * pyramid.size();
+  const Point3 centre{o.x + half, o.y + half, 0.0};
+  encode::Geodetic g;
+  geo.toGeodetic({&centre, 1}, {&g, 1});
+  return g;
+}
+
 /// The error for a subtree (or shard zoom) above the mosaic zoom K, `what`
 /// naming it: the tiles above K are fitted to the mosaic of all of zoom K's.
 [[noreturn]] void refuseAboveMosaicZoom(const std::string& what, int mosaicZoom) {
@@ -520,10 +560,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     // Encoded after the planning fit, in the memory it has given back: the
     // TIN's bytes and the fit's working data are not held at once.
     if (!options.partOf && !options.plan) encodeWhole();
-    const Point2 o = tiler->geometry().origin();
-    const double half = 0.5 * tiler->geometry().size();
-    const Point3 centre{o.x + half, o.y + half, 0.0};
-    geo.toGeodetic({&centre, 1}, {&content.localOrigin, 1});
+    content.localOrigin = pyramidCentre(tiler->geometry(), geo);
     // Everything that can refuse the run is checked before the output is touched.
     // Above the mosaic zoom only the whole top is built (buildPyramid).
     const int mosaicZoom = tiler->mosaicZoom();
@@ -563,11 +600,15 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   std::unique_ptr<store::TileStore> previous;  // the finished output's tiles, for --resume
   // A finished shard's tiles' CRC-32: a tile whose bytes are not those is
   // built again, not carried on under a new CRC.
-  std::map<std::string, std::uint32_t> previousCrcs;
+  std::map<std::string, std::uint32_t> previousCrcs, previousSurfaceCrcs;
   if (options.resume) {
     (void)resumableStore(stagePath, build, shard);
     previous = resumableStore(out, build, shard);
-    if (previous && previous->contains(kShardKey)) previousCrcs = shardFinish(*previous).tileCrcs;
+    if (previous && previous->contains(kShardKey)) {
+      ShardFinish finished = shardFinish(*previous);
+      previousCrcs = std::move(finished.tileCrcs);
+      if (finished.surfaceCrcs) previousSurfaceCrcs = std::move(*finished.surfaceCrcs);
+    }
   }
   store::removeStaleTemps(out);
   store::removeStaleTemps(stagePath);
@@ -594,28 +635,62 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
 
   // The tiles above the mosaic zoom are always stored: they are fitted to
   // the mosaic of zoom K's tiles, which a rebuild on demand has not got.
-  const int storeUntilZoom =
-      std::max(options.storeUntilZoom.value_or(1 << 20), tiler ? tiler->mosaicZoom() : 0);
+  const int mosaicZoom = tiler ? tiler->mosaicZoom() : 0;
+  const int storeUntilZoom = std::max(options.storeUntilZoom.value_or(1 << 20), mosaicZoom);
+  // A shard leaves the tiles above the mosaic zoom to the merge and hands
+  // it the surface of each zoom-K tile it holds, put just before the tile.
+  const bool handsSurfaces = !shard.empty() && mosaicZoom > 0;
+  std::map<TileId, std::string> surfaces;  // encoded on the workers, not yet put
+  std::mutex surfacesMutex;
   tiles::PyramidSummary walked;
   if (tiles3d) {
     tiles::PyramidCallbacks callbacks;
     if (options.resume) {
-      callbacks.existing = [&](const TileId& id) -> std::optional<TileRecord> {
+      // The finished output's copy of `key`, when its bytes are those the
+      // shard finished with.
+      const auto fromPrevious = [&](const std::string& key, const auto& crcs) {
+        auto bytes = previous ? previous->get(key) : std::nullopt;
+        if (const auto crc = crcs.find(key);
+            bytes && crc != crcs.end() && crc32(*bytes) != crc->second)
+          bytes.reset();
+        return bytes;
+      };
+      callbacks.existing = [&, fromPrevious](const TileId& id) -> std::optional<TileRecord> {
+        // A shard's zoom-K tile is built again without its surface.
+        if (const std::string key = tileSurfaceKey(id);
+            handsSurfaces && id.z == mosaicZoom && !stage->contains(key)) {
+          const auto bytes = fromPrevious(key, previousSurfaceCrcs);
+          if (!bytes) return std::nullopt;
+          stage->put(key, *bytes);
+        }
         const std::string key = tiles::tileContentKey(id);
         if (const auto bytes = stage->get(key)) return recordOfTile(key, *bytes, stagePath);
-        if (!previous) return std::nullopt;
-        const auto bytes = previous->get(key);
+        const auto bytes = fromPrevious(key, previousCrcs);
         if (!bytes) return std::nullopt;
-        if (const auto crc = previousCrcs.find(key);
-            crc != previousCrcs.end() && crc32(*bytes) != crc->second)
-          return std::nullopt;
         TileRecord record = recordOfTile(key, *bytes, out);
         stage->put(key, *bytes);  // the stage becomes the whole new store
         return record;
       };
     }
+    if (handsSurfaces) {
+      callbacks.mosaicSurface = [&](const tiles::TileSurface& s) {
+        if (s.empty()) return;
+        std::string bytes = encodeTileSurface(s);
+        std::lock_guard lock(surfacesMutex);
+        surfaces[s.id] = std::move(bytes);
+      };
+    }
     callbacks.emit = [&](const tiles::TileContent& c) {
-      if (c.record.id.z < storeUntilZoom) stage->put(tiles::tileContentKey(c.record.id), c.glb);
+      const TileId& id = c.record.id;
+      if (handsSurfaces && id.z == mosaicZoom) {
+        std::lock_guard lock(surfacesMutex);
+        const auto it = surfaces.find(id);
+        if (it == surfaces.end())
+          throw internalError("tile " + id.name() + " came without its surface");
+        stage->put(tileSurfaceKey(id), it->second);
+        surfaces.erase(it);
+      }
+      if (id.z < storeUntilZoom) stage->put(tiles::tileContentKey(id), c.glb);
     };
     callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
       reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
@@ -638,16 +713,27 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     // A shard: no tileset.json of its own; `tinsmith merge` writes it. It
     // finishes with its tiles' count and each one's CRC-32, which the merge
     // checks the bytes it reads against (a shared filesystem's damage).
+    // The surfaces, of its zoom-K tiles, too.
     nlohmann::ordered_json crcs = nlohmann::ordered_json::object();
+    nlohmann::ordered_json surfaceCrcs = nlohmann::ordered_json::object();
+    std::vector<std::string> surfaceKeys;
+    const auto crcOf = [&](const std::string& key) {
+      const auto bytes = stage->get(key);
+      if (!bytes) throw internalError("the shard's " + key + " is not in its stage");
+      return crc32(*bytes);
+    };
     for (const auto& r : records) {
       const std::string key = tiles::tileContentKey(r.id);
-      const auto bytes = stage->get(key);
-      if (!bytes) throw internalError("the shard's tile " + key + " is not in its stage");
-      crcs[key] = crc32(*bytes);
+      crcs[key] = crcOf(key);
+      if (handsSurfaces && r.id.z == mosaicZoom) {
+        surfaceKeys.push_back(tileSurfaceKey(r.id));
+        surfaceCrcs[surfaceKeys.back()] = crcOf(surfaceKeys.back());
+      }
     }
-    stage->put(kShardFinishedKey,
-               nlohmann::ordered_json{{"tiles", records.size()}, {"crc32", crcs}}.dump() + "\n");
-    publish(stage, stagePath, out, canonicalKeys(*stage, records, {}, true));
+    nlohmann::ordered_json finished{{"tiles", records.size()}, {"crc32", crcs}};
+    if (handsSurfaces) finished["surfaces"] = surfaceCrcs;
+    stage->put(kShardFinishedKey, finished.dump() + "\n");
+    publish(stage, stagePath, out, canonicalKeys(*stage, records, {}, true, {}, surfaceKeys));
   }
   TileJobSummary summary = summarize(records, build);
   summary.terrain = std::move(terrain);
@@ -663,11 +749,15 @@ namespace {
 /// Which tiles a merge input answers for: a shard its part (kShardKey), a
 /// finished store every tile.
 struct ShardCoverage {
+  bool shard = false;  ///< false: a finished store, which answers for every tile
   std::optional<TileId> subtree;
   std::optional<int> untilZoom;
   /// A shard's: the CRC-32 of each tile it finished with, by key (a
   /// finished store's tiles are not checked).
   std::map<std::string, std::uint32_t> tileCrcs;
+  /// A shard's: those of the zoom-K surfaces it hands over (nullopt: none,
+  /// a shard of an older tinsmith).
+  std::optional<std::map<std::string, std::uint32_t>> surfaceCrcs;
 
   [[nodiscard]] bool covers(const TileId& id) const {
     if (untilZoom) return id.z < *untilZoom;
@@ -693,7 +783,9 @@ ShardCoverage coverageOf(const store::TileStore& in) {
                      "tile command with --resume) and merge its finished store");
   const auto j = nlohmann::json::parse(*record, nullptr, false);
   ShardCoverage c;
+  c.shard = true;
   c.tileCrcs = std::move(finish.tileCrcs);
+  c.surfaceCrcs = std::move(finish.surfaceCrcs);
   if (j.is_object() && j.contains("subtree") && j["subtree"].is_string()) {
     c.subtree = tiles::parseTileId(j["subtree"].get<std::string>(), kShardKey);
   } else if (j.is_object() && j.contains("untilZoom") && j["untilZoom"].is_number_integer()) {
@@ -703,6 +795,112 @@ ShardCoverage coverageOf(const store::TileStore& in) {
                      fileLocation(in.path().string()), "build the shard again");
   }
   return c;
+}
+
+/// The tiles above the mosaic zoom K of a job whose inputs are all shards,
+/// as one run builds them (tiles::buildMosaicTop): from the zoom-K surfaces
+/// the shards hand over, with the tiling options, pyramid and content the
+/// build record names. `emit` takes each tile (z, y, x order). Throws
+/// inputError naming the shard when a surface is missing or damaged, and
+/// usageError when no shard answers for a zoom-K tile.
+tiles::PyramidSummary topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
+                                  const std::vector<ShardCoverage>& coverage,
+                                  const std::string& buildText, int threads,
+                                  const Progress* progress,
+                                  const std::function<void(const tiles::TileContent&)>& emit) {
+  tiles::PyramidFrame frame;
+  std::string geoid, compression, contentFrame;
+  try {
+    const auto b = nlohmann::json::parse(buildText);
+    const auto& o = b.at("options");
+    const auto& p = b.at("pyramid");
+    frame.options.tolerance = o.at("tolerance").get<double>();
+    frame.options.maxTriangles = o.at("maxTriangles").get<std::size_t>();
+    frame.options.lambdaFactor = o.at("lambdaFactor").get<double>();
+    frame.geometry = tiles::PyramidGeometry(
+        {p.at("origin").at(0).get<double>(), p.at("origin").at(1).get<double>()},
+        p.at("size").get<double>());
+    frame.finestZoom = p.at("finestZoom").get<int>();
+    frame.maxZoom = o.at("maxZoom").get<int>();
+    frame.mosaicZoom = p.at("mosaicZoom").get<int>();
+    frame.crs = b.at("tin").at("crs").get<std::string>();
+    geoid = o.at("geoid").get<std::string>();
+    compression = o.at("compression").get<std::string>();
+    contentFrame = o.at("frame").get<std::string>();
+  } catch (const nlohmann::json::exception& e) {
+    throw inputError(
+        std::string("the shards' build record is not one this tinsmith reads (") + e.what() + ")",
+        fileLocation(shards.front()->path().string()), "build the shards again");
+  }
+  const int k = frame.mosaicZoom;
+  if (k < 1 || k > 15 || !parseCompression(compression) || !parseContentFrame(contentFrame))
+    throw inputError("the shards' build record names mosaic zoom " + std::to_string(k) +
+                         ", compression '" + compression + "' and frame '" + contentFrame + "'",
+                     fileLocation(shards.front()->path().string()), "build the shards again");
+
+  // Every zoom-K tile's surface, row by row: from the shards that answer
+  // for it (the same bytes in each), empty where they hold none.
+  const std::uint32_t side = 1U << k;
+  std::vector<tiles::TileSurface> zoomK(std::size_t{side} * side);
+  for (std::uint32_t y = 0; y < side; ++y) {
+    for (std::uint32_t x = 0; x < side; ++x) {
+      const TileId id{k, x, y};
+      const std::string key = tileSurfaceKey(id);
+      bool answered = false;
+      std::optional<std::string> bytes;
+      for (std::size_t i = 0; i < shards.size(); ++i) {
+        if (!coverage[i].covers(id)) continue;
+        answered = true;
+        const auto where = fileLocation(shards[i]->path().string());
+        const auto& crcs = coverage[i].surfaceCrcs;
+        if (!crcs)
+          throw inputError("it holds no surfaces of its zoom-" + std::to_string(k) +
+                               " tiles, of which the merge builds the tiles above them: it was "
+                               "built by an older tinsmith",
+                           where, "build the shard again with this tinsmith");
+        auto here = shards[i]->get(key);
+        if (!here) {
+          if (shards[i]->contains(tiles::tileContentKey(id)))
+            throw inputError("it holds tile " + id.name() + " but not its surface " + key, where,
+                             "build the shard again");
+          continue;
+        }
+        if (const auto crc = crcs->find(key); crc == crcs->end() || crc32(*here) != crc->second)
+          throw inputError("its tile surface " + key +
+                               " is damaged: its bytes are not those its shard finished with "
+                               "(CRC-32)",
+                           where, "build the shard again, then merge");
+        if (bytes && *bytes != *here)
+          throw usageError("the surface of tile " + id.name() + " differs between the shards");
+        if (!bytes) {
+          tiles::TileSurface s = decodeTileSurface(*here, shards[i]->path().string() + " " + key);
+          if (s.id != id)
+            throw inputError("its " + key + " is the surface of tile " + s.id.name(), where,
+                             "build the shard again");
+          zoomK[std::size_t{y} * side + x] = std::move(s);
+        }
+        bytes = std::move(here);
+      }
+      if (!answered)
+        throw usageError("tile " + id.name() + ", of the mosaic zoom " + std::to_string(k) +
+                             " whose tiles the top is fitted to, is in none of the shards",
+                         "add the shard of subtree " + id.name() + " (or one above it)");
+    }
+  }
+
+  const ProjGeoReference geo(frame.crs, geoid);
+  frame.options.geo = &geo;
+  tiles::ContentOptions content;
+  content.compression = *parseCompression(compression);
+  content.frame = *parseContentFrame(contentFrame);
+  content.geo = &geo;
+  content.localOrigin = pyramidCentre(frame.geometry, geo);
+  tiles::PyramidCallbacks callbacks;
+  callbacks.emit = emit;
+  callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
+    reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
+  };
+  return tiles::buildMosaicTop(frame, std::move(zoomK), content, threads, callbacks);
 }
 
 }  // namespace
@@ -728,7 +926,8 @@ bool isFinishedShard(const fs::path& path, bool checkTileBytes) {
   }
 }
 
-TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::path& output) {
+TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::path& output,
+                               int threads, const Progress* progress) {
   if (inputs.empty())
     throw usageError("nothing to merge", "name the shard stores: tinsmith merge A B … -o ALL");
   const fs::path out = storePathFor(output);
@@ -777,9 +976,31 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
   try {
     stage->put(kBuildKey, build);
     // Every tile of every shard, once (a tile two shards hold must be the
-    // same bytes in both), and which shard it is read from.
+    // same bytes in both), and which shard it is read from — or the merge,
+    // which builds the tiles above the mosaic zoom when every input is a
+    // shard (a finished store holds them).
+    constexpr std::size_t kBuiltHere = SIZE_MAX;
     std::map<std::string, std::size_t> from;
     std::vector<TileRecord> found;
+    const auto b = nlohmann::json::parse(build);
+    // (A store of tinsmith-tiles/4 or older has none: its top was the TIN's.)
+    const int mosaicZoom = b.at("pyramid").value("mosaicZoom", 0);
+    if (mosaicZoom > 0 && std::all_of(coverage.begin(), coverage.end(),
+                                      [](const ShardCoverage& c) { return c.shard; })) {
+      (void)topOfShards(shards, coverage, build, threads, progress,
+                        [&](const tiles::TileContent& c) {
+                          const std::string key = tiles::tileContentKey(c.record.id);
+                          stage->put(key, c.glb);
+                          from.emplace(key, kBuiltHere);
+                          TileRecord r = c.record;
+                          r.bytes = c.glb.size();
+                          found.push_back(std::move(r));
+                        });
+    }
+    const auto bytesOf = [&](const std::string& key) {
+      const std::size_t i = from.at(key);
+      return i == kBuiltHere ? stage->get(key) : shards[i]->get(key);
+    };
     for (std::size_t i = 0; i < shards.size(); ++i) {
       const auto& in = shards[i];
       if (!store::holdsTin(*stage)) store::copyTin(*in, *stage);  // a piece at a time
@@ -796,9 +1017,10 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
                            "build the shard again (tinsmith slurm … --resume --submit "
                            "reruns it, or its tinsmith tile command without --resume), "
                            "then merge");
-        if (const auto there = from.find(key); there != from.end()) {
-          if (shards[there->second]->get(key) != bytes)
-            throw usageError("tile " + key + " differs between the shards");
+        if (from.contains(key)) {
+          if (bytesOf(key) != bytes)
+            throw usageError("tile " + key + " differs between the shards" +
+                             (from.at(key) == kBuiltHere ? " and the top the merge built" : ""));
           continue;
         }
         from.emplace(key, i);
@@ -807,12 +1029,9 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
       decltype(coverage[i].tileCrcs)().swap(coverage[i].tileCrcs);  // checked: let go
     }
     sortRecords(found);
-    const auto b = nlohmann::json::parse(build);
     const double tolerance = b["options"]["tolerance"].get<double>();
     const int maxZoom = b["options"]["maxZoom"].get<int>();
     const int finestZoom = b["pyramid"]["finestZoom"].get<int>();
-    // (A store of tinsmith-tiles/4 or older has none: its top was the TIN's.)
-    const int mosaicZoom = b.at("pyramid").value("mosaicZoom", 0);
     // Above the mosaic zoom every tile with terrain refines (Tiler::refines).
     const auto refines = [&](const TileRecord& r) {
       return r.id.z < mosaicZoom ||
@@ -846,7 +1065,8 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     }
     for (const auto& r : records) {
       const std::string key = tiles::tileContentKey(r.id);
-      stage->put(key, *shards[from.at(key)]->get(key));
+      if (const std::size_t i = from.at(key); i != kBuiltHere)
+        stage->put(key, *shards[i]->get(key));
     }
     finish(stage, stagePath, out, records, build);
   } catch (...) {

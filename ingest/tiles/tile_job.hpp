@@ -211,9 +211,15 @@ bool isFinishedShard(const std::filesystem::path& path, bool checkTileBytes = fa
 /// with (its CRC-32), and without leaving a
 /// stage when a tile differs between them or a child of a refined tile is in
 /// none of them (a shard that answers for the child and lacks it found it
-/// empty).
+/// empty). Over a mosaic zoom K ≥ 1, when every input is a shard (none
+/// holds the tiles above K), it builds those tiles, on `threads` (0: all
+/// cores), from the surfaces of zoom K's tiles the shards hand over
+/// (inputError naming a shard that lacks one or whose bytes are damaged,
+/// usageError when no shard answers for a zoom-K tile), with the options
+/// the build record names: the bytes of one run.
 TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs,
-                               const std::filesystem::path& output);
+                               const std::filesystem::path& output, int threads = 0,
+                               const Progress* progress = nullptr);
 
 /// What `tinsmith info` tells of a store: its build record (JSON text) and the
 /// per-zoom summary from the tiles' records.

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -84,24 +85,31 @@ nlohmann::json buildOf(const fs::path& path) {
   return nlohmann::json::parse(*store::openStoreForReading(path)->get("tinsmith/build.json"));
 }
 
+/// The keys of a store that start with `prefix`.
+std::vector<std::string> keysOf(const fs::path& path, const std::string& prefix) {
+  std::vector<std::string> out;
+  for (const auto& key : store::openStoreForReading(path)->keys())
+    if (key.rfind(prefix, 0) == 0) out.push_back(key);
+  return out;
+}
+
 /// The top of a sharded job (`--until-zoom shardZoom --write-plan`) and its
-/// subtrees at shardZoom taking the plan, merged into `merged`.
-void shardAndMerge(const TinData& tin, const std::string& name, const fs::path& dir, int shardZoom,
-                   const fs::path& merged) {
+/// subtrees at shardZoom taking the plan, merged into `merged`; the stores
+/// in the order they were made (the top first).
+std::vector<fs::path> shardAndMerge(const TinData& tin, const std::string& name,
+                                    const fs::path& dir, int shardZoom, const fs::path& merged) {
   const TileJobOptions options = mosaicOptions();
   std::vector<fs::path> shards{dir / "top.3dtiles"};
   TileJobOptions top = options;
   top.untilZoom = shardZoom;
   top.writePlan = dir / "tiler.plan";
-  // Its progress goes through zoom 2, whose tiles it builds for the mosaic
-  // alone when it stops there.
-  std::uint64_t zoom2 = 0;
-  Progress progress{[&](std::string_view stage, std::string_view detail, std::uint64_t done,
-                        std::uint64_t total) {
-    if (stage == "tiles.zoom" && detail == "zoom 2" && done == total) zoom2 = total;
-  }};
-  runTileJob(tin, name, shards[0], top, &progress);
-  EXPECT_GT(zoom2, 0u);
+  runTileJob(tin, name, shards[0], top);
+  // No shard holds a tile above K = 2: the merge builds them, from the
+  // surfaces of zoom 2's tiles, which the shards that hold those tiles
+  // hand over (the top, when it goes below K).
+  for (const auto& key : keysOf(shards[0], "tiles/")) EXPECT_GE(key[6] - '0', 2) << key;
+  EXPECT_EQ(keysOf(shards[0], "tinsmith/surfaces/").size(),
+            shardZoom > 2 ? keysOf(shards[0], "tiles/2/").size() : 0u);
   const auto plan = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
   const std::uint32_t side = 1U << shardZoom;
   for (std::uint32_t y = 0; y < side; ++y)
@@ -113,8 +121,23 @@ void shardAndMerge(const TinData& tin, const std::string& name, const fs::path& 
       shards.push_back(dir /
                        ("subtree-" + std::to_string(x) + "-" + std::to_string(y) + ".3dtiles"));
       runTileJob(tin, name, shards.back(), subtree);
+      const auto held = keysOf(shards.back(), "tinsmith/surfaces/");
+      if (shardZoom == 2 && !keysOf(shards.back(), "tiles/").empty()) {
+        EXPECT_EQ(held, std::vector<std::string>{"tinsmith/surfaces/2/" + std::to_string(x) + "/" +
+                                                 std::to_string(y)});
+      } else {
+        EXPECT_TRUE(held.empty());
+      }
     }
-  mergeTileStores(shards, merged);
+  // The merge's progress goes through the zooms it builds.
+  std::set<std::string> built;
+  Progress progress{[&](std::string_view stage, std::string_view detail, std::uint64_t done,
+                        std::uint64_t total) {
+    if (stage == "tiles.zoom" && done == total) built.emplace(detail);
+  }};
+  mergeTileStores(shards, merged, 2, &progress);
+  EXPECT_EQ(built, (std::set<std::string>{"zoom 0", "zoom 1"}));
+  return shards;
 }
 
 TEST(MosaicTop, OneRunsTopIsFittedToZoomKsMosaicAndItsShardsMergeIntoItsBytes) {
@@ -203,6 +226,89 @@ TEST(MosaicTop, ATinWithAnEmptyQuadrantHasATopWithAHoleAndItsShardsMergeIntoOneR
     EXPECT_FALSE(one.contains(tiles::tileContentKey(id))) << id.name();
   shardAndMerge(tin, "l.tin", dir, 2, dir / "merged.3dtiles");
   EXPECT_EQ(test::readFile(dir / "merged.3dtiles"), test::readFile(dir / "one.3dtiles"));
+}
+
+/// The message of the Error `run` throws ("" when it throws none).
+template <class Run>
+std::string errorOf(const Run& run) {
+  try {
+    run();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+TEST(MosaicTop, TheMergeNamesAShardThatLacksItsZoomKSurfaceOrDamagedIt) {
+  const fs::path dir = test::scratchDir("mosaic-top-surfaces");
+  const TinData tin = rippledTin();
+  std::vector<fs::path> shards = shardAndMerge(tin, "ripple.tin", dir, 2, dir / "merged.3dtiles");
+  const fs::path merged = dir / "again.3dtiles";
+  const std::string key = "tinsmith/surfaces/2/0/0";
+  const fs::path& shard00 = shards[1];  // subtree 2/0/0
+  ASSERT_EQ(shard00.filename(), "subtree-0-0.3dtiles");
+
+  // A resumed shard takes its tile and surface back, built again by nothing.
+  TileJobOptions subtree = mosaicOptions();
+  subtree.subtree = TileId{2, 0, 0};
+  subtree.uncheckedAncestors = true;
+  subtree.plan = std::make_shared<const TilingPlan>(readTilingPlan(dir / "tiler.plan"));
+  subtree.resume = true;
+  const std::string before = test::readFile(shard00);
+  EXPECT_EQ(runTileJob(tin, "ripple.tin", shard00, subtree).built, 0u);
+  EXPECT_EQ(test::readFile(shard00), before);
+
+  // Without the shard of a zoom-2 tile the top cannot be built.
+  std::vector<fs::path> without = shards;
+  without.erase(without.begin() + 1);
+  std::string what = errorOf([&] { mergeTileStores(without, merged); });
+  EXPECT_NE(what.find("tile 2/0/0, of the mosaic zoom 2"), std::string::npos) << what;
+  EXPECT_NE(what.find("add the shard of subtree 2/0/0"), std::string::npos) << what;
+
+  // Its surface damaged (the CRC-32 it finished with no longer holds).
+  const auto copyOf = [&](const fs::path& to, const std::vector<std::string>& keys) {
+    const auto from = store::openStoreForReading(shard00);
+    store::writeStore(*from, keys, to);
+    return store::openStoreForWriting(to, true);
+  };
+  const auto keysBut = [&](const std::string& left) {
+    std::vector<std::string> keys;
+    for (const auto& k : store::openStoreForReading(shard00)->keys())
+      if (k != left) keys.push_back(k);
+    return keys;
+  };
+  std::vector<fs::path> damaged = shards;
+  damaged[1] = dir / "damaged.3dtiles";
+  {
+    auto st = copyOf(damaged[1], keysBut(""));
+    std::string bytes = *st->get(key);
+    bytes[bytes.size() / 2] ^= 1;
+    st->put(key, bytes);
+  }
+  what = errorOf([&] { mergeTileStores(damaged, merged); });
+  EXPECT_NE(what.find("damaged.3dtiles"), std::string::npos) << what;
+  EXPECT_NE(what.find(key + " is damaged"), std::string::npos) << what;
+
+  // A shard as an older tinsmith wrote it: no surfaces, none listed.
+  std::vector<fs::path> older = shards;
+  older[1] = dir / "older.3dtiles";
+  {
+    auto st = copyOf(older[1], keysBut(key));
+    auto finished = nlohmann::json::parse(*st->get("tinsmith/shard-finished.json"));
+    finished.erase("surfaces");
+    st->put("tinsmith/shard-finished.json", finished.dump());
+  }
+  what = errorOf([&] { mergeTileStores(older, merged); });
+  EXPECT_NE(what.find("older.3dtiles"), std::string::npos) << what;
+  EXPECT_NE(what.find("built by an older tinsmith"), std::string::npos) << what;
+  // Its surface gone but still listed: a shard that lost it.
+  std::vector<fs::path> lost = shards;
+  lost[1] = dir / "lost.3dtiles";
+  (void)copyOf(lost[1], keysBut(key));
+  what = errorOf([&] { mergeTileStores(lost, merged); });
+  EXPECT_NE(what.find("holds 0 of the 1 tile surfaces its shard finished with"), std::string::npos)
+      << what;
+  EXPECT_FALSE(fs::exists(merged));
 }
 
 TEST(MosaicTop, ShardsAboveTheMosaicZoomAreRefusedBeforeAnythingIsWritten) {

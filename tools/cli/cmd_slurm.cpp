@@ -9,14 +9,18 @@
 //               plans the pyramid (the planning fit, which chooses the
 //               finest zoom; the lines simplified for each zoom) into
 //               tiler.plan (ingest/tiles/tiling_plan.hpp) and tiles the top
-//               of the pyramid (tinsmith tile --until-zoom Z --write-plan);
+//               of the pyramid (tinsmith tile --until-zoom Z --write-plan)
+//               — over 2^18 vertices only from the mosaic zoom K down, as
+//               every shard leaves the tiles above K to the merge;
 //               task k ≥ 1 the subtree Z/x/y with k − 1 = y · 2^Z + x, given
 //               the plan (--plan: it reads only its square of the TIN) and
 //               --subtree --unchecked-ancestors (a subtree under a tile that
 //               does not refine, or without terrain, is written all the
 //               same, and the merge leaves it out); shards/k.3dtiles,
 //               logs/shard-k.log;
-//   merge.sh    tinsmith merge of every shard into the output, then info,
+//   merge.sh    tinsmith merge of every shard into the output (building
+//               the tiles above K from the surfaces of the shards' zoom-K
+//               tiles, with the shards' cores), then info,
 //               then what each shard cost, from the "process:" line of
 //               tinsmith tile's summary in its log (logs/merge.log);
 // and with --submit runs `sbatch --array=0` (the top), `sbatch --array` of
@@ -121,11 +125,14 @@ std::string shardScript(const std::string& tinsmith, const fs::path& tin, const 
 }
 
 std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const fs::path& output,
-                        int tasks, bool strict) {
+                        int tasks, bool strict, int cpus) {
   std::ostringstream s;
   s << "#!/usr/bin/env bash\n"
-    << "# The merge of a tinsmith tiling job's shards (written by tinsmith slurm).\n"
+    << "# The merge of a tinsmith tiling job's shards (written by tinsmith slurm): over\n"
+    << "# 2^18 TIN vertices it also builds the tiles above the mosaic zoom, from the\n"
+    << "# shards' zoom-K tiles.\n"
     << "#SBATCH --job-name=tinsmith-merge\n"
+    << "#SBATCH --cpus-per-task=" << cpus << "\n"
     << "# Its log: logs/merge.log (sbatch --output, on the command line).\n"
     << "set -euo pipefail\n"
     << "shards=" << shellQuote((dir / "shards").string()) << "\n"
@@ -142,7 +149,8 @@ std::string mergeScript(const std::string& tinsmith, const fs::path& dir, const 
     // tolerance) is the job's, after the store, info and the costs.
     << "merged=0\n"
     << shellQuote(tinsmith) << " merge \"${stores[@]}\" -o " << shellQuote(output.string())
-    << (strict ? " --strict" : "") << " || merged=$?\n"
+    << " --threads \"${SLURM_CPUS_PER_TASK:-1}\"" << (strict ? " --strict" : "")
+    << " || merged=$?\n"
     << "if [ \"$merged\" -ne 0 ] && [ \"$merged\" -ne 1 ]; then exit \"$merged\"; fi\n"
     << shellQuote(tinsmith) << " info " << shellQuote(output.string())
     << "\n"
@@ -237,7 +245,8 @@ void runSlurm(const SlurmCliOptions& o) {
   makeFolder(dir / "logs");
   const int cpus = std::max(1, f.threads);
   writeAtomically(dir / "shard.sh", shardScript(tinsmith, tin, dir, args, o.shardZoom, cpus), true);
-  writeAtomically(dir / "merge.sh", mergeScript(tinsmith, dir, output, tasks, f.strict), true);
+  writeAtomically(dir / "merge.sh", mergeScript(tinsmith, dir, output, tasks, f.strict, cpus),
+                  true);
 
   std::vector<int> todo;
   if (f.resume) {

@@ -50,6 +50,7 @@ struct MergeCliOptions {
   bool json = false;
   bool quiet = false;
   bool strict = false;
+  int threads = 0;
 };
 
 }  // namespace
@@ -150,9 +151,14 @@ void addTileCommand(CLI::App& app) {
   mcmd->add_flag("--strict", merge->strict,
                  "Exit with code 1 (the store is still written) when a tile's measured error is "
                  "over its zoom's tolerance");
+  addThreadsOption(*mcmd, merge->threads,
+                   "Worker threads for the tiles above the mosaic zoom, which the merge builds "
+                   "from the shards' zoom-K tiles over 2^18 TIN vertices");
   mcmd->callback([merge] {
     std::vector<std::filesystem::path> inputs(merge->inputs.begin(), merge->inputs.end());
-    const auto summary = ingest::mergeTileStores(inputs, merge->output);
+    auto bar = terminalProgress(merge->quiet || merge->json);
+    const auto summary = ingest::mergeTileStores(inputs, merge->output, merge->threads, bar.get());
+    bar.bar.reset();
     reportTileJob(summary, merge->output, merge->json, merge->quiet);
     requireWithinTolerance(summary, merge->strict);
   });

@@ -4,8 +4,10 @@
 # each run as its array task would run (one thread), timed by /usr/bin/time —
 # per-shard peak memory and the shards' total CPU against the one run's —
 # then their merge, checked byte for byte against the one run. Task 0 plans
-# (the planning fit, once) and tiles the top; `tinsmith slurm` itself only
-# writes the scripts, and counts in the total too.
+# (the planning fit, once) and tiles the top down to the shard zoom, but
+# over 2^18 vertices not above the mosaic zoom K: the merge builds those
+# tiles from the shards' zoom-K tiles, and counts in the total;
+# `tinsmith slurm` itself only writes the scripts, and counts too.
 #
 #   bash tests/bench/slurm/shard_cost.sh TINSMITH TIN TOLERANCE SHARD_ZOOM [WORKDIR]
 # e.g. the Red Butte DEM-TIN of tests/bench/tiles/vs_martini.sh (KEEP=DIR keeps it)
@@ -42,9 +44,9 @@ awk -v ow="$ow" -v oc="$(echo "$ou $os" | awk '{print $1 + $2}')" -v om="$om" \
     printf "| one tinsmith tile | %.2f | %.0f |\n", oc, om / 1024
     printf "| tinsmith slurm (the scripts) | %.2f | %.0f |\n", pc, pm / 1024
     printf "| %d shards (sum of CPU; largest and smallest peak) | %.2f | %.0f (%.2f×), smallest %.0f |\n", tasks, cpu, peak / 1024, peak / om, min / 1024
-    printf "| task 0: the plan and the top | %.2f | %.0f |\n", top, topm / 1024
+    printf "| task 0: the plan and the top (from zoom K when K > 0) | %.2f | %.0f |\n", top, topm / 1024
     printf "| the largest subtree shard | | %.0f (%.2f×) |\n", subtree / 1024, subtree / om
-    printf "| scripts + shards | %.2f (%.2f×) | |\n", pc + cpu, (pc + cpu) / oc
-    printf "| merge | %.2f | %.0f |\n", mc, mm / 1024
+    printf "| merge (over 2^18 vertices: the tiles above K) | %.2f | %.0f |\n", mc, mm / 1024
+    printf "| scripts + shards + merge | %.2f (%.2f×) | |\n", pc + cpu + mc, (pc + cpu + mc) / oc
     printf "\nThe merged store and the one run: %s.\n", same
   }' times.txt

@@ -132,7 +132,8 @@ int main(int argc, char** argv) try {
   start = std::chrono::steady_clock::now();
   std::vector<double> errors;  // of the zoom-M tiles, row by row
   for (const auto& t : zoomM) errors.push_back(t.error);
-  const tiles::TilerOptions mosaicOptions = tiles::mosaicTopOptions(tiler, k, m, std::move(errors));
+  const tiles::TilerOptions mosaicOptions =
+      tiles::mosaicTopOptions(tiles::frameOf(tiler), k, m, std::move(errors));
   const tiles::Tiler mosaicTiler(mosaic.tin, mosaicOptions);
   std::vector<Built> fromMosaic(top.size());
   std::vector<tiles::TileSurface> mosaicSurfaces(top.size());

@@ -1,0 +1,131 @@
+#include "ingest/tiles/tile_surface_bytes.hpp"
+
+#include <bit>
+#include <cstdint>
+#include <type_traits>
+
+#include "core/base/error.hpp"
+
+namespace tinsmith::ingest {
+
+namespace {
+
+constexpr std::string_view kMagic = "TSURFv01";
+
+template <class T>
+using BitsOf = std::conditional_t<sizeof(T) == 8, std::uint64_t,
+                                  std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
+
+class Writer {
+ public:
+  template <class T>
+  void put(T value) {
+    const auto bits = std::bit_cast<BitsOf<T>>(value);
+    for (std::size_t i = 0; i < sizeof(T); ++i) bytes.push_back(static_cast<char>(bits >> (8 * i)));
+  }
+  std::string bytes;
+};
+
+class Reader {
+ public:
+  Reader(std::string_view bytes, const std::string& where) : bytes_(bytes), where_(where) {}
+  template <class T>
+  T get() {
+    need(sizeof(T));
+    BitsOf<T> bits = 0;
+    for (std::size_t i = 0; i < sizeof(T); ++i)
+      bits |= static_cast<BitsOf<T>>(
+          static_cast<BitsOf<T>>(static_cast<std::uint8_t>(bytes_[at_ + i])) << (8 * i));
+    at_ += sizeof(T);
+    return std::bit_cast<T>(bits);
+  }
+  void need(std::size_t n) const {
+    if (bytes_.size() - at_ < n) fail("it is cut short");
+  }
+  [[nodiscard]] bool atEnd() const { return at_ == bytes_.size(); }
+  [[noreturn]] void fail(const std::string& why) const {
+    throw inputError("the tile surface " + where_ + " is not one tinsmith writes: " + why, {},
+                     "build its shard again");
+  }
+
+ private:
+  std::string_view bytes_;
+  std::size_t at_ = 0;
+  const std::string& where_;
+};
+
+}  // namespace
+
+std::string tileSurfaceKey(const tiles::TileId& id) {
+  return "tinsmith/surfaces/" + id.name();
+}
+
+std::string encodeTileSurface(const tiles::TileSurface& s) {
+  if (s.heldEdges.size() != s.triangles.size() || s.riverEdges.size() != s.triangles.size() ||
+      s.flags.size() != s.vertices.size())
+    throw internalError("encodeTileSurface: tile " + s.id.name() + " lacks its flags or edges");
+  Writer w;
+  w.bytes.reserve(kMagic.size() + 72 + 26 * s.vertices.size() + 14 * s.triangles.size());
+  w.bytes += kMagic;
+  w.put(static_cast<std::uint32_t>(s.id.z));
+  w.put(s.id.x);
+  w.put(s.id.y);
+  for (const double v : {s.bounds.x0, s.bounds.y0, s.bounds.x1, s.bounds.y1, s.error, s.tolerance})
+    w.put(v);
+  w.put(static_cast<std::uint64_t>(s.vertices.size()));
+  w.put(static_cast<std::uint64_t>(s.triangles.size()));
+  for (const Point3& p : s.vertices) {
+    w.put(p.x);
+    w.put(p.y);
+    w.put(p.z);
+  }
+  for (const auto& t : s.triangles)
+    for (const std::uint32_t c : t) w.put(c);
+  for (const auto bits : s.heldEdges) w.put(bits);
+  for (const auto bits : s.riverEdges) w.put(bits);
+  for (const auto bits : s.flags) w.put(bits);
+  return std::move(w.bytes);
+}
+
+tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& where) {
+  Reader r(bytes, where);
+  r.need(kMagic.size());
+  if (bytes.substr(0, kMagic.size()) != kMagic)
+    r.fail("it does not start with " + std::string(kMagic));
+  for (std::size_t i = 0; i < kMagic.size(); ++i) (void)r.get<std::uint8_t>();
+  tiles::TileSurface s;
+  const auto z = r.get<std::uint32_t>();
+  if (z > 30) r.fail("its zoom is " + std::to_string(z));
+  s.id = {static_cast<int>(z), r.get<std::uint32_t>(), r.get<std::uint32_t>()};
+  if (s.id.x >> z || s.id.y >> z) r.fail("its tile " + s.id.name() + " is outside its zoom");
+  s.bounds.x0 = r.get<double>();
+  s.bounds.y0 = r.get<double>();
+  s.bounds.x1 = r.get<double>();
+  s.bounds.y1 = r.get<double>();
+  s.error = r.get<double>();
+  s.tolerance = r.get<double>();
+  const std::size_t nv = r.get<std::uint64_t>();
+  const std::size_t nt = r.get<std::uint64_t>();
+  // 25 bytes a vertex (x y z, flags), 14 a triangle (corners, held, river).
+  if (nv > bytes.size() / 25 || nt > bytes.size() / 14) r.fail("it is cut short");
+  r.need(25 * nv + 14 * nt);
+  s.vertices.resize(nv);
+  for (Point3& p : s.vertices) p = {r.get<double>(), r.get<double>(), r.get<double>()};
+  s.triangles.resize(nt);
+  for (auto& t : s.triangles) {
+    for (auto& c : t) {
+      c = r.get<std::uint32_t>();
+      if (c >= nv) r.fail("a triangle's corner " + std::to_string(c) + " is no vertex");
+    }
+  }
+  s.heldEdges.resize(nt);
+  for (auto& bits : s.heldEdges) bits = r.get<std::uint8_t>();
+  s.riverEdges.resize(nt);
+  for (auto& bits : s.riverEdges) bits = r.get<std::uint8_t>();
+  s.flags.resize(nv);
+  for (auto& bits : s.flags) bits = r.get<std::uint8_t>();
+  if (!r.atEnd()) r.fail("more bytes follow it");
+  return s;
+}
+
+}  // namespace tinsmith::ingest
