@@ -707,6 +707,7 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   // The walk's records are the stage's tiles: those it built and those a
   // resumed run found.
   const std::vector<TileRecord>& records = walked.records;
+  std::size_t surfaceCount = 0;
   if (shard.empty()) {
     finish(stage, stagePath, out, records, build, storeUntilZoom, terrainKeys);
   } else {
@@ -734,12 +735,17 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     if (handsSurfaces) finished["surfaces"] = surfaceCrcs;
     stage->put(kShardFinishedKey, finished.dump() + "\n");
     publish(stage, stagePath, out, canonicalKeys(*stage, records, {}, true, {}, surfaceKeys));
+    surfaceCount = surfaceKeys.size();
   }
   TileJobSummary summary = summarize(records, build);
   summary.terrain = std::move(terrain);
   summary.built = walked.built;
   summary.reused = walked.reused;
   summary.dataPoints = tiler ? tiler->dataPointCount() : 0;
+  if (handsSurfaces) {
+    summary.leftAboveZoom = mosaicZoom;
+    summary.surfacesHandedOver = surfaceCount;
+  }
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

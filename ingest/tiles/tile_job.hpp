@@ -163,6 +163,10 @@ struct TileJobSummary {
   int finestZoom = 0;
   int levelsPerTile = 0;
   std::size_t dataPoints = 0;
+  /// A shard over a mosaic zoom K ≥ 1: K (the tiles above it are the
+  /// merge's) and how many zoom-K tiles' surfaces it hands over; 0 else.
+  int leftAboveZoom = 0;
+  std::size_t surfacesHandedOver = 0;
   double seconds = 0;
   /// The whole process's CPU time and peak resident memory, as the command
   /// that ran the job measured them (a shard's log and report tell its

@@ -208,6 +208,14 @@ missing_logs=""
 for t in $(seq 0 "$subtrees"); do [ -s "$run/logs/shard-$t.log" ] || missing_logs+=" $t"; done
 expect "a log per task and one for the merge${missing_logs:+ (missing:$missing_logs)}" \
   test -z "$missing_logs" -a -s "$run/logs/merge.log"
+# Over 2^18 vertices (K = 2, the shard zoom) the top builds no tile: every
+# subtree hands its zoom-2 tile's surface over, and the merge builds the
+# tiles above zoom 2 from them.
+handed=$(for t in $(seq 1 "$subtrees"); do grep -h 'this shard hands over' "$run/logs/shard-$t.log" | tail -1; done |
+  awk '{ n += $(NF - 2) } END { print n + 0 }')
+zoom2=$(sqlite3 "$work/one.3dtiles" "select count(*) from media where key like 'tiles/2/%'")
+expect "task 0 leaves the tiles above zoom 2 to the merge, handing over no surface; the subtrees hand over $handed surfaces, one for each of the one run's $zoom2 zoom-2 tiles" \
+  test -n "$(grep 'the tiles above zoom 2 are the merge.s.*hands over 0 of them' "$run/logs/shard-0.log")" -a "$handed" -eq "${zoom2:-0}" -a "${zoom2:-0}" -gt 0
 expect "task $victim's log holds its failure and its retry" \
   test "$(grep -c '^tinsmith shard' "$run/logs/shard-$victim.log")" -eq 2
 exit 0

@@ -48,6 +48,12 @@ std::string tileSummaryText(const ingest::TileJobSummary& s) {
     out += format("  built %zu, kept %zu already in the store, %zu fit points, %.1f s\n", s.built,
                   s.reused, s.dataPoints, s.seconds);
   }
+  if (s.leftAboveZoom > 0) {
+    out += format(
+        "  the tiles above zoom %d are the merge's (tinsmith merge builds them from the zoom-%d "
+        "tiles' surfaces); this shard hands over %zu of them\n",
+        s.leftAboveZoom, s.leftAboveZoom, s.surfacesHandedOver);
+  }
   out +=
       "  zoom  tolerance m  tiles  triangles  bytes/triangle  max error m  break-line vertices\n";
   for (const auto& z : s.zooms) {
@@ -112,6 +118,10 @@ nlohmann::ordered_json tileSummaryObject(const ingest::TileJobSummary& s,
   j["levelsPerTile"] = s.levelsPerTile;
   j["fitPoints"] = s.dataPoints;
   j["seconds"] = s.seconds;
+  if (s.leftAboveZoom > 0) {
+    j["leftAboveZoom"] = s.leftAboveZoom;
+    j["surfacesHandedOver"] = s.surfacesHandedOver;
+  }
   if (s.cpuSeconds > 0 || s.peakMemoryBytes > 0) {
     j["cpuSeconds"] = s.cpuSeconds;
     j["peakMemoryBytes"] = s.peakMemoryBytes;
