@@ -194,11 +194,11 @@ PyramidSummary buildPyramid(const Tiler& tiler, const TileEncoder& encode, const
   std::vector<TileId> roots;
   for (std::uint32_t y = 0; y < side; ++y)
     for (std::uint32_t x = 0; x < side; ++x) roots.push_back({k, x, y});
-  const auto slot = [side](const TileId& id) { return std::size_t{id.y} * side + id.x; };
-  std::vector<std::optional<TileSurface>> kept(roots.size());
   if (handOver)
     return walk(tiler, encode, roots, threads, callbacks, untilZoom,
                 [&](TileSurface&& s) { handOver(s); });
+  const auto slot = [side](const TileId& id) { return std::size_t{id.y} * side + id.x; };
+  std::vector<std::optional<TileSurface>> kept(roots.size());
   PyramidSummary below = walk(tiler, encode, roots, threads, callbacks, untilZoom,
                               [&](TileSurface&& s) { kept[slot(s.id)] = std::move(s); });
   // Those the walk did not build (the caller had them, or it stops above

@@ -40,7 +40,9 @@ TileMosaic mosaicOf(std::span<const TileSurface> tiles, const std::string& crs);
 /// record names (a merge's, which has no TIN).
 struct PyramidFrame {
   /// The tiling options: tolerance, maxTriangles, lambdaFactor and geo are
-  /// read (the rest are a fixed pyramid's, set by mosaicTopOptions).
+  /// read (the rest are a fixed pyramid's, set by mosaicTopOptions). An
+  /// option that changes tiles goes into the build record too, which a
+  /// merge makes this from (ingest/tiles/tile_job.cpp).
   TilerOptions options;
   PyramidGeometry geometry{{0, 0}, 1};
   int finestZoom = 0;

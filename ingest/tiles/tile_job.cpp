@@ -809,11 +809,10 @@ ShardCoverage coverageOf(const store::TileStore& in) {
 /// build record names. `emit` takes each tile (z, y, x order). Throws
 /// inputError naming the shard when a surface is missing or damaged, and
 /// usageError when no shard answers for a zoom-K tile.
-tiles::PyramidSummary topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
-                                  const std::vector<ShardCoverage>& coverage,
-                                  const std::string& buildText, int threads,
-                                  const Progress* progress,
-                                  const std::function<void(const tiles::TileContent&)>& emit) {
+void topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
+                 const std::vector<ShardCoverage>& coverage, const std::string& buildText,
+                 int threads, const Progress* progress,
+                 const std::function<void(const tiles::TileContent&)>& emit) {
   tiles::PyramidFrame frame;
   std::string geoid, compression, contentFrame;
   try {
@@ -906,7 +905,7 @@ tiles::PyramidSummary topOfShards(const std::vector<std::unique_ptr<store::TileS
   callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
     reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
   };
-  return tiles::buildMosaicTop(frame, std::move(zoomK), content, threads, callbacks);
+  (void)tiles::buildMosaicTop(frame, std::move(zoomK), content, threads, callbacks);
 }
 
 }  // namespace
@@ -993,15 +992,14 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     const int mosaicZoom = b.at("pyramid").value("mosaicZoom", 0);
     if (mosaicZoom > 0 && std::all_of(coverage.begin(), coverage.end(),
                                       [](const ShardCoverage& c) { return c.shard; })) {
-      (void)topOfShards(shards, coverage, build, threads, progress,
-                        [&](const tiles::TileContent& c) {
-                          const std::string key = tiles::tileContentKey(c.record.id);
-                          stage->put(key, c.glb);
-                          from.emplace(key, kBuiltHere);
-                          TileRecord r = c.record;
-                          r.bytes = c.glb.size();
-                          found.push_back(std::move(r));
-                        });
+      topOfShards(shards, coverage, build, threads, progress, [&](const tiles::TileContent& c) {
+        const std::string key = tiles::tileContentKey(c.record.id);
+        stage->put(key, c.glb);
+        from.emplace(key, kBuiltHere);
+        TileRecord r = c.record;
+        r.bytes = c.glb.size();
+        found.push_back(std::move(r));
+      });
     }
     const auto bytesOf = [&](const std::string& key) {
       const std::size_t i = from.at(key);
@@ -1025,8 +1023,11 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
                            "then merge");
         if (from.contains(key)) {
           if (bytesOf(key) != bytes)
-            throw usageError("tile " + key + " differs between the shards" +
-                             (from.at(key) == kBuiltHere ? " and the top the merge built" : ""));
+            throw usageError(from.at(key) == kBuiltHere
+                                 ? "tile " + key + " of " + in->path().string() +
+                                       " differs from the one the merge built from the shards' "
+                                       "zoom-K surfaces"
+                                 : "tile " + key + " differs between the shards");
           continue;
         }
         from.emplace(key, i);
