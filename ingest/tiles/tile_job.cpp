@@ -978,6 +978,7 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
 
   auto stage = store::openStoreForWriting(stagePath, false);
   std::vector<TileRecord> records;
+  std::size_t builtHere = 0;  // the tiles above the mosaic zoom, when the merge builds them
   try {
     stage->put(kBuildKey, build);
     // Every tile of every shard, once (a tile two shards hold must be the
@@ -999,6 +1000,7 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
         TileRecord r = c.record;
         r.bytes = c.glb.size();
         found.push_back(std::move(r));
+        ++builtHere;
       });
     }
     const auto bytesOf = [&](const std::string& key) {
@@ -1090,7 +1092,8 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     throw;
   }
   TileJobSummary summary = summarize(records, build);
-  summary.reused = records.size();
+  summary.built = builtHere;
+  summary.reused = records.size() - builtHere;
   return summary;
 }
 

@@ -135,8 +135,11 @@ std::vector<fs::path> shardAndMerge(const TinData& tin, const std::string& name,
                         std::uint64_t total) {
     if (stage == "tiles.zoom" && done == total) built.emplace(detail);
   }};
-  mergeTileStores(shards, merged, 2, &progress);
+  const TileJobSummary summary = mergeTileStores(shards, merged, 2, &progress);
   EXPECT_EQ(built, (std::set<std::string>{"zoom 0", "zoom 1"}));
+  const auto above = keysOf(merged, "tiles/0/").size() + keysOf(merged, "tiles/1/").size();
+  EXPECT_EQ(summary.built, above);
+  EXPECT_EQ(summary.built + summary.reused, keysOf(merged, "tiles/").size());
   return shards;
 }
 
