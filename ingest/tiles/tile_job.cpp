@@ -479,10 +479,8 @@ void checkTileJobOptions(const TileJobOptions& o) {
                      "shard the 3D Tiles with --scheme 3d-tiles");
 }
 
-namespace {
-
-/// Where the local frame's east-north-up axes stand: the pyramid's centre.
-encode::Geodetic pyramidCentre(const tiles::PyramidGeometry& pyramid, const ProjGeoReference& geo) {
+encode::Geodetic pyramidCentre(const tiles::PyramidGeometry& pyramid,
+                               const tiles::GeoReference& geo) {
   const Point2 o = pyramid.origin();
   const double half = 0.5 * pyramid.size();
   const Point3 centre{o.x + half, o.y + half, 0.0};
@@ -490,6 +488,8 @@ encode::Geodetic pyramidCentre(const tiles::PyramidGeometry& pyramid, const Proj
   geo.toGeodetic({&centre, 1}, {&g, 1});
   return g;
 }
+
+namespace {
 
 /// The error for a subtree (or shard zoom) above the mosaic zoom K, `what`
 /// naming it: the tiles above K are fitted to the mosaic of all of zoom K's.
@@ -646,12 +646,13 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
   if (tiles3d) {
     tiles::PyramidCallbacks callbacks;
     if (options.resume) {
-      // The finished output's copy of `key`, when its bytes are those the
-      // shard finished with.
-      const auto fromPrevious = [&](const std::string& key, const auto& crcs) {
+      // The finished output's copy of `key`; a shard's only when it
+      // finished with it and these bytes (none of one that did not finish).
+      const bool previousIsShard = previous && previous->contains(kShardKey);
+      const auto fromPrevious = [&, previousIsShard](const std::string& key, const auto& crcs) {
         auto bytes = previous ? previous->get(key) : std::nullopt;
         if (const auto crc = crcs.find(key);
-            bytes && crc != crcs.end() && crc32(*bytes) != crc->second)
+            bytes && previousIsShard && (crc == crcs.end() || crc32(*bytes) != crc->second))
           bytes.reset();
         return bytes;
       };
@@ -683,12 +684,16 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName, const 
     callbacks.emit = [&](const tiles::TileContent& c) {
       const TileId& id = c.record.id;
       if (handsSurfaces && id.z == mosaicZoom) {
-        std::lock_guard lock(surfacesMutex);
-        const auto it = surfaces.find(id);
-        if (it == surfaces.end())
-          throw internalError("tile " + id.name() + " came without its surface");
-        stage->put(tileSurfaceKey(id), it->second);
-        surfaces.erase(it);
+        std::string bytes;
+        {
+          std::lock_guard lock(surfacesMutex);
+          const auto it = surfaces.find(id);
+          if (it == surfaces.end())
+            throw internalError("tile " + id.name() + " came without its surface");
+          bytes = std::move(it->second);
+          surfaces.erase(it);
+        }
+        stage->put(tileSurfaceKey(id), bytes);
       }
       if (id.z < storeUntilZoom) stage->put(tiles::tileContentKey(id), c.glb);
     };
@@ -803,18 +808,26 @@ ShardCoverage coverageOf(const store::TileStore& in) {
   return c;
 }
 
-/// The tiles above the mosaic zoom K of a job whose inputs are all shards,
-/// as one run builds them (tiles::buildMosaicTop): from the zoom-K surfaces
-/// the shards hand over, with the tiling options, pyramid and content the
-/// build record names. `emit` takes each tile (z, y, x order). Throws
-/// inputError naming the shard when a surface is missing or damaged, and
-/// usageError when no shard answers for a zoom-K tile.
-void topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
-                 const std::vector<ShardCoverage>& coverage, const std::string& buildText,
-                 int threads, const Progress* progress,
-                 const std::function<void(const tiles::TileContent&)>& emit) {
+/// What the merge of a job whose inputs are all shards builds the tiles
+/// above the mosaic zoom K from, as one run builds them
+/// (tiles::buildMosaicTop): the tiling options, pyramid and content the
+/// build record names, and every zoom-K tile's surface the shards hand over.
+struct ShardsTop {
   tiles::PyramidFrame frame;
-  std::string geoid, compression, contentFrame;
+  std::string geoid;
+  tiles::ContentOptions content;          ///< without its geo
+  std::vector<tiles::TileSurface> zoomK;  ///< row by row, empty where no shard holds one
+};
+
+/// Reads and checks a ShardsTop, before the merge touches its output.
+/// Throws inputError naming the shard when a surface is missing, damaged or
+/// not one tinsmith writes, and usageError when no shard answers for a
+/// zoom-K tile.
+ShardsTop readShardsTop(const std::vector<std::unique_ptr<store::TileStore>>& shards,
+                        const std::vector<ShardCoverage>& coverage, const std::string& buildText) {
+  ShardsTop top;
+  tiles::PyramidFrame& frame = top.frame;
+  std::string compression, contentFrame;
   try {
     const auto b = nlohmann::json::parse(buildText);
     const auto& o = b.at("options");
@@ -829,7 +842,7 @@ void topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
     frame.maxZoom = o.at("maxZoom").get<int>();
     frame.mosaicZoom = p.at("mosaicZoom").get<int>();
     frame.crs = b.at("tin").at("crs").get<std::string>();
-    geoid = o.at("geoid").get<std::string>();
+    top.geoid = o.at("geoid").get<std::string>();
     compression = o.at("compression").get<std::string>();
     contentFrame = o.at("frame").get<std::string>();
   } catch (const nlohmann::json::exception& e) {
@@ -838,15 +851,25 @@ void topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
         fileLocation(shards.front()->path().string()), "build the shards again");
   }
   const int k = frame.mosaicZoom;
-  if (k < 1 || k > 15 || !parseCompression(compression) || !parseContentFrame(contentFrame))
+  const auto parsedCompression = parseCompression(compression);
+  const auto parsedFrame = parseContentFrame(contentFrame);
+  // K is at most the finest zoom; its 4^K surfaces are made before a shard
+  // is read.
+  if (k < 1 || k > std::min(frame.finestZoom, 12) || !parsedCompression || !parsedFrame ||
+      !isKnownGeoid(top.geoid))
     throw inputError("the shards' build record names mosaic zoom " + std::to_string(k) +
-                         ", compression '" + compression + "' and frame '" + contentFrame + "'",
+                         " (finest zoom " + std::to_string(frame.finestZoom) + "), compression '" +
+                         compression + "', frame '" + contentFrame + "' and geoid '" + top.geoid +
+                         "'",
                      fileLocation(shards.front()->path().string()), "build the shards again");
+  top.content.compression = *parsedCompression;
+  top.content.frame = *parsedFrame;
 
   // Every zoom-K tile's surface, row by row: from the shards that answer
   // for it (the same bytes in each), empty where they hold none.
   const std::uint32_t side = 1U << k;
-  std::vector<tiles::TileSurface> zoomK(std::size_t{side} * side);
+  auto& zoomK = top.zoomK;
+  zoomK.resize(std::size_t{side} * side);
   for (std::uint32_t y = 0; y < side; ++y) {
     for (std::uint32_t x = 0; x < side; ++x) {
       const TileId id{k, x, y};
@@ -893,19 +916,23 @@ void topOfShards(const std::vector<std::unique_ptr<store::TileStore>>& shards,
     }
   }
 
-  const ProjGeoReference geo(frame.crs, geoid);
-  frame.options.geo = &geo;
-  tiles::ContentOptions content;
-  content.compression = *parseCompression(compression);
-  content.frame = *parseContentFrame(contentFrame);
-  content.geo = &geo;
-  content.localOrigin = pyramidCentre(frame.geometry, geo);
+  return top;
+}
+
+/// Builds the tiles above the mosaic zoom from `top`; `emit` takes each
+/// one, in (z, y, x) order.
+void buildShardsTop(ShardsTop top, int threads, const Progress* progress,
+                    const std::function<void(const tiles::TileContent&)>& emit) {
+  const ProjGeoReference geo(top.frame.crs, top.geoid);
+  top.frame.options.geo = &geo;
+  top.content.geo = &geo;
+  top.content.localOrigin = pyramidCentre(top.frame.geometry, geo);
   tiles::PyramidCallbacks callbacks;
   callbacks.emit = emit;
   callbacks.progress = [&](int z, std::size_t done, std::size_t total) {
     reportProgress(progress, "tiles.zoom", "zoom " + std::to_string(z), done, total);
   };
-  (void)tiles::buildMosaicTop(frame, std::move(zoomK), content, threads, callbacks);
+  (void)tiles::buildMosaicTop(top.frame, std::move(top.zoomK), top.content, threads, callbacks);
 }
 
 }  // namespace
@@ -918,14 +945,22 @@ bool isFinishedShard(const fs::path& path, bool checkTileBytes) {
     if (!in->contains(kShardKey)) return false;
     const ShardFinish finish = shardFinish(*in);
     if (finish.unfinished) return false;
+    // A shard of an older tinsmith hands over no zoom-K surfaces, which the
+    // merge of a job with a mosaic zoom needs.
+    const auto build = nlohmann::json::parse(in->get(kBuildKey).value_or(""), nullptr, false);
+    if (!finish.surfaceCrcs && build.is_object() &&
+        build.value("/pyramid/mosaicZoom"_json_pointer, 0) > 0)
+      return false;
     if (!checkTileBytes) return true;
-    // A tile whose bytes are not those the shard finished with (a shared
-    // filesystem's damage) would fail the merge.
-    for (const auto& [key, crc] : finish.tileCrcs) {
-      const auto bytes = in->get(key);
-      if (!bytes || crc32(*bytes) != crc) return false;
-    }
-    return true;
+    // A tile or surface whose bytes are not those the shard finished with (a
+    // shared filesystem's damage) would fail the merge.
+    const auto intact = [&](const std::map<std::string, std::uint32_t>& crcs) {
+      return std::all_of(crcs.begin(), crcs.end(), [&](const auto& kv) {
+        const auto bytes = in->get(kv.first);
+        return bytes && crc32(*bytes) == kv.second;
+      });
+    };
+    return intact(finish.tileCrcs) && (!finish.surfaceCrcs || intact(*finish.surfaceCrcs));
   } catch (const Error&) {
     return false;
   }
@@ -967,10 +1002,20 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
   if (std::none_of(coverage.begin(), coverage.end(),
                    [](const ShardCoverage& s) { return s.covers(TileId{}); }))
     throw usageError(
-        "none of the stores is the top of the pyramid (tile 0/0/0 and the tiles "
-        "above the subtrees)",
+        "none of the stores is the top of the pyramid (the shard that answers for tile "
+        "0/0/0 and the tiles above the subtrees, and holds the TIN)",
         "add the top shard, built with tinsmith tile --until-zoom (task 0 of "
         "tinsmith slurm: shards/0.3dtiles)");
+  // Over a mosaic zoom, when every input is a shard, the merge builds the
+  // tiles above it (a finished store holds them): their surfaces are read
+  // and checked here.
+  const auto b = nlohmann::json::parse(build);
+  // (A store of tinsmith-tiles/4 or older has none: its top was the TIN's.)
+  const int mosaicZoom = b.at("pyramid").value("mosaicZoom", 0);
+  std::optional<ShardsTop> top;
+  if (mosaicZoom > 0 &&
+      std::all_of(coverage.begin(), coverage.end(), [](const ShardCoverage& c) { return c.shard; }))
+    top = readShardsTop(shards, coverage, build);
   store::requireReplaceable(out);
   store::requireReplaceable(stagePath);
   store::removeStaleTemps(out);
@@ -988,25 +1033,6 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
     constexpr std::size_t kBuiltHere = SIZE_MAX;
     std::map<std::string, std::size_t> from;
     std::vector<TileRecord> found;
-    const auto b = nlohmann::json::parse(build);
-    // (A store of tinsmith-tiles/4 or older has none: its top was the TIN's.)
-    const int mosaicZoom = b.at("pyramid").value("mosaicZoom", 0);
-    if (mosaicZoom > 0 && std::all_of(coverage.begin(), coverage.end(),
-                                      [](const ShardCoverage& c) { return c.shard; })) {
-      topOfShards(shards, coverage, build, threads, progress, [&](const tiles::TileContent& c) {
-        const std::string key = tiles::tileContentKey(c.record.id);
-        stage->put(key, c.glb);
-        from.emplace(key, kBuiltHere);
-        TileRecord r = c.record;
-        r.bytes = c.glb.size();
-        found.push_back(std::move(r));
-        ++builtHere;
-      });
-    }
-    const auto bytesOf = [&](const std::string& key) {
-      const std::size_t i = from.at(key);
-      return i == kBuiltHere ? stage->get(key) : shards[i]->get(key);
-    };
     for (std::size_t i = 0; i < shards.size(); ++i) {
       const auto& in = shards[i];
       if (!store::holdsTin(*stage)) store::copyTin(*in, *stage);  // a piece at a time
@@ -1023,19 +1049,35 @@ TileJobSummary mergeTileStores(const std::vector<fs::path>& inputs, const fs::pa
                            "build the shard again (tinsmith slurm … --resume --submit "
                            "reruns it, or its tinsmith tile command without --resume), "
                            "then merge");
-        if (from.contains(key)) {
-          if (bytesOf(key) != bytes)
-            throw usageError(from.at(key) == kBuiltHere
-                                 ? "tile " + key + " of " + in->path().string() +
-                                       " differs from the one the merge built from the shards' "
-                                       "zoom-K surfaces"
-                                 : "tile " + key + " differs between the shards");
+        if (const auto there = from.find(key); there != from.end()) {
+          if (shards[there->second]->get(key) != bytes)
+            throw usageError("tile " + key + " differs between the shards");
           continue;
         }
         from.emplace(key, i);
         found.push_back(recordOfTile(key, *bytes, in->path()));
       }
       decltype(coverage[i].tileCrcs)().swap(coverage[i].tileCrcs);  // checked: let go
+    }
+    if (top) {
+      buildShardsTop(std::move(*top), threads, progress, [&](const tiles::TileContent& c) {
+        const std::string key = tiles::tileContentKey(c.record.id);
+        // A shard of an older tinsmith held the top.
+        if (const auto there = from.find(key); there != from.end()) {
+          if (shards[there->second]->get(key) != c.glb)
+            throw usageError("tile " + key + " of " + shards[there->second]->path().string() +
+                             " differs from the one the merge built from the shards' zoom-" +
+                             std::to_string(mosaicZoom) + " surfaces");
+          return;
+        }
+        stage->put(key, c.glb);
+        from.emplace(key, kBuiltHere);
+        TileRecord r = c.record;
+        r.bytes = c.glb.size();
+        found.push_back(std::move(r));
+        ++builtHere;
+      });
+      top.reset();
     }
     sortRecords(found);
     const double tolerance = b["options"]["tolerance"].get<double>();

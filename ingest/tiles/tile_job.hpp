@@ -23,7 +23,12 @@
 // (store::requireReplaceable), and every option is checked before either is
 // touched. A shard's store also holds tinsmith/shard.json, the part of the
 // pyramid it answers for, and once finished tinsmith/shard-finished.json
-// (its tiles' count and each one's CRC-32, which merge checks).
+// (its tiles' count and each one's CRC-32, which merge checks). Over a
+// mosaic zoom K (tiles::TilerOptions::mosaicPoints) a shard holds no tile
+// above K and hands over instead, for each zoom-K tile it holds,
+//   tinsmith/surfaces/{z}/{x}/{y}  the tile's surface (tile_surface_bytes.hpp;
+//                         its CRC-32 in shard-finished.json too), of which
+//                         merge builds the tiles above K.
 #pragma once
 
 #include <cstddef>
@@ -199,11 +204,18 @@ TileJobSummary runTileJob(const TinData& tin, const std::string& tinName,
                           const std::filesystem::path& output, const TileJobOptions& options,
                           const Progress* progress = nullptr);
 
+/// Where a local frame's east-north-up axes stand: the pyramid's centre on
+/// the ground (height 0 in the project CRS).
+encode::Geodetic pyramidCentre(const tiles::PyramidGeometry& pyramid,
+                               const tiles::GeoReference& geo);
+
 /// Whether `path` is a shard's store that finished, as merge takes it: not a
 /// stage left by a shard that was killed, failed or is still running, nor
-/// one that lost tiles, nor a damaged or missing store; with
-/// `checkTileBytes`, nor one holding a tile whose bytes are not those it
-/// finished with (their CRC-32: every tile is read, the store's size).
+/// one that lost tiles or surfaces, nor a damaged or missing store, nor an
+/// older tinsmith's shard of a job with a mosaic zoom (it hands over no
+/// surfaces); with `checkTileBytes`, nor one holding a tile or surface whose
+/// bytes are not those it finished with (their CRC-32: every one is read,
+/// the store's size).
 bool isFinishedShard(const std::filesystem::path& path, bool checkTileBytes = false);
 
 /// Joins stores built from the same TIN and options (shards: subtrees and the
@@ -217,10 +229,11 @@ bool isFinishedShard(const std::filesystem::path& path, bool checkTileBytes = fa
 /// none of them (a shard that answers for the child and lacks it found it
 /// empty). Over a mosaic zoom K ≥ 1, when every input is a shard (none
 /// holds the tiles above K), it builds those tiles, on `threads` (0: all
-/// cores), from the surfaces of zoom K's tiles the shards hand over
-/// (inputError naming a shard that lacks one or whose bytes are damaged,
-/// usageError when no shard answers for a zoom-K tile), with the options
-/// the build record names: the bytes of one run.
+/// cores), from the surfaces of zoom K's tiles the shards hand over, with
+/// the options the build record names: the bytes of one run. The surfaces
+/// are read and checked before the output is touched (inputError naming a
+/// shard that lacks one or whose bytes are damaged, usageError when no
+/// shard answers for a zoom-K tile).
 TileJobSummary mergeTileStores(const std::vector<std::filesystem::path>& inputs,
                                const std::filesystem::path& output, int threads = 0,
                                const Progress* progress = nullptr);

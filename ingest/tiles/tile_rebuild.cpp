@@ -94,10 +94,7 @@ TileRebuilder::TileRebuilder(std::string_view build, std::string_view tin, const
   content.compression = o.compression;
   content.frame = o.frame;
   content.geo = state_->geo.get();
-  const Point2 origin = tiler.geometry().origin();
-  const double half = 0.5 * tiler.geometry().size();
-  const Point3 centre{origin.x + half, origin.y + half, 0.0};
-  state_->geo->toGeodetic({&centre, 1}, {&content.localOrigin, 1});
+  content.localOrigin = pyramidCentre(tiler.geometry(), *state_->geo);
 
   const bool samePyramid =
       tiler.geometry().origin().x == r.number("/pyramid/origin/0") &&

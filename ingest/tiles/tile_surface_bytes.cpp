@@ -1,6 +1,7 @@
 #include "ingest/tiles/tile_surface_bytes.hpp"
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <type_traits>
 
@@ -38,6 +39,12 @@ class Reader {
           static_cast<BitsOf<T>>(static_cast<std::uint8_t>(bytes_[at_ + i])) << (8 * i));
     at_ += sizeof(T);
     return std::bit_cast<T>(bits);
+  }
+  std::string_view take(std::size_t n) {
+    need(n);
+    const std::string_view v = bytes_.substr(at_, n);
+    at_ += n;
+    return v;
   }
   void need(std::size_t n) const {
     if (bytes_.size() - at_ < n) fail("it is cut short");
@@ -89,10 +96,7 @@ std::string encodeTileSurface(const tiles::TileSurface& s) {
 
 tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& where) {
   Reader r(bytes, where);
-  r.need(kMagic.size());
-  if (bytes.substr(0, kMagic.size()) != kMagic)
-    r.fail("it does not start with " + std::string(kMagic));
-  for (std::size_t i = 0; i < kMagic.size(); ++i) (void)r.get<std::uint8_t>();
+  if (r.take(kMagic.size()) != kMagic) r.fail("it does not start with " + std::string(kMagic));
   tiles::TileSurface s;
   const auto z = r.get<std::uint32_t>();
   if (z > 30) r.fail("its zoom is " + std::to_string(z));
@@ -104,13 +108,21 @@ tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& 
   s.bounds.y1 = r.get<double>();
   s.error = r.get<double>();
   s.tolerance = r.get<double>();
+  if (!(s.error >= 0) || !std::isfinite(s.error) || !(s.tolerance >= 0) ||
+      !std::isfinite(s.tolerance))
+    r.fail("its error is " + std::to_string(s.error) + " and tolerance " +
+           std::to_string(s.tolerance) + " m");
   const std::size_t nv = r.get<std::uint64_t>();
   const std::size_t nt = r.get<std::uint64_t>();
   // 25 bytes a vertex (x y z, flags), 14 a triangle (corners, held, river).
   if (nv > bytes.size() / 25 || nt > bytes.size() / 14) r.fail("it is cut short");
   r.need(25 * nv + 14 * nt);
   s.vertices.resize(nv);
-  for (Point3& p : s.vertices) p = {r.get<double>(), r.get<double>(), r.get<double>()};
+  for (Point3& p : s.vertices) {
+    p = {r.get<double>(), r.get<double>(), r.get<double>()};
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      r.fail("a vertex is not finite");
+  }
   s.triangles.resize(nt);
   for (auto& t : s.triangles) {
     for (auto& c : t) {
@@ -118,12 +130,20 @@ tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& 
       if (c >= nv) r.fail("a triangle's corner " + std::to_string(c) + " is no vertex");
     }
   }
+  // Three edge bits a triangle, a river's among its held ones; six flag
+  // bits a vertex.
   s.heldEdges.resize(nt);
-  for (auto& bits : s.heldEdges) bits = r.get<std::uint8_t>();
+  for (auto& bits : s.heldEdges)
+    if ((bits = r.get<std::uint8_t>()) > 7)
+      r.fail("a triangle's held edges are " + std::to_string(bits));
   s.riverEdges.resize(nt);
-  for (auto& bits : s.riverEdges) bits = r.get<std::uint8_t>();
+  for (std::size_t t = 0; t < nt; ++t)
+    if ((s.riverEdges[t] = r.get<std::uint8_t>()) & ~s.heldEdges[t])
+      r.fail("a triangle's river edges are not among its held ones");
   s.flags.resize(nv);
-  for (auto& bits : s.flags) bits = r.get<std::uint8_t>();
+  for (auto& bits : s.flags)
+    if ((bits = r.get<std::uint8_t>()) > 0x3f)
+      r.fail("a vertex's flags are " + std::to_string(bits));
   if (!r.atEnd()) r.fail("more bytes follow it");
   return s;
 }

@@ -289,6 +289,10 @@ TEST(MosaicTop, TheMergeNamesAShardThatLacksItsZoomKSurfaceOrDamagedIt) {
     st->put(key, bytes);
   }
   what = errorOf([&] { mergeTileStores(damaged, merged); });
+  // tinsmith slurm --resume reruns it: read through, it is no finished shard.
+  EXPECT_TRUE(isFinishedShard(shard00, true));
+  EXPECT_TRUE(isFinishedShard(damaged[1], false));
+  EXPECT_FALSE(isFinishedShard(damaged[1], true));
   EXPECT_NE(what.find("damaged.3dtiles"), std::string::npos) << what;
   EXPECT_NE(what.find(key + " is damaged"), std::string::npos) << what;
 
@@ -304,6 +308,7 @@ TEST(MosaicTop, TheMergeNamesAShardThatLacksItsZoomKSurfaceOrDamagedIt) {
   what = errorOf([&] { mergeTileStores(older, merged); });
   EXPECT_NE(what.find("older.3dtiles"), std::string::npos) << what;
   EXPECT_NE(what.find("built by an older tinsmith"), std::string::npos) << what;
+  EXPECT_FALSE(isFinishedShard(older[1], false));
   // Its surface gone but still listed: a shard that lost it.
   std::vector<fs::path> lost = shards;
   lost[1] = dir / "lost.3dtiles";
@@ -311,6 +316,7 @@ TEST(MosaicTop, TheMergeNamesAShardThatLacksItsZoomKSurfaceOrDamagedIt) {
   what = errorOf([&] { mergeTileStores(lost, merged); });
   EXPECT_NE(what.find("holds 0 of the 1 tile surfaces its shard finished with"), std::string::npos)
       << what;
+  EXPECT_FALSE(isFinishedShard(lost[1], false));
   EXPECT_FALSE(fs::exists(merged));
 }
 

@@ -114,6 +114,20 @@ TEST(TileSurfaceBytes, BytesThatAreNotASurfaceAreRefusedNamingWhere) {
   std::string outside = good;
   outside[8 + 4] = 9;  // x = 9 at zoom 2
   expectRefused(outside, "outside its zoom");
+  // Values no tile has: a NaN error, an infinite vertex, a fourth edge
+  // bit, a river edge that is not held, a seventh flag bit.
+  const auto with = [&](std::size_t at, const std::string& bytes) {
+    std::string b = good;
+    b.replace(at, bytes.size(), bytes);
+    return b;
+  };
+  const std::string nan(8, '\xff');
+  expectRefused(with(8 + 12 + 32, nan), "its error is");
+  expectRefused(with(8 + 12 + 48 + 16 + 8, nan), "a vertex is not finite");
+  const std::size_t bits = 8 + 12 + 48 + 16 + 72 + 12;  // held, river, then flags
+  expectRefused(with(bits, "\x08"), "held edges are 8");
+  expectRefused(with(bits + 1, "\x02"), "river edges are not among its held ones");
+  expectRefused(with(bits + 2, "\x40"), "flags are 64");
   EXPECT_EQ(refusal(good), "read");
 }
 

@@ -2,7 +2,8 @@
 //   tinsmith tile SITE.tin -o SITE.3dtiles [--tolerance M] [--threads N] [--resume]
 //   tinsmith tile SITE.tin -o PART.3dtiles --subtree Z/X/Y     (one shard)
 //       [--plan tiler.plan --unchecked-ancestors]   (reads only its square of the TIN)
-//   tinsmith tile SITE.tin -o TOP.3dtiles --until-zoom Z       (the tiles above the shards)
+//   tinsmith tile SITE.tin -o TOP.3dtiles --until-zoom Z       (the tiles above the shards;
+//       over 2^18 vertices only from the mosaic zoom K down: merge builds those above K)
 //       [--write-plan tiler.plan]          (and the plan the subtree shards take)
 //   tinsmith merge TOP.3dtiles PART*.3dtiles -o SITE.3dtiles
 //   tinsmith tile SITE.tin -o SITE.3dtiles --store-until-zoom Z (deeper tiles
@@ -71,7 +72,8 @@ void addTileCommand(CLI::App& app) {
                 "pyramid; the shard is written in any case, and merge drops it when it is not "
                 "(shard arrays)");
   cmd->add_option("--until-zoom", opt->untilZoom,
-                  "Build only the tiles above this zoom: the shards' top");
+                  "Build only the tiles above this zoom: the shards' top (over 2^18 TIN "
+                  "vertices, not above the mosaic zoom: tinsmith merge builds those)");
   cmd->add_option("--store-until-zoom", opt->storeUntilZoom,
                   "Plan every tile (tileset.json lists them all) but store only those above "
                   "this zoom (and always those above the mosaic zoom of a TIN of over 2^18 "
