@@ -1,65 +1,16 @@
 #include "ingest/tiles/tile_surface_bytes.hpp"
 
-#include <bit>
 #include <cmath>
 #include <cstdint>
-#include <type_traits>
 
 #include "core/base/error.hpp"
+#include "ingest/base/le_bytes.hpp"
 
 namespace tinsmith::ingest {
 
 namespace {
 
 constexpr std::string_view kMagic = "TSURFv01";
-
-template <class T>
-using BitsOf = std::conditional_t<sizeof(T) == 8, std::uint64_t,
-                                  std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
-
-class Writer {
- public:
-  template <class T>
-  void put(T value) {
-    const auto bits = std::bit_cast<BitsOf<T>>(value);
-    for (std::size_t i = 0; i < sizeof(T); ++i) bytes.push_back(static_cast<char>(bits >> (8 * i)));
-  }
-  std::string bytes;
-};
-
-class Reader {
- public:
-  Reader(std::string_view bytes, const std::string& where) : bytes_(bytes), where_(where) {}
-  template <class T>
-  T get() {
-    need(sizeof(T));
-    BitsOf<T> bits = 0;
-    for (std::size_t i = 0; i < sizeof(T); ++i)
-      bits |= static_cast<BitsOf<T>>(
-          static_cast<BitsOf<T>>(static_cast<std::uint8_t>(bytes_[at_ + i])) << (8 * i));
-    at_ += sizeof(T);
-    return std::bit_cast<T>(bits);
-  }
-  std::string_view take(std::size_t n) {
-    need(n);
-    const std::string_view v = bytes_.substr(at_, n);
-    at_ += n;
-    return v;
-  }
-  void need(std::size_t n) const {
-    if (bytes_.size() - at_ < n) fail("it is cut short");
-  }
-  [[nodiscard]] bool atEnd() const { return at_ == bytes_.size(); }
-  [[noreturn]] void fail(const std::string& why) const {
-    throw inputError("the tile surface " + where_ + " is not one tinsmith writes: " + why, {},
-                     "build its shard again");
-  }
-
- private:
-  std::string_view bytes_;
-  std::size_t at_ = 0;
-  const std::string& where_;
-};
 
 }  // namespace
 
@@ -71,7 +22,7 @@ std::string encodeTileSurface(const tiles::TileSurface& s) {
   if (s.heldEdges.size() != s.triangles.size() || s.riverEdges.size() != s.triangles.size() ||
       s.flags.size() != s.vertices.size())
     throw internalError("encodeTileSurface: tile " + s.id.name() + " lacks its flags or edges");
-  Writer w;
+  LeWriter w;
   w.bytes.reserve(kMagic.size() + 72 + 26 * s.vertices.size() + 14 * s.triangles.size());
   w.bytes += kMagic;
   w.put(static_cast<std::uint32_t>(s.id.z));
@@ -95,7 +46,11 @@ std::string encodeTileSurface(const tiles::TileSurface& s) {
 }
 
 tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& where) {
-  Reader r(bytes, where);
+  const LeReader::Fail fail = [&where](const std::string& why) {
+    throw inputError("the tile surface " + where + " is not one tinsmith writes: " + why, {},
+                     "build its shard again");
+  };
+  LeReader r(bytes, fail);
   if (r.take(kMagic.size()) != kMagic) r.fail("it does not start with " + std::string(kMagic));
   tiles::TileSurface s;
   const auto z = r.get<std::uint32_t>();
@@ -115,7 +70,7 @@ tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& 
   const std::size_t nv = r.get<std::uint64_t>();
   const std::size_t nt = r.get<std::uint64_t>();
   // 25 bytes a vertex (x y z, flags), 14 a triangle (corners, held, river).
-  if (nv > bytes.size() / 25 || nt > bytes.size() / 14) r.fail("it is cut short");
+  if (nv > bytes.size() / 25 || nt > bytes.size() / 14) r.fail("it ends early");
   r.need(25 * nv + 14 * nt);
   s.vertices.resize(nv);
   for (Point3& p : s.vertices) {

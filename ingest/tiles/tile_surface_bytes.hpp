@@ -25,8 +25,8 @@ std::string tileSurfaceKey(const tiles::TileId& id);
 std::string encodeTileSurface(const tiles::TileSurface& surface);
 
 /// The surface encodeTileSurface wrote. Throws inputError naming `where`
-/// (the store and key) when the bytes are not one: another format, cut
-/// short or with more after it, a tile outside its zoom, an error or vertex
+/// (the store and key) when the bytes are not one: another format, ending
+/// early or with more after them, a tile outside its zoom, an error or vertex
 /// that is not finite (or a negative error), a corner that is no vertex,
 /// edge or flag bits no tile has.
 tiles::TileSurface decodeTileSurface(std::string_view bytes, const std::string& where);

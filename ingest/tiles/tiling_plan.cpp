@@ -9,6 +9,7 @@
 
 #include "core/base/error.hpp"
 #include "ingest/base/atomic_file.hpp"
+#include "ingest/base/le_bytes.hpp"
 #include "ingest/tinfile/tin_file.hpp"
 
 namespace tinsmith::ingest {
@@ -17,49 +18,13 @@ namespace {
 
 constexpr std::string_view kMagic{"\x89TSPLAN\n", 8};
 
-class Writer {
- public:
-  template <class T>
-  void put(T value) {
-    using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
-                                 std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
-    const U bits = std::bit_cast<U>(value);
-    for (std::size_t i = 0; i < sizeof(T); ++i) out.push_back(static_cast<char>(bits >> (8 * i)));
-  }
-  std::string out;
-};
-
-class Reader {
- public:
-  Reader(std::string_view bytes, const std::string& name) : bytes_(bytes), name_(name) {}
-  template <class T>
-  T get() {
-    using U = std::conditional_t<sizeof(T) == 8, std::uint64_t,
-                                 std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint8_t>>;
-    if (bytes_.size() - at_ < sizeof(T)) bad("it ends early");
-    U bits = 0;
-    for (std::size_t i = 0; i < sizeof(T); ++i)
-      bits |= static_cast<U>(static_cast<U>(static_cast<std::uint8_t>(bytes_[at_ + i])) << (8 * i));
-    at_ += sizeof(T);
-    return std::bit_cast<T>(bits);
-  }
-  /// A count of records of `size` bytes each that the rest can hold.
-  std::size_t count(std::size_t size) {
-    const auto n = get<std::uint64_t>();
-    if (n > (bytes_.size() - at_) / size) bad("a count is larger than the file");
-    return static_cast<std::size_t>(n);
-  }
-  [[nodiscard]] std::size_t at() const { return at_; }
-  [[noreturn]] void bad(const std::string& what) const {
-    throw inputError("not a tiling plan tinsmith can read: " + what, fileLocation(name_),
+/// A reader whose failures say the plan is not one tinsmith reads.
+LeReader planReader(std::string_view bytes, const std::string& name) {
+  return LeReader(bytes, [&name](const std::string& why) {
+    throw inputError("not a tiling plan tinsmith can read: " + why, fileLocation(name),
                      "plan the job again (tinsmith slurm in a new --workdir)");
-  }
-
- private:
-  std::string_view bytes_;
-  const std::string& name_;
-  std::size_t at_ = 0;
-};
+  });
+}
 
 }  // namespace
 
@@ -81,8 +46,8 @@ TilingPlan makeTilingPlan(const tiles::Tiler& tiler, const tiles::TilerOptions& 
 }
 
 std::string encodeTilingPlan(const TilingPlan& plan) {
-  Writer w;
-  w.out.append(kMagic);
+  LeWriter w;
+  w.bytes.append(kMagic);
   w.put(kTilingPlanVersion);
   w.put(plan.tin.crc32);
   w.put(plan.tin.vertices);
@@ -124,21 +89,21 @@ std::string encodeTilingPlan(const TilingPlan& plan) {
     w.put(c.column);
     w.put(c.z);
   }
-  w.put(crc32(w.out));
-  return std::move(w.out);
+  w.put(crc32(w.bytes));
+  return std::move(w.bytes);
 }
 
 TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
-  Reader r(bytes, name);
-  if (bytes.substr(0, kMagic.size()) != kMagic) r.bad("wrong magic bytes");
-  if (bytes.size() < kMagic.size() + 8) r.bad("it ends early");
+  LeReader r = planReader(bytes, name);
+  if (bytes.substr(0, kMagic.size()) != kMagic) r.fail("wrong magic bytes");
+  if (bytes.size() < kMagic.size() + 8) r.fail("it ends early");
   const std::string_view body = bytes.substr(0, bytes.size() - 4);
-  Reader tail(bytes.substr(bytes.size() - 4), name);
-  if (tail.get<std::uint32_t>() != crc32(body)) r.bad("the checksum does not match");
+  LeReader tail = planReader(bytes.substr(bytes.size() - 4), name);
+  if (tail.get<std::uint32_t>() != crc32(body)) r.fail("the checksum does not match");
   for (std::size_t i = 0; i < kMagic.size(); ++i) (void)r.get<std::uint8_t>();
   if (const auto version = r.get<std::uint32_t>(); version != kTilingPlanVersion)
-    r.bad("format version " + std::to_string(version) + ", this tinsmith reads " +
-          std::to_string(kTilingPlanVersion));
+    r.fail("format version " + std::to_string(version) + ", this tinsmith reads " +
+           std::to_string(kTilingPlanVersion));
   TilingPlan plan;
   plan.tin.crc32 = r.get<std::uint32_t>();
   plan.tin.vertices = r.get<std::uint64_t>();
@@ -154,7 +119,7 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   for (double* v : {&t.extent.x0, &t.extent.y0, &t.extent.x1, &t.extent.y1}) *v = r.get<double>();
   if (!(t.extent.x0 <= t.extent.x1 && t.extent.y0 <= t.extent.y1) || !std::isfinite(t.extent.x0) ||
       !std::isfinite(t.extent.x1) || !std::isfinite(t.extent.y0) || !std::isfinite(t.extent.y1))
-    r.bad("the TIN's box is empty or not finite");
+    r.fail("the TIN's box is empty or not finite");
   t.finestZoom = r.get<std::int32_t>();
   t.fitSpacing = r.get<double>();
   t.tileFitAllData = r.get<std::uint8_t>() != 0;
@@ -162,15 +127,16 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   const auto zooms = r.get<std::uint32_t>();
   if (t.finestZoom < 0 || t.finestZoom > 30 ||
       zooms != static_cast<std::uint32_t>(t.finestZoom) + 1)
-    r.bad("the finest zoom and the zooms of lines do not agree");
+    r.fail("the finest zoom and the zooms of lines do not agree");
   if (t.mosaicZoom < 0 || t.mosaicZoom > t.finestZoom)
-    r.bad("the mosaic zoom " + std::to_string(t.mosaicZoom) + " is not one of the planned zooms");
+    r.fail("the mosaic zoom " + std::to_string(t.mosaicZoom) + " is not one of the planned zooms");
   t.zoomLines.resize(zooms);
   for (auto& lines : t.zoomLines) {
     lines.resize(r.count(11));
     for (auto& line : lines) {
       const auto kind = r.get<std::uint8_t>();
-      if (kind > static_cast<std::uint8_t>(FeatureKind::BreakLine)) r.bad("a line of unknown kind");
+      if (kind > static_cast<std::uint8_t>(FeatureKind::BreakLine))
+        r.fail("a line of unknown kind");
       line.kind = static_cast<FeatureKind>(kind);
       line.ring = r.get<std::uint8_t>() != 0;
       line.closed = r.get<std::uint8_t>() != 0;
@@ -184,7 +150,7 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   }
   t.cornerZoom = r.get<std::int32_t>();
   if (t.cornerZoom < -1 || t.cornerZoom > tiles::kMaxCornerZoom)
-    r.bad("corners off the TIN to zoom " + std::to_string(t.cornerZoom));
+    r.fail("corners off the TIN to zoom " + std::to_string(t.cornerZoom));
   t.offTinCorners.resize(r.count(17));
   for (auto& c : t.offTinCorners) {
     c.zoom = r.get<std::uint8_t>();
@@ -193,12 +159,12 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
     c.z = r.get<double>();
     const auto lines = (std::uint64_t{1} << std::min(c.zoom, 31)) + 1;
     if (c.zoom > t.cornerZoom || c.row >= lines || c.column >= lines)
-      r.bad("a corner off the TIN outside the planned zooms");
+      r.fail("a corner off the TIN outside the planned zooms");
   }
   for (std::size_t k = 1; k < t.offTinCorners.size(); ++k)
     if (!(t.offTinCorners[k - 1].key() < t.offTinCorners[k].key()))
-      r.bad("the corners off the TIN are not in order");
-  if (r.at() != body.size()) r.bad("bytes left over");
+      r.fail("the corners off the TIN are not in order");
+  if (r.at() != body.size()) r.fail("bytes left over");
   return plan;
 }
 

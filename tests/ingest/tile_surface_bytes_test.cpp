@@ -97,10 +97,10 @@ TEST(TileSurfaceBytes, BytesThatAreNotASurfaceAreRefusedNamingWhere) {
     EXPECT_NE(what.find("shard.3dtiles tinsmith/surfaces/2/1/1"), std::string::npos) << what;
     EXPECT_NE(what.find(why), std::string::npos) << what;
   };
-  expectRefused("", "cut short");
+  expectRefused("", "ends early");
   expectRefused("TSURFv99" + good.substr(8), "does not start with TSURFv01");
   for (const std::size_t cut : {good.size() - 1, good.size() / 2, std::size_t{20}})
-    expectRefused(good.substr(0, cut), "cut short");
+    expectRefused(good.substr(0, cut), "ends early");
   expectRefused(good + "x", "more bytes follow it");
   // A corner past the vertices: the triangle's first corner follows the
   // header (8 + 12 + 48 + 16 bytes) and the vertices (3 · 24).
@@ -110,7 +110,7 @@ TEST(TileSurfaceBytes, BytesThatAreNotASurfaceAreRefusedNamingWhere) {
   // Counts larger than the bytes hold are refused before anything is made.
   std::string huge = good;
   huge[8 + 12 + 48 + 7] = '\x7f';
-  expectRefused(huge, "cut short");
+  expectRefused(huge, "ends early");
   std::string outside = good;
   outside[8 + 4] = 9;  // x = 9 at zoom 2
   expectRefused(outside, "outside its zoom");
