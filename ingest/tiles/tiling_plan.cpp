@@ -100,7 +100,7 @@ TilingPlan decodeTilingPlan(std::string_view bytes, const std::string& name) {
   const std::string_view body = bytes.substr(0, bytes.size() - 4);
   LeReader tail = planReader(bytes.substr(bytes.size() - 4), name);
   if (tail.get<std::uint32_t>() != crc32(body)) r.fail("the checksum does not match");
-  for (std::size_t i = 0; i < kMagic.size(); ++i) (void)r.get<std::uint8_t>();
+  (void)r.take(kMagic.size());  // checked above
   if (const auto version = r.get<std::uint32_t>(); version != kTilingPlanVersion)
     r.fail("format version " + std::to_string(version) + ", this tinsmith reads " +
            std::to_string(kTilingPlanVersion));
