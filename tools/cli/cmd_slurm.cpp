@@ -26,7 +26,8 @@
 // and with --submit runs `sbatch --array=0` (the top), `sbatch --array` of
 // the subtrees after it and `sbatch` of the merge after every task (afterok).
 // Nothing heavy runs where tinsmith slurm runs (a login node): it reads the
-// TIN's header and CRS only, and with --resume the shards' stores (each
+// TIN's header, CRS and index summary only (the vertex count bounds the
+// mosaic zoom), and with --resume the shards' stores (each
 // tile's bytes against its CRC-32: the output's size, read once).
 // --resume resubmits only the tasks that left no finished
 // store (a failed, cancelled, lost or damaged shard, or one holding a tile
